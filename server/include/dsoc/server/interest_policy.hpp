@@ -1,0 +1,60 @@
+#pragma once
+// Interest policies decide, per tick and per client, which entities the client
+// should know about. The server turns the answer into enter/update/leave messages.
+
+#include "dsoc/server/game_world.hpp"
+#include "dsoc/server/server_config.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+namespace dsoc::server {
+
+/// One client's point of view this tick.
+struct Viewer {
+    std::uint32_t client_id = 0;
+    std::uint32_t entity_id = 0; ///< the entity the client controls
+    glm::vec3 eye{0.0f};
+};
+
+class InterestPolicy {
+public:
+    virtual ~InterestPolicy() = default;
+    [[nodiscard]] virtual std::string_view name() const = 0;
+    /// Called once per tick after movement, before any select().
+    virtual void begin_tick(const GameWorld& /*world*/, std::uint64_t /*tick*/) {}
+    /// Fills `out` (cleared first) with the ids, in increasing order, of the entities
+    /// `viewer` should know. The server adds the viewer's own entity itself.
+    virtual void select(const GameWorld& world, const Viewer& viewer,
+                        std::vector<std::uint32_t>& out) = 0;
+    /// A client left: forget any per-client state.
+    virtual void remove_viewer(std::uint32_t /*client_id*/) {}
+};
+
+/// Every entity, always.
+class BroadcastPolicy final : public InterestPolicy {
+public:
+    [[nodiscard]] std::string_view name() const override { return "broadcast"; }
+    void select(const GameWorld& world, const Viewer& viewer,
+                std::vector<std::uint32_t>& out) override;
+};
+
+/// Entities whose box comes within `radius` of the viewer's eye (ring culling, as in
+/// Unreal's replication graph grid or Mirror's distance interest management).
+class DistancePolicy final : public InterestPolicy {
+public:
+    explicit DistancePolicy(float radius) : radius_(radius) {}
+    [[nodiscard]] std::string_view name() const override { return "distance"; }
+    void select(const GameWorld& world, const Viewer& viewer,
+                std::vector<std::uint32_t>& out) override;
+
+private:
+    float radius_;
+};
+
+/// The policy named by config.policy; config must have passed validate().
+std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config);
+
+} // namespace dsoc::server

@@ -1,0 +1,96 @@
+#pragma once
+// The dsoc game server: accepts clients, runs a fixed-rate tick loop, moves every
+// entity authoritatively and sends each client the snapshot its interest policy
+// allows. Single-threaded: everything runs on the io_context given to it.
+
+#include "dsoc/protocol/messages.hpp"
+#include "dsoc/server/game_world.hpp"
+#include "dsoc/server/interest_policy.hpp"
+#include "dsoc/server/replication_state.hpp"
+#include "dsoc/server/server_config.hpp"
+#include "dsoc/server/session.hpp"
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/steady_timer.hpp>
+
+#include <chrono>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace dsoc::server {
+
+/// Totals since start; read them on the io_context thread or after run() returned.
+struct ServerStats {
+    std::uint64_t ticks = 0;
+    std::uint64_t late_ticks = 0;      ///< ticks that started more than one period late
+    std::uint64_t bytes_sent = 0;      ///< to clients, frame headers included
+    std::uint64_t bytes_received = 0;  ///< from clients, frame headers included
+    std::uint64_t snapshots_sent = 0;
+    std::uint64_t entity_updates_sent = 0; ///< enters + updates
+    std::uint64_t clients_accepted = 0;
+    std::map<std::string, std::uint64_t> disconnects; ///< by reason name
+    std::vector<double> tick_cost_us; ///< per tick, work time (not waiting), microseconds
+};
+
+class Server final : private SessionHost {
+public:
+    /// `config` must have passed validate().
+    Server(boost::asio::io_context& io, ServerConfig config);
+    ~Server() override;
+    Server(const Server&) = delete;
+    Server& operator=(const Server&) = delete;
+
+    /// Binds, listens and starts the tick loop. Returns the bound port (useful with
+    /// port 0). Throws boost::system::system_error when the address cannot be bound.
+    std::uint16_t start();
+
+    /// Stops accepting, stops ticking, tells every client `server_shutdown`, and lets
+    /// the connections drain; io_context::run() then returns once all are closed.
+    /// `on_done` (optional) runs when the last connection has closed.
+    void shutdown(std::function<void()> on_done = {});
+
+    [[nodiscard]] const ServerStats& stats() const { return stats_; }
+    [[nodiscard]] const ServerConfig& config() const { return config_; }
+    [[nodiscard]] std::size_t session_count() const { return sessions_.size(); }
+    [[nodiscard]] std::uint64_t tick() const { return tick_; }
+
+private:
+    struct Client {
+        std::shared_ptr<Session> session;
+        ReplicationState replication;
+    };
+
+    void accept_next();
+    void schedule_tick();
+    void run_tick();
+    void send_snapshots();
+    void maybe_finish_shutdown();
+
+    void on_hello(Session& session, const protocol::pb::ClientHello& hello) override;
+    void on_input(Session& session, const protocol::pb::ClientInput& input) override;
+    void on_closed(Session& session) override;
+
+    boost::asio::io_context& io_;
+    ServerConfig config_;
+    boost::asio::ip::tcp::acceptor acceptor_;
+    boost::asio::steady_timer tick_timer_;
+    std::chrono::steady_clock::time_point tick_epoch_;
+    std::chrono::nanoseconds tick_period_;
+    std::uint64_t tick_ = 0;
+    GameWorld world_;
+    std::unique_ptr<InterestPolicy> policy_;
+    std::map<std::uint32_t, Client> clients_;                    // active (after hello)
+    std::map<std::uint32_t, std::shared_ptr<Session>> sessions_; // all open connections
+    std::uint32_t next_client_id_ = 1;
+    bool shutting_down_ = false;
+    std::function<void()> on_shutdown_done_;
+    ServerStats stats_;
+    std::vector<std::uint32_t> interest_;
+    protocol::pb::Envelope envelope_;
+};
+
+} // namespace dsoc::server

@@ -1,0 +1,49 @@
+#pragma once
+// Every server setting, with its default, unit and valid range.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace dsoc::server {
+
+struct ServerConfig {
+    /// Address to listen on. Loopback by default: expose deliberately.
+    std::string bind_address = "127.0.0.1";
+    /// TCP port; 0 picks a free port (printed at start). [Limit: 0..65535]
+    std::uint16_t port = 27960;
+    /// Simulation and snapshot rate. [Units: Hz] [Limit: 1..240]
+    int tick_rate = 30;
+    /// Wandering bots. [Limit: 0..100000]
+    int bots = 200;
+    /// Interest policy name: "broadcast" or "distance".
+    std::string policy = "distance";
+    /// Radius of the distance policy, from the viewer's eye. [Units: world units] [Limit: > 0]
+    float distance_radius = 1500.0f;
+    /// Connected clients at most; more are refused with `server_full`. [Limit: 1..100000]
+    int max_clients = 256;
+    /// Largest frame payload a client may send. [Units: bytes] [Limit: 64..16 MiB]
+    std::uint32_t max_frame_bytes = 64 * 1024;
+    /// A client's queued, unsent snapshot bytes at most before it is disconnected as
+    /// too slow. [Units: bytes] [Limit: >= max_frame_bytes]
+    std::size_t max_send_queue_bytes = 1024 * 1024;
+    /// A connection that has not said a valid hello by then is closed. [Units: ms] [Limit: > 0]
+    int handshake_timeout_ms = 5000;
+    /// Horizontal speed bound of every entity, enforced by the server. [Units: units/s] [Limit: > 0]
+    float max_speed = 320.0f;
+    /// Bots move at this fraction of max_speed. [Limit: 0..1]
+    float bot_speed_fraction = 0.8f;
+    /// Half size of the square open world the skeleton uses. [Units: world units] [Limit: > 0]
+    float world_half_size = 2048.0f;
+    /// Seed for bots and spawn positions; the same seed gives the same bot motion.
+    std::uint64_t seed = 1;
+    /// Name reported to clients in the server hello.
+    std::string map_name = "open-square";
+    /// Stop by itself after this long; 0 runs until SIGINT/SIGTERM. [Units: s] [Limit: >= 0]
+    double duration_s = 0.0;
+};
+
+/// Every problem with the settings, each naming the field and why; empty when usable.
+std::vector<std::string> validate(const ServerConfig& config);
+
+} // namespace dsoc::server

@@ -1,0 +1,104 @@
+// dsoc-server: the game server with occlusion-aware interest management.
+
+#include "dsoc/server/server.hpp"
+#include "dsoc/server/stats_report.hpp"
+
+#include <CLI/CLI.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+
+int main(int argc, char** argv) {
+    dsoc::server::ServerConfig config;
+    std::string log_level = "info";
+    std::string stats_json;
+
+    CLI::App app{"dsoc-server: authoritative game server with interest management"};
+    app.add_option("--bind", config.bind_address, "Address to listen on")
+        ->capture_default_str();
+    app.add_option("--port", config.port, "TCP port; 0 picks a free one")->capture_default_str();
+    app.add_option("--tick-rate", config.tick_rate, "Ticks (snapshots) per second [Hz]")
+        ->capture_default_str();
+    app.add_option("--bots", config.bots, "Wandering bots")->capture_default_str();
+    app.add_option("--policy", config.policy, "Interest policy: broadcast | distance")
+        ->capture_default_str();
+    app.add_option("--distance-radius", config.distance_radius,
+                   "Radius of the distance policy [units]")
+        ->capture_default_str();
+    app.add_option("--max-clients", config.max_clients, "Connected clients at most")
+        ->capture_default_str();
+    app.add_option("--max-frame-bytes", config.max_frame_bytes,
+                   "Largest frame a client may send [bytes]")
+        ->capture_default_str();
+    app.add_option("--max-send-queue-bytes", config.max_send_queue_bytes,
+                   "Unsent bytes per client before it is dropped as too slow")
+        ->capture_default_str();
+    app.add_option("--handshake-timeout-ms", config.handshake_timeout_ms,
+                   "Close connections that send no hello within this time [ms]")
+        ->capture_default_str();
+    app.add_option("--max-speed", config.max_speed, "Speed bound of every entity [units/s]")
+        ->capture_default_str();
+    app.add_option("--seed", config.seed, "Seed for bots and spawns")->capture_default_str();
+    app.add_option("--duration", config.duration_s, "Stop after this many seconds (0: run until signalled)")
+        ->capture_default_str();
+    app.add_option("--log-level", log_level, "trace|debug|info|warn|error")->capture_default_str();
+    app.add_option("--stats-json", stats_json, "Write the end-of-run figures as JSON to this file");
+    CLI11_PARSE(app, argc, argv);
+
+    spdlog::set_level(spdlog::level::from_str(log_level));
+    spdlog::set_pattern("[%H:%M:%S.%e] [server] [%^%l%$] %v");
+
+    if (const auto problems = dsoc::server::validate(config); !problems.empty()) {
+        for (const auto& p : problems) {
+            spdlog::error("invalid setting: {}", p);
+        }
+        return 2;
+    }
+
+    boost::asio::io_context io;
+    dsoc::server::Server server(io, config);
+    std::uint16_t port = 0;
+    try {
+        port = server.start();
+    } catch (const std::exception& e) {
+        spdlog::error("cannot listen on {}:{}: {}", config.bind_address, config.port, e.what());
+        return 1;
+    }
+    // A machine-readable line for scripts that started us with --port 0.
+    std::printf("listening on port %u\n", static_cast<unsigned>(port));
+    std::fflush(stdout);
+
+    boost::asio::signal_set signals(io, SIGINT, SIGTERM);
+    signals.async_wait([&](const boost::system::error_code& ec, int signal) {
+        if (!ec) {
+            spdlog::info("signal {} received", signal);
+            server.shutdown([&] { signals.cancel(); });
+        }
+    });
+    boost::asio::steady_timer stop_timer(io);
+    if (config.duration_s > 0.0) {
+        stop_timer.expires_after(std::chrono::milliseconds(static_cast<long>(config.duration_s * 1000)));
+        stop_timer.async_wait([&](const boost::system::error_code& ec) {
+            if (!ec) {
+                server.shutdown([&] { signals.cancel(); });
+            }
+        });
+    }
+
+    io.run();
+
+    std::cout << dsoc::server::format_summary(server.stats(), config);
+    if (!stats_json.empty()) {
+        std::ofstream out(stats_json);
+        out << dsoc::server::format_json(server.stats(), config) << "\n";
+        if (!out) {
+            spdlog::error("cannot write {}", stats_json);
+            return 1;
+        }
+    }
+    return 0;
+}

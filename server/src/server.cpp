@@ -1,0 +1,205 @@
+#include "dsoc/server/server.hpp"
+
+#include "dsoc/protocol/codec.hpp"
+
+#include <boost/asio/post.hpp>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+
+namespace dsoc::server {
+
+namespace asio = boost::asio;
+namespace pb = protocol::pb;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+/// Samples of tick cost kept for percentiles (a rolling window would do for a
+/// long-running server; a day at 30 Hz is 2.6 M doubles, 20 MiB).
+constexpr std::size_t kMaxTickSamples = 4'000'000;
+} // namespace
+
+Server::Server(asio::io_context& io, ServerConfig config)
+    : io_(io), config_(std::move(config)), acceptor_(io), tick_timer_(io),
+      tick_period_(std::chrono::nanoseconds(1'000'000'000LL / config_.tick_rate)),
+      world_(config_), policy_(make_policy(config_)) {}
+
+Server::~Server() = default;
+
+std::uint16_t Server::start() {
+    const asio::ip::tcp::endpoint endpoint(asio::ip::make_address(config_.bind_address),
+                                           config_.port);
+    acceptor_.open(endpoint.protocol());
+    acceptor_.set_option(asio::socket_base::reuse_address(true));
+    acceptor_.bind(endpoint);
+    acceptor_.listen();
+    const std::uint16_t port = acceptor_.local_endpoint().port();
+    spdlog::info("dsoc-server listening on {}:{} map={} policy={} tick_rate={} Hz bots={}",
+                 config_.bind_address, port, config_.map_name, policy_->name(),
+                 config_.tick_rate, config_.bots);
+    accept_next();
+    tick_epoch_ = Clock::now();
+    schedule_tick();
+    return port;
+}
+
+void Server::accept_next() {
+    acceptor_.async_accept([this](const boost::system::error_code& ec,
+                                  asio::ip::tcp::socket socket) {
+        if (ec) {
+            if (ec != asio::error::operation_aborted && !shutting_down_) {
+                spdlog::warn("accept failed: {}", ec.message());
+                accept_next();
+            }
+            return;
+        }
+        const std::uint32_t id = next_client_id_++;
+        auto session = std::make_shared<Session>(std::move(socket), id, config_,
+                                                      static_cast<SessionHost&>(*this));
+        sessions_[id] = session;
+        ++stats_.clients_accepted;
+        session->start();
+        if (sessions_.size() > static_cast<std::size_t>(config_.max_clients)) {
+            session->disconnect(pb::DISCONNECT_REASON_SERVER_FULL,
+                                "server holds " + std::to_string(config_.max_clients) +
+                                    " clients at most");
+        }
+        accept_next();
+    });
+}
+
+void Server::schedule_tick() {
+    // Deadlines come from the epoch, not from "now", so the loop does not drift.
+    const auto deadline = tick_epoch_ + tick_period_ * static_cast<std::int64_t>(tick_ + 1);
+    tick_timer_.expires_at(deadline);
+    tick_timer_.async_wait([this](const boost::system::error_code& ec) {
+        if (ec || shutting_down_) {
+            return;
+        }
+        run_tick();
+        schedule_tick();
+    });
+}
+
+void Server::run_tick() {
+    const auto start = Clock::now();
+    const auto due = tick_epoch_ + tick_period_ * static_cast<std::int64_t>(tick_ + 1);
+    if (start - due > tick_period_) {
+        ++stats_.late_ticks;
+    }
+    ++tick_;
+    const float dt = 1.0f / static_cast<float>(config_.tick_rate);
+    world_.step(dt);
+    policy_->begin_tick(world_, tick_);
+    send_snapshots();
+    ++stats_.ticks;
+    if (stats_.tick_cost_us.size() < kMaxTickSamples) {
+        stats_.tick_cost_us.push_back(
+            std::chrono::duration<double, std::micro>(Clock::now() - start).count());
+    }
+}
+
+void Server::send_snapshots() {
+    for (auto& [id, client] : clients_) {
+        Session& session = *client.session;
+        if (!session.active()) {
+            continue;
+        }
+        const Entity* self = world_.find(session.entity_id());
+        if (self == nullptr) {
+            continue;
+        }
+        const Viewer viewer{id, session.entity_id(), GameWorld::eye_of(*self)};
+        policy_->select(world_, viewer, interest_);
+        const auto own = std::lower_bound(interest_.begin(), interest_.end(), viewer.entity_id);
+        if (own == interest_.end() || *own != viewer.entity_id) {
+            interest_.insert(own, viewer.entity_id);
+        }
+        pb::Snapshot& snapshot = *envelope_.mutable_snapshot();
+        client.replication.build_snapshot(world_, interest_, tick_, snapshot);
+        stats_.entity_updates_sent +=
+            static_cast<std::uint64_t>(snapshot.enter_size() + snapshot.update_size());
+        ++stats_.snapshots_sent;
+        session.send(envelope_);
+    }
+}
+
+void Server::on_hello(Session& session, const pb::ClientHello& /*hello*/) {
+    if (shutting_down_) {
+        session.disconnect(pb::DISCONNECT_REASON_SERVER_SHUTDOWN, "server is shutting down");
+        return;
+    }
+    if (static_cast<int>(clients_.size()) >= config_.max_clients) {
+        session.disconnect(pb::DISCONNECT_REASON_SERVER_FULL,
+                           "server holds " + std::to_string(config_.max_clients) +
+                               " clients at most");
+        return;
+    }
+    const std::uint32_t entity = world_.spawn_player();
+    session.set_entity_id(entity);
+    pb::Envelope reply;
+    auto& hello = *reply.mutable_server_hello();
+    hello.set_protocol_version(protocol::kProtocolVersion);
+    hello.set_client_id(session.client_id());
+    hello.set_entity_id(entity);
+    hello.set_tick_rate(static_cast<std::uint32_t>(config_.tick_rate));
+    hello.set_map_name(config_.map_name);
+    hello.set_server_tick(tick_);
+    hello.set_max_speed(config_.max_speed);
+    session.send(reply);
+    session.mark_active();
+    auto it = sessions_.find(session.client_id());
+    clients_[session.client_id()].session = it->second;
+    spdlog::debug("client {} '{}' from {} joined as entity {}", session.client_id(),
+                  session.name(), session.remote(), entity);
+}
+
+void Server::on_input(Session& session, const pb::ClientInput& input) {
+    world_.set_player_input(session.entity_id(),
+                            glm::vec3(input.move_x(), input.move_y(), input.move_z()),
+                            input.view_yaw(), input.view_pitch());
+}
+
+void Server::on_closed(Session& session) {
+    const std::uint32_t id = session.client_id();
+    stats_.bytes_sent += session.bytes_sent();
+    stats_.bytes_received += session.bytes_received();
+    ++stats_.disconnects[protocol::disconnect_reason_name(session.close_reason())];
+    if (session.entity_id() != 0) {
+        world_.remove(session.entity_id());
+    }
+    policy_->remove_viewer(id);
+    // Erase later: we may be inside a loop over the maps, or inside the session.
+    asio::post(io_, [this, id] {
+        clients_.erase(id);
+        sessions_.erase(id);
+        maybe_finish_shutdown();
+    });
+}
+
+void Server::shutdown(std::function<void()> on_done) {
+    if (shutting_down_) {
+        return;
+    }
+    shutting_down_ = true;
+    on_shutdown_done_ = std::move(on_done);
+    spdlog::info("shutting down: {} connection(s) to close", sessions_.size());
+    boost::system::error_code ec;
+    acceptor_.close(ec);
+    tick_timer_.cancel();
+    const auto open = sessions_; // copy: disconnect may close synchronously
+    for (const auto& [id, session] : open) {
+        session->disconnect(pb::DISCONNECT_REASON_SERVER_SHUTDOWN, "server shutting down");
+    }
+    asio::post(io_, [this] { maybe_finish_shutdown(); });
+}
+
+void Server::maybe_finish_shutdown() {
+    if (shutting_down_ && sessions_.empty() && on_shutdown_done_) {
+        auto done = std::move(on_shutdown_done_);
+        on_shutdown_done_ = nullptr;
+        done();
+    }
+}
+
+} // namespace dsoc::server

@@ -1,0 +1,46 @@
+#include "dsoc/server/server_config.hpp"
+
+#include <cmath>
+#include <string>
+
+namespace dsoc::server {
+
+namespace {
+
+void check(std::vector<std::string>& problems, bool ok, const char* field, const std::string& why) {
+    if (!ok) {
+        problems.push_back(std::string(field) + ": " + why);
+    }
+}
+
+} // namespace
+
+std::vector<std::string> validate(const ServerConfig& c) {
+    std::vector<std::string> p;
+    check(p, !c.bind_address.empty(), "bind_address", "must not be empty");
+    check(p, c.tick_rate >= 1 && c.tick_rate <= 240, "tick_rate",
+          "must be 1..240 Hz, got " + std::to_string(c.tick_rate));
+    check(p, c.bots >= 0 && c.bots <= 100000, "bots",
+          "must be 0..100000, got " + std::to_string(c.bots));
+    check(p, c.policy == "broadcast" || c.policy == "distance", "policy",
+          "must be one of broadcast, distance; got '" + c.policy + "'");
+    check(p, std::isfinite(c.distance_radius) && c.distance_radius > 0.0f, "distance_radius",
+          "must be a finite number > 0");
+    check(p, c.max_clients >= 1 && c.max_clients <= 100000, "max_clients",
+          "must be 1..100000, got " + std::to_string(c.max_clients));
+    check(p, c.max_frame_bytes >= 64 && c.max_frame_bytes <= 16u * 1024u * 1024u,
+          "max_frame_bytes", "must be 64..16777216, got " + std::to_string(c.max_frame_bytes));
+    check(p, c.max_send_queue_bytes >= c.max_frame_bytes, "max_send_queue_bytes",
+          "must be at least max_frame_bytes");
+    check(p, c.handshake_timeout_ms > 0, "handshake_timeout_ms", "must be > 0");
+    check(p, std::isfinite(c.max_speed) && c.max_speed > 0.0f, "max_speed",
+          "must be a finite number > 0");
+    check(p, c.bot_speed_fraction >= 0.0f && c.bot_speed_fraction <= 1.0f, "bot_speed_fraction",
+          "must be in [0, 1]");
+    check(p, std::isfinite(c.world_half_size) && c.world_half_size > 0.0f, "world_half_size",
+          "must be a finite number > 0");
+    check(p, std::isfinite(c.duration_s) && c.duration_s >= 0.0, "duration_s", "must be >= 0");
+    return p;
+}
+
+} // namespace dsoc::server

@@ -1,0 +1,278 @@
+#include "dsoc/server/session.hpp"
+
+#include "dsoc/protocol/codec.hpp"
+
+#include <boost/asio/buffer.hpp>
+#include <boost/asio/write.hpp>
+
+#include <cmath>
+#include <spdlog/spdlog.h>
+
+namespace dsoc::server {
+
+namespace asio = boost::asio;
+namespace pb = protocol::pb;
+
+namespace {
+
+constexpr auto kCloseGrace = std::chrono::seconds(1);
+constexpr std::size_t kMaxNameBytes = 64;
+
+std::string body_name(const pb::Envelope& message) {
+    const auto* field = pb::Envelope::descriptor()->FindFieldByNumber(message.body_case());
+    return field != nullptr ? field->name() : "nothing";
+}
+
+/// Names the first non-finite field of an input, or returns nullptr.
+const char* non_finite_field(const pb::ClientInput& in) {
+    if (!std::isfinite(in.move_x())) {
+        return "move_x";
+    }
+    if (!std::isfinite(in.move_y())) {
+        return "move_y";
+    }
+    if (!std::isfinite(in.move_z())) {
+        return "move_z";
+    }
+    if (!std::isfinite(in.view_yaw())) {
+        return "view_yaw";
+    }
+    if (!std::isfinite(in.view_pitch())) {
+        return "view_pitch";
+    }
+    return nullptr;
+}
+
+} // namespace
+
+Session::Session(asio::ip::tcp::socket socket, std::uint32_t client_id, const ServerConfig& config,
+                 SessionHost& host)
+    : socket_(std::move(socket)), deadline_(socket_.get_executor()), client_id_(client_id),
+      config_(config), host_(host), decoder_(config.max_frame_bytes) {
+    boost::system::error_code ec;
+    const auto endpoint = socket_.remote_endpoint(ec);
+    remote_ = ec ? "unknown" : endpoint.address().to_string() + ":" + std::to_string(endpoint.port());
+    socket_.set_option(asio::ip::tcp::no_delay(true), ec);
+}
+
+void Session::start() {
+    deadline_.expires_after(std::chrono::milliseconds(config_.handshake_timeout_ms));
+    deadline_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+        if (!ec && self->state_ == State::awaiting_hello) {
+            self->disconnect(pb::DISCONNECT_REASON_HANDSHAKE_TIMEOUT,
+                             "no client_hello within " +
+                                 std::to_string(self->config_.handshake_timeout_ms) + " ms");
+        }
+    });
+    read_some();
+}
+
+void Session::read_some() {
+    socket_.async_read_some(
+        asio::buffer(read_buffer_),
+        [self = shared_from_this()](const boost::system::error_code& ec, std::size_t n) {
+            if (self->state_ == State::closed) {
+                return;
+            }
+            if (ec) {
+                if (self->close_reason_ == pb::DISCONNECT_REASON_UNSPECIFIED) {
+                    self->close_reason_ = pb::DISCONNECT_REASON_CLIENT_QUIT;
+                }
+                self->close_now();
+                return;
+            }
+            self->on_read(n);
+        });
+}
+
+void Session::on_read(std::size_t bytes) {
+    bytes_received_ += bytes;
+    if (state_ == State::closing) {
+        read_some(); // drain until the peer closes, so our last frames are not reset
+        return;
+    }
+    decoder_.feed(std::span<const std::uint8_t>(read_buffer_.data(), bytes));
+    while (state_ == State::awaiting_hello || state_ == State::active) {
+        std::span<const std::uint8_t> payload;
+        const auto status = decoder_.next(payload);
+        if (status == protocol::FrameDecoder::Status::need_more) {
+            break;
+        }
+        if (status == protocol::FrameDecoder::Status::too_large) {
+            disconnect(pb::DISCONNECT_REASON_FRAME_TOO_LARGE,
+                       "frame announces " + std::to_string(decoder_.rejected_length()) +
+                           " bytes; the limit is " + std::to_string(config_.max_frame_bytes));
+            break;
+        }
+        const auto error = protocol::decode_payload(payload, incoming_);
+        if (error != protocol::DecodeError::none) {
+            disconnect(pb::DISCONNECT_REASON_PROTOCOL_ERROR,
+                       std::string("frame of ") + std::to_string(payload.size()) +
+                           " bytes: " + protocol::to_string(error) + " envelope");
+            break;
+        }
+        handle(incoming_);
+    }
+    if (state_ != State::closed) {
+        read_some();
+    }
+}
+
+void Session::handle(const pb::Envelope& message) {
+    if (state_ == State::awaiting_hello) {
+        if (message.body_case() != pb::Envelope::kClientHello) {
+            disconnect(pb::DISCONNECT_REASON_PROTOCOL_ERROR,
+                       "expected client_hello first, got " + body_name(message));
+            return;
+        }
+        handle_hello(message.client_hello());
+        return;
+    }
+    switch (message.body_case()) {
+    case pb::Envelope::kClientInput: {
+        if (const char* field = non_finite_field(message.client_input())) {
+            disconnect(pb::DISCONNECT_REASON_INVALID_INPUT,
+                       std::string("client_input.") + field + " is not a finite number");
+            return;
+        }
+        host_.on_input(*this, message.client_input());
+        return;
+    }
+    case pb::Envelope::kPing: {
+        pb::Envelope reply;
+        auto& pong = *reply.mutable_pong();
+        pong.set_nonce(message.ping().nonce());
+        pong.set_client_time_us(message.ping().client_time_us());
+        send(reply);
+        return;
+    }
+    case pb::Envelope::kDisconnect:
+        close_reason_ = pb::DISCONNECT_REASON_CLIENT_QUIT;
+        state_ = State::closing;
+        deadline_.expires_after(kCloseGrace);
+        deadline_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+            if (!ec) {
+                self->close_now();
+            }
+        });
+        if (!writing_ && write_queue_.empty()) {
+            boost::system::error_code ec;
+            socket_.shutdown(asio::ip::tcp::socket::shutdown_send, ec);
+        }
+        return;
+    default:
+        disconnect(pb::DISCONNECT_REASON_PROTOCOL_ERROR,
+                   "unexpected " + body_name(message) + " from a client");
+        return;
+    }
+}
+
+void Session::handle_hello(const pb::ClientHello& hello) {
+    if (hello.protocol_version() != protocol::kProtocolVersion) {
+        disconnect(pb::DISCONNECT_REASON_VERSION_MISMATCH,
+                   "client speaks protocol " + std::to_string(hello.protocol_version()) +
+                       ", server speaks " + std::to_string(protocol::kProtocolVersion));
+        return;
+    }
+    if (hello.name().size() > kMaxNameBytes) {
+        disconnect(pb::DISCONNECT_REASON_INVALID_INPUT,
+                   "client_hello.name is " + std::to_string(hello.name().size()) +
+                       " bytes; at most " + std::to_string(kMaxNameBytes) + " allowed");
+        return;
+    }
+    name_ = hello.name();
+    host_.on_hello(*this, hello);
+    if (state_ == State::active) {
+        deadline_.cancel();
+    }
+}
+
+void Session::send(const pb::Envelope& message) {
+    if (state_ != State::awaiting_hello && state_ != State::active) {
+        return;
+    }
+    std::vector<std::uint8_t> frame;
+    protocol::encode_frame(message, frame);
+    if (queued_bytes_ + frame.size() > config_.max_send_queue_bytes) {
+        disconnect(pb::DISCONNECT_REASON_TOO_SLOW,
+                   "send queue holds " + std::to_string(queued_bytes_) +
+                       " unsent bytes; the limit is " +
+                       std::to_string(config_.max_send_queue_bytes));
+        return;
+    }
+    enqueue(std::move(frame));
+}
+
+void Session::disconnect(pb::DisconnectReason reason, const std::string& text) {
+    if (state_ == State::closing || state_ == State::closed) {
+        return;
+    }
+    spdlog::info("client {} ({}) disconnected: {}: {}", client_id_, remote_,
+                 protocol::disconnect_reason_name(reason), text);
+    close_reason_ = reason;
+    state_ = State::closing;
+    pb::Envelope message;
+    message.mutable_disconnect()->set_reason(reason);
+    message.mutable_disconnect()->set_text(text);
+    std::vector<std::uint8_t> frame;
+    protocol::encode_frame(message, frame);
+    enqueue(std::move(frame)); // beyond the queue limit on purpose: the reason must go out
+    deadline_.expires_after(kCloseGrace);
+    deadline_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+        if (!ec) {
+            self->close_now();
+        }
+    });
+}
+
+void Session::enqueue(std::vector<std::uint8_t> frame) {
+    queued_bytes_ += frame.size();
+    write_queue_.push_back(std::move(frame));
+    write_next();
+}
+
+void Session::write_next() {
+    if (writing_ || write_queue_.empty() || state_ == State::closed) {
+        return;
+    }
+    writing_ = true;
+    asio::async_write(socket_, asio::buffer(write_queue_.front()),
+                      [self = shared_from_this()](const boost::system::error_code& ec,
+                                                  std::size_t n) {
+                          self->writing_ = false;
+                          if (self->state_ == State::closed) {
+                              return;
+                          }
+                          if (ec) {
+                              self->close_now();
+                              return;
+                          }
+                          self->bytes_sent_ += n;
+                          self->queued_bytes_ -= self->write_queue_.front().size();
+                          self->write_queue_.pop_front();
+                          if (!self->write_queue_.empty()) {
+                              self->write_next();
+                          } else if (self->state_ == State::closing) {
+                              // Half-close: the peer reads our last frames, then closes.
+                              boost::system::error_code ignored;
+                              self->socket_.shutdown(asio::ip::tcp::socket::shutdown_send,
+                                                     ignored);
+                          }
+                      });
+}
+
+void Session::close_now() {
+    if (state_ == State::closed) {
+        return;
+    }
+    state_ = State::closed;
+    deadline_.cancel();
+    boost::system::error_code ec;
+    socket_.shutdown(asio::ip::tcp::socket::shutdown_both, ec);
+    socket_.close(ec);
+    write_queue_.clear();
+    queued_bytes_ = 0;
+    host_.on_closed(*this);
+}
+
+} // namespace dsoc::server

@@ -1,0 +1,51 @@
+#include "dsoc/server/stats_report.hpp"
+
+#include "dsoc/common/percentiles.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+namespace dsoc::server {
+
+std::string format_summary(const ServerStats& stats, const ServerConfig& config) {
+    const auto cost = common::summarize(stats.tick_cost_us);
+    std::string out = fmt::format(
+        "server: policy={} bots={} tick_rate={} Hz\n"
+        "  ticks            {} ({} late)\n"
+        "  tick cost        p50 {:.1f} us  p99 {:.1f} us  max {:.1f} us  (budget {:.0f} us)\n"
+        "  sent             {} bytes, {} snapshots, {} entity updates\n"
+        "  received         {} bytes from {} client(s)\n",
+        config.policy, config.bots, config.tick_rate, stats.ticks, stats.late_ticks, cost.p50,
+        cost.p99, cost.max, 1e6 / config.tick_rate, stats.bytes_sent, stats.snapshots_sent,
+        stats.entity_updates_sent, stats.bytes_received, stats.clients_accepted);
+    out += "  disconnects     ";
+    if (stats.disconnects.empty()) {
+        out += " none";
+    }
+    for (const auto& [reason, count] : stats.disconnects) {
+        out += fmt::format(" {}={}", reason, count);
+    }
+    out += "\n";
+    return out;
+}
+
+std::string format_json(const ServerStats& stats, const ServerConfig& config) {
+    const auto cost = common::summarize(stats.tick_cost_us);
+    nlohmann::json j;
+    j["policy"] = config.policy;
+    j["bots"] = config.bots;
+    j["tick_rate"] = config.tick_rate;
+    j["ticks"] = stats.ticks;
+    j["late_ticks"] = stats.late_ticks;
+    j["tick_cost_us"] = {{"mean", cost.mean}, {"p50", cost.p50}, {"p95", cost.p95},
+                         {"p99", cost.p99},   {"max", cost.max}};
+    j["bytes_sent"] = stats.bytes_sent;
+    j["bytes_received"] = stats.bytes_received;
+    j["snapshots_sent"] = stats.snapshots_sent;
+    j["entity_updates_sent"] = stats.entity_updates_sent;
+    j["clients_accepted"] = stats.clients_accepted;
+    j["disconnects"] = stats.disconnects;
+    return j.dump(2);
+}
+
+} // namespace dsoc::server

@@ -1,0 +1,30 @@
+#pragma once
+// What one simulated client saw, for the report.
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace dsoc::simclient {
+
+struct ClientStats {
+    bool connect_failed = false;
+    bool hello_received = false;
+    bool saw_own_entity = false;
+    bool unexpected_disconnect = false; ///< lost, or told to go for a reason other than shutdown
+    std::string disconnect_reason;      ///< from the server's Disconnect, if any
+    std::string disconnect_text;
+    std::uint32_t entity_id = 0;
+    std::uint64_t bytes_down = 0; ///< frame headers included
+    std::uint64_t bytes_up = 0;
+    std::uint64_t snapshots = 0;
+    std::uint64_t entity_updates = 0;   ///< enters + updates received
+    double active_seconds = 0.0;        ///< from server hello to stop
+    std::vector<double> known_samples;  ///< entities known after each snapshot
+    std::vector<double> interarrival_ms;
+    std::vector<double> rtt_ms;
+    std::map<std::string, std::uint64_t> protocol_errors; ///< by kind
+};
+
+} // namespace dsoc::simclient

@@ -1,0 +1,28 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace dsoc::simclient {
+
+/// Settings of one load run.
+struct LoadConfig {
+    std::string host = "127.0.0.1";
+    std::uint16_t port = 27960;
+    /// Simulated clients. [Limit: 1..100000]
+    int clients = 32;
+    /// Whole run, ramp-up included. [Units: s] [Limit: > 0]
+    double duration_s = 15.0;
+    /// Clients connect evenly spread over this time. [Units: s] [Limit: 0..duration_s]
+    double ramp_up_s = 1.0;
+    /// Largest frame accepted from the server. [Units: bytes]
+    std::uint32_t max_frame_bytes = 16 * 1024 * 1024;
+    /// Seed of the wandering intents.
+    std::uint64_t seed = 7;
+    /// One progress line per second on stderr.
+    bool progress = true;
+    /// Prefix of the client names ("sim-0", "sim-1", ...).
+    std::string name_prefix = "sim-";
+};
+
+} // namespace dsoc::simclient
