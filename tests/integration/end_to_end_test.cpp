@@ -1,0 +1,83 @@
+// A real server and eight simulated clients over loopback TCP for about two seconds.
+
+#include "server_fixture.hpp"
+
+#include "dsoc/simclient/load_run.hpp"
+
+#include <gtest/gtest.h>
+
+namespace dsoc {
+namespace {
+
+TEST(EndToEnd, EightClientsGetHelloSnapshotsAndTheirOwnEntity) {
+    server::ServerConfig sc;
+    sc.bots = 60;
+    sc.tick_rate = 30;
+    sc.policy = "distance";
+    testing::RunningServer server(sc);
+
+    simclient::LoadConfig lc;
+    lc.port = server.port();
+    lc.clients = 8;
+    lc.duration_s = 2.0;
+    lc.ramp_up_s = 0.2;
+    lc.progress = false;
+    boost::asio::io_context io;
+    simclient::LoadRun run(io, lc);
+    run.start();
+    io.run(); // returns once every client has said goodbye and the server closed it
+    server.stop();
+
+    const auto report = run.report();
+    EXPECT_EQ(report.connected, 8);
+    EXPECT_EQ(report.connect_failures, 0);
+    EXPECT_EQ(report.protocol_errors, 0u) << simclient::format_summary(report);
+    EXPECT_EQ(report.unexpected_disconnects, 0);
+    EXPECT_EQ(report.missing_own_entity, 0);
+    EXPECT_TRUE(report.passed());
+    for (const auto& client : run.clients()) {
+        const auto& s = client->stats();
+        EXPECT_TRUE(s.hello_received);
+        EXPECT_TRUE(s.saw_own_entity);
+        // ~1.8 s active at 30 Hz: at least 40 snapshots even on a loaded machine.
+        EXPECT_GE(s.snapshots, 40u);
+    }
+    EXPECT_GT(report.entities_known.mean, 1.0); // more than just themselves
+
+    // Both ends counted every byte of every frame.
+    const auto& stats = server.stats();
+    EXPECT_EQ(stats.bytes_sent, report.bytes_down);
+    EXPECT_EQ(stats.bytes_received, report.bytes_up);
+    EXPECT_EQ(stats.snapshots_sent, report.snapshots);
+    EXPECT_EQ(stats.disconnects.at("client_quit"), 8u);
+}
+
+TEST(EndToEnd, ShutdownTellsEveryClientWhy) {
+    server::ServerConfig sc;
+    sc.bots = 10;
+    testing::RunningServer server(sc);
+
+    simclient::LoadConfig lc;
+    lc.port = server.port();
+    lc.clients = 4;
+    lc.duration_s = 30.0; // far longer than we wait: the server ends it
+    lc.ramp_up_s = 0.0;
+    lc.progress = false;
+    boost::asio::io_context io;
+    simclient::LoadRun run(io, lc);
+    run.start();
+    std::thread client_thread([&] { io.run(); });
+    std::this_thread::sleep_for(std::chrono::milliseconds(700));
+    server.stop();
+    boost::asio::post(io, [&] { run.stop(); });
+    client_thread.join();
+
+    const auto report = run.report();
+    EXPECT_EQ(report.connected, 4);
+    EXPECT_EQ(report.unexpected_disconnects, 0);
+    EXPECT_EQ(report.disconnect_reasons.at("server_shutdown"), 4u);
+    EXPECT_EQ(server.stats().disconnects.at("server_shutdown"), 4u);
+}
+
+} // namespace
+} // namespace dsoc

@@ -1,0 +1,49 @@
+#pragma once
+// Runs a real dsoc server on loopback (port 0) on its own thread.
+
+#include "dsoc/server/server.hpp"
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
+
+#include <future>
+#include <thread>
+
+namespace dsoc::testing {
+
+class RunningServer {
+public:
+    explicit RunningServer(server::ServerConfig config) : server_(io_, prepare(std::move(config))) {
+        port_ = server_.start();
+        thread_ = std::thread([this] { io_.run(); });
+    }
+    ~RunningServer() { stop(); }
+    RunningServer(const RunningServer&) = delete;
+    RunningServer& operator=(const RunningServer&) = delete;
+
+    /// Graceful shutdown; afterwards stats() is safe to read.
+    void stop() {
+        if (!thread_.joinable()) {
+            return;
+        }
+        boost::asio::post(io_, [this] { server_.shutdown(); });
+        thread_.join();
+    }
+
+    [[nodiscard]] std::uint16_t port() const { return port_; }
+    [[nodiscard]] const server::ServerStats& stats() const { return server_.stats(); }
+
+private:
+    static server::ServerConfig prepare(server::ServerConfig c) {
+        c.port = 0;
+        c.bind_address = "127.0.0.1";
+        return c;
+    }
+
+    boost::asio::io_context io_;
+    server::Server server_;
+    std::uint16_t port_ = 0;
+    std::thread thread_;
+};
+
+} // namespace dsoc::testing
