@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 #include <boost/asio/signal_set.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <csignal>
@@ -49,6 +50,7 @@ int main(int argc, char** argv) {
     app.add_option("--stats-json", stats_json, "Write the end-of-run figures as JSON to this file");
     CLI11_PARSE(app, argc, argv);
 
+    spdlog::set_default_logger(spdlog::stderr_color_mt("server"));
     spdlog::set_level(spdlog::level::from_str(log_level));
     spdlog::set_pattern("[%H:%M:%S.%e] [server] [%^%l%$] %v");
 
