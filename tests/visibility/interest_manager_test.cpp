@@ -1,0 +1,284 @@
+// The DSOC state machine, one test per rule of the guide, on a hand-made world with
+// an exact culler: an infinite wall filling -8 <= x <= 8.
+
+#include "dsoc/visibility/interest_manager.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+namespace dsoc::visibility {
+namespace {
+
+/// Exact visibility for the one-wall world: hidden iff the region and the box lie
+/// strictly on opposite sides of the wall.
+class WallVisibility final : public RegionVisibility {
+public:
+    explicit WallVisibility(int* builds) : builds_(builds) {}
+    void build(const Aabb& region) override {
+        region_ = region;
+        ++*builds_;
+    }
+    [[nodiscard]] Visibility test_box(const Aabb& box) const override {
+        const bool left_right = region_.max.x <= -kWall && box.min.x >= kWall;
+        const bool right_left = region_.min.x >= kWall && box.max.x <= -kWall;
+        return left_right || right_left ? Visibility::occluded : Visibility::visible;
+    }
+    static constexpr float kWall = 8.0f;
+
+private:
+    Aabb region_;
+    int* builds_;
+};
+
+constexpr glm::vec3 kHalf{15.0f, 15.0f, 28.0f};
+
+Aabb box_at(glm::vec3 c) { return Aabb::from_center_half_extents(c, kHalf); }
+
+class DsocStateMachine : public ::testing::Test {
+protected:
+    DSOCConfig config() const {
+        DSOCConfig c;
+        c.strategy = TbvStrategy::explicit_duration;
+        c.default_tbv_duration = 10;
+        c.tbv_merge_distance = 0.0f;
+        c.validate_state = true;
+        return c;
+    }
+    std::unique_ptr<InterestManager> make(const DSOCConfig& c) {
+        EXPECT_TRUE(validate(c).empty());
+        return std::make_unique<InterestManager>(
+            c, Aabb{glm::vec3(-4096.0f), glm::vec3(4096.0f)},
+            [this] { return std::make_unique<WallVisibility>(&builds_); });
+    }
+    /// A viewer entity (id 1) at `eye_x` and a client (id 100) looking from it.
+    void add_viewer(InterestManager& m, float eye_x, int lookahead = 3) {
+        ASSERT_TRUE(m.add_entity(1, EntityDesc{kHalf, {}}, box_at({eye_x, 0, 0})));
+        ClientDesc d;
+        d.viewer = 1;
+        d.lookahead_ticks = lookahead;
+        ASSERT_TRUE(m.add_client(100, d));
+    }
+    void step(InterestManager& m, std::uint64_t tick) {
+        m.update(tick);
+        const auto problems = m.validate_state();
+        EXPECT_TRUE(problems.empty()) << problems.front();
+    }
+    static bool replicated(const InterestManager& m, EntityId id) {
+        const auto& r = m.decisions(100)->replicated;
+        return std::any_of(r.begin(), r.end(), [&](const Replicated& x) { return x.id == id; });
+    }
+    int builds_ = 0;
+};
+
+TEST_F(DsocStateMachine, ClientJoinCreatesTbvsForEveryHiddenEntityAtOnce) {
+    auto m = make(config());
+    add_viewer(*m, -500.0f);
+    for (EntityId id = 2; id < 12; ++id) { // 5 on the viewer's side, 5 behind the wall
+        const float x = id % 2 == 0 ? -300.0f : 300.0f + 10.0f * static_cast<float>(id);
+        ASSERT_TRUE(m->add_entity(id, EntityDesc{kHalf, {}}, box_at({x, 100.0f * id, 0})));
+    }
+    step(*m, 1);
+    int hidden = 0;
+    for (EntityId id = 2; id < 12; ++id) {
+        if (id % 2 == 0) {
+            EXPECT_EQ(m->state(100, id), PairState::visible);
+            EXPECT_TRUE(replicated(*m, id));
+        } else {
+            EXPECT_EQ(m->state(100, id), PairState::hidden_with_tbv) << id;
+            EXPECT_FALSE(replicated(*m, id));
+            EXPECT_TRUE(m->tbv_of(100, id).contains(box_at({300.0f + 10.0f * id, 100.0f * id, 0})));
+            ++hidden;
+        }
+    }
+    EXPECT_EQ(hidden, 5); // something is culled
+    EXPECT_TRUE(replicated(*m, 1)); // the viewer's own entity
+    EXPECT_EQ(m->decisions(100)->enter.size(), 6u);
+    EXPECT_EQ(m->stats(100)->tbvs_created, 5u);
+}
+
+TEST_F(DsocStateMachine, HiddenTbvCostsNothingWhileTheRegionHolds) {
+    auto m = make(config());
+    add_viewer(*m, -500.0f);
+    ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
+    step(*m, 1);
+    const auto tests_after_join = m->stats(100)->box_tests;
+    for (std::uint64_t t = 2; t <= 9; ++t) { // within the 10-tick TBV
+        m->set_entity_box(2, box_at({400.0f + 5.0f * static_cast<float>(t), 0, 0}));
+        step(*m, t);
+    }
+    EXPECT_EQ(m->state(100, 2), PairState::hidden_with_tbv);
+    EXPECT_EQ(m->stats(100)->box_tests, tests_after_join); // no re-test of entity 2
+    EXPECT_EQ(m->stats(100)->buffer_builds, 1u);
+}
+
+TEST_F(DsocStateMachine, ExpiredTbvIsRetestedAndRenewed) {
+    auto m = make(config());
+    add_viewer(*m, -500.0f);
+    ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
+    step(*m, 1);
+    for (std::uint64_t t = 2; t <= 12; ++t) {
+        step(*m, t);
+    }
+    EXPECT_EQ(m->stats(100)->tbvs_expired, 1u); // expiry at tick 11 < 12
+    EXPECT_EQ(m->stats(100)->tbvs_created, 2u);
+    EXPECT_EQ(m->state(100, 2), PairState::hidden_with_tbv);
+}
+
+TEST_F(DsocStateMachine, VisibleTbvTriggersARealTestOfTheCurrentBox) {
+    auto m = make(config());
+    add_viewer(*m, -500.0f, 0);
+    ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
+    ASSERT_TRUE(m->add_entity(3, EntityDesc{kHalf, {}}, box_at({600, 0, 0})));
+    step(*m, 1);
+    ASSERT_EQ(m->state(100, 2), PairState::hidden_with_tbv);
+    // The viewer walks through the wall's gap (the culler is exact; we teleport the
+    // viewer, which only rebuilds its region) to the far side.
+    m->set_entity_box(1, box_at({500, 0, 0}));
+    step(*m, 2);
+    EXPECT_GE(m->stats(100)->tbv_hits, 1u);
+    EXPECT_EQ(m->state(100, 2), PairState::visible);
+    EXPECT_EQ(m->state(100, 3), PairState::visible);
+    EXPECT_TRUE(replicated(*m, 2));
+    EXPECT_EQ(m->stats(100)->buffer_builds, 2u);
+}
+
+TEST_F(DsocStateMachine, TeleportVoidsTheTbv) {
+    auto m = make(config());
+    add_viewer(*m, -500.0f);
+    ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
+    step(*m, 1);
+    ASSERT_EQ(m->state(100, 2), PairState::hidden_with_tbv);
+    // Far beyond 320 units/s * 1/30 s: a teleport, to the viewer's side of the wall.
+    m->set_entity_box(2, box_at({-900, 0, 0}));
+    step(*m, 2);
+    EXPECT_EQ(m->stats(100)->teleports, 1u);
+    EXPECT_EQ(m->state(100, 2), PairState::visible);
+    EXPECT_TRUE(replicated(*m, 2));
+}
+
+TEST_F(DsocStateMachine, NearbyTbvsMergeIntoOneGroup) {
+    auto c = config();
+    c.tbv_merge_distance = 100.0f;
+    auto m = make(c);
+    add_viewer(*m, -500.0f);
+    ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
+    ASSERT_TRUE(m->add_entity(3, EntityDesc{kHalf, {}}, box_at({440, 20, 0})));
+    ASSERT_TRUE(m->add_entity(4, EntityDesc{kHalf, {}}, box_at({400, 2000, 0}))); // far
+    step(*m, 1);
+    EXPECT_EQ(m->stats(100)->tbvs_merged, 1u);
+    EXPECT_EQ(m->tbv_count(100), 2u);
+    EXPECT_TRUE(m->tbv_of(100, 2).contains(m->tbv_of(100, 3)));
+    EXPECT_TRUE(m->tbv_of(100, 3).contains(box_at({400, 0, 0})));
+}
+
+TEST_F(DsocStateMachine, EvictionUnderMemoryPressureNeverForgetsAnEntity) {
+    auto c = config();
+    c.max_tbvs_per_client = 2;
+    auto m = make(c);
+    add_viewer(*m, -500.0f);
+    for (EntityId id = 2; id < 7; ++id) {
+        ASSERT_TRUE(m->add_entity(id, EntityDesc{kHalf, {}},
+                                  box_at({400, 1000.0f * static_cast<float>(id), 0})));
+    }
+    for (std::uint64_t t = 1; t <= 5; ++t) {
+        step(*m, t);
+        EXPECT_LE(m->tbv_count(100), 2u);
+        for (EntityId id = 2; id < 7; ++id) {
+            const auto s = m->state(100, id);
+            EXPECT_TRUE(s == PairState::hidden_with_tbv || s == PairState::hidden_expired)
+                << to_string(s);
+            EXPECT_FALSE(replicated(*m, id));
+        }
+    }
+    EXPECT_GE(m->stats(100)->evictions, 3u);
+}
+
+TEST_F(DsocStateMachine, LatencyRegionCoversTheViewersOwnMovement) {
+    // The viewer stands 40 units from the wall. Its reach over 5 ticks at 320 u/s is
+    // 53 units: it could step past the wall's face, so entities behind must be sent.
+    for (const int lookahead : {0, 5}) {
+        builds_ = 0;
+        auto c = config();
+        c.region_reuse_margin = 0.0f; // judge the reachable region alone
+        auto m = make(c);
+        add_viewer(*m, -8.0f - 40.0f, lookahead);
+        ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
+        step(*m, 1);
+        if (lookahead == 0) {
+            EXPECT_EQ(m->state(100, 2), PairState::hidden_with_tbv);
+        } else {
+            EXPECT_EQ(m->state(100, 2), PairState::visible);
+            EXPECT_GT(m->eye_region(100).max.x, -WallVisibility::kWall);
+        }
+    }
+}
+
+TEST_F(DsocStateMachine, RemovedEntityLeavesAndRemovedClientReleasesItsTbvs) {
+    auto m = make(config());
+    add_viewer(*m, -500.0f);
+    ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({-300, 0, 0})));
+    ASSERT_TRUE(m->add_entity(3, EntityDesc{kHalf, {}}, box_at({300, 0, 0})));
+    step(*m, 1);
+    ASSERT_TRUE(replicated(*m, 2));
+    ASSERT_TRUE(m->remove_entity(2));
+    ASSERT_TRUE(m->remove_entity(3)); // had a TBV
+    step(*m, 2);
+    EXPECT_EQ(m->decisions(100)->leave, std::vector<EntityId>{2});
+    EXPECT_EQ(m->tbv_count(100), 0u);
+    EXPECT_FALSE(m->remove_entity(2));
+    EXPECT_TRUE(m->remove_client(100));
+    EXPECT_EQ(m->decisions(100), nullptr);
+}
+
+TEST_F(DsocStateMachine, AdaptiveGivesAStillEntityTheLongestTbv) {
+    auto c = config();
+    c.strategy = TbvStrategy::adaptive;
+    c.min_adaptive_duration = 4;
+    c.max_adaptive_duration = 40;
+    c.tbv_expansion_factor = 1.0f;
+    auto m = make(c);
+    add_viewer(*m, -500.0f);
+    ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({1400, 0, 0})));
+    step(*m, 1);
+    // 40 ticks at 320 u/s: 426.7 units of growth on each side.
+    EXPECT_NEAR(m->tbv_of(100, 2).size().x, 30.0f + 2.0f * 320.0f * 40.0f / 30.0f, 0.5f);
+}
+
+TEST(Tbv, AdaptiveDurationFollowsTheGuidesFormula) {
+    DSOCConfig c;
+    c.min_adaptive_duration = 10;
+    c.max_adaptive_duration = 110;
+    c.velocity_threshold = 0.1f;
+    EXPECT_EQ(adaptive_duration(0.05f, 10.0f, c), 110); // stationary
+    EXPECT_EQ(adaptive_duration(10.0f, 10.0f, c), 10);  // full speed
+    EXPECT_EQ(adaptive_duration(5.0f, 10.0f, c), 60);   // half speed
+    EXPECT_EQ(adaptive_duration(50.0f, 10.0f, c), 10);  // beyond the bound: clamped
+}
+
+TEST(DsocConfig, ValidateNamesTheField) {
+    DSOCConfig c;
+    c.min_adaptive_duration = 50;
+    c.max_adaptive_duration = 10;
+    c.fuzzy_confidence = 2.0f;
+    const auto problems = validate(c);
+    ASSERT_EQ(problems.size(), 2u);
+    EXPECT_NE(problems[0].find("max_adaptive_duration"), std::string::npos);
+    EXPECT_NE(problems[1].find("fuzzy_confidence"), std::string::npos);
+    EXPECT_TRUE(validate(DSOCConfig{}).empty());
+}
+
+TEST(Tbv, ReachableBoxContainsEveryReachablePosition) {
+    const MotionLimits limits{320.0f, 270.0f, 800.0f};
+    const Aabb start = box_at({0, 0, 0});
+    const Aabb tbv = reachable_box(start, limits, 0.5f);
+    EXPECT_TRUE(tbv.contains(box_at({160, 0, 0})));
+    EXPECT_TRUE(tbv.contains(box_at({113, 113, 135})));
+    EXPECT_TRUE(tbv.contains(box_at({0, 0, -400})));
+    EXPECT_FALSE(tbv.contains(box_at({161, 0, 0})));
+    EXPECT_TRUE(within_reach({0, 0, 0}, {10, 0, 0}, limits, 1.0f / 30.0f, 0.05f));
+    EXPECT_FALSE(within_reach({0, 0, 0}, {11, 0, 0}, limits, 1.0f / 30.0f, 0.05f));
+}
+
+} // namespace
+} // namespace dsoc::visibility

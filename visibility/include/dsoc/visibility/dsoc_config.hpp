@@ -1,0 +1,80 @@
+#pragma once
+// Settings of the DSOC interest manager, with defaults, units and limits.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace dsoc::visibility {
+
+/// How a newly hidden entity's TBV duration and box are chosen.
+enum class TbvStrategy : std::uint8_t {
+    explicit_duration, ///< fixed duration, box from the motion limits (conservative)
+    adaptive,          ///< duration from the entity's speed between min and max (conservative)
+    fuzzy,             ///< box predicted from movement history (NOT conservative; evaluation only)
+};
+
+[[nodiscard]] const char* to_string(TbvStrategy s) noexcept;
+/// Parses "explicit", "adaptive" or "fuzzy"; false on anything else.
+[[nodiscard]] bool parse_tbv_strategy(const std::string& name, TbvStrategy& out) noexcept;
+
+struct DSOCConfig {
+    /// Simulation rate; converts ticks to seconds. [Units: Hz] [Limit: 1..240]
+    int tick_rate = 30;
+
+    // TBV creation (guide: "TBV Creation")
+    TbvStrategy strategy = TbvStrategy::adaptive;
+    /// Duration of an explicit TBV. [Units: ticks] [Limit: >= 1]
+    int default_tbv_duration = 30;
+    /// Safety margin on a TBV's growth. [Units: factor] [Limit: >= 1.0]
+    float tbv_expansion_factor = 1.2f;
+    /// TBVs one entity may hold across all clients; past it a client re-tests that
+    /// entity every tick instead (costs CPU, never correctness). [Limit: >= 1]
+    int max_tbvs_per_object = 256;
+    /// TBV groups one client may hold; past it the earliest-expiring group is evicted
+    /// and its entities become HIDDEN_EXPIRED (re-tested). [Limit: >= 1]
+    int max_tbvs_per_client = 4096;
+
+    // Adaptive expiration (guide: "Implicit Expiration")
+    /// Below this speed an entity counts as stationary. [Units: world units / tick] [Limit: >= 0]
+    float velocity_threshold = 0.1f;
+    /// [Units: ticks] [Limit: 1..max_adaptive_duration]
+    int min_adaptive_duration = 4;
+    /// [Units: ticks] [Limit: >= min_adaptive_duration]
+    int max_adaptive_duration = 30;
+
+    // Fuzzy TBVs
+    /// Share of predicted positions a fuzzy TBV keeps. [Limit: 0.5..0.999]
+    float fuzzy_confidence = 0.95f;
+
+    // Grouping (guide: "TBV Merging")
+    /// TBVs created in the same tick whose centres are closer than this merge into one
+    /// group, when the group's box is still hidden. 0 disables. [Units: world units] [Limit: >= 0]
+    float tbv_merge_distance = 64.0f;
+
+    // Viewer side (latency safety)
+    /// A client's occlusion buffer covers its reachable eye region grown by this, and
+    /// is rebuilt only when the reachable region leaves it. [Units: world units] [Limit: >= 0]
+    float region_reuse_margin = 48.0f;
+
+    // Network level of detail, from the conservative distance between the client's
+    // eye region and the entity (or its TBV).
+    /// Closer than this: update every tick at full precision. [Units: world units]
+    float lod_near_distance = 1024.0f;
+    /// Beyond lod_near: every 2nd tick; beyond this: every 4th. [Units: world units]
+    /// [Limit: >= lod_near_distance]
+    float lod_far_distance = 2048.0f;
+
+    /// Run ValidateDSOCState after every update (debug and test builds). [Units: flag]
+    bool validate_state = false;
+};
+
+/// Guide's implicit expiration: `max_adaptive_duration` below velocity_threshold, else
+/// min + (max - min) * (1 - speed / max_speed), clamped. Speeds in world units / tick.
+[[nodiscard]] int adaptive_duration(float speed_per_tick, float max_speed_per_tick,
+                                    const DSOCConfig& config);
+
+/// Every problem with the settings, each naming the field and why; empty when usable.
+[[nodiscard]] std::vector<std::string> validate(const DSOCConfig& config);
+
+} // namespace dsoc::visibility

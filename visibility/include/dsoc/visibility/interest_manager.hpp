@@ -1,0 +1,175 @@
+#pragma once
+// DSOC interest management for a game server: for every client, every tick, which
+// entities enter, stay in and leave its replication set. An entity hidden from a
+// client gets a Temporal Bounding Volume (where it can be until the TBV expires);
+// nothing about it is tested or sent while the TBV stays hidden from the client's
+// whole reachable eye region. See docs/dsoc.md.
+//
+// Guarantee (conservative): if an entity's box is visible from any point of a
+// client's reachable eye region at tick t (eye +- the client's motion limits over
+// its lookahead), the entity is in that client's replication set at t - provided
+// every entity moved within its declared MotionLimits and the RegionVisibility is
+// conservative. A jump beyond the limits is detected and voids that entity's TBVs.
+//
+// Threading: add/remove/set_* and begin_update() must be serialized. After
+// begin_update(tick), update_client(i) for distinct i may run in parallel (each
+// touches only its own client's state and reads shared entity state); then read
+// decisions(). update(tick) does all of it on the calling thread.
+
+#include "dsoc/visibility/dsoc_config.hpp"
+#include "dsoc/visibility/loose_octree.hpp"
+#include "dsoc/visibility/region_visibility.hpp"
+#include "dsoc/visibility/tbv.hpp"
+
+#include <atomic>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <queue>
+#include <unordered_map>
+#include <vector>
+
+namespace dsoc::visibility {
+
+using EntityId = std::uint32_t;
+using ClientId = std::uint32_t;
+inline constexpr EntityId kNoEntity = 0xffffffffu;
+
+/// Visibility state of one (client, entity) pair (guide: "Visibility States").
+enum class PairState : std::uint8_t {
+    unknown,         ///< not decided yet (new client or entity)
+    visible,         ///< in the replication set; its box is tested every tick
+    hidden_with_tbv, ///< hidden; its TBV is hidden from the client's region
+    hidden_expired,  ///< hidden, no valid TBV: its box is tested every tick
+};
+[[nodiscard]] const char* to_string(PairState s) noexcept;
+
+struct EntityDesc {
+    /// Half extents of the entity's box. [Units: world units]
+    glm::vec3 half_extents{15.0f, 15.0f, 28.0f};
+    MotionLimits motion;
+};
+
+struct ClientDesc {
+    /// The entity the client controls and views from; kNoEntity for a spectator
+    /// (then set_client_eye() places the eye).
+    EntityId viewer = kNoEntity;
+    /// Eye position relative to the viewer entity's box centre. [Units: world units]
+    glm::vec3 eye_offset{0.0f, 0.0f, 26.0f};
+    /// How many ticks ahead the client's own movement must be covered: round trip +
+    /// interpolation delay, in ticks. [Units: ticks] [Limit: >= 0]
+    int lookahead_ticks = 5;
+    /// How fast the eye can move (the viewer's limits). [Units: world units / s]
+    MotionLimits eye_motion;
+};
+
+/// One replicated entity with its network level-of-detail hint.
+struct Replicated {
+    EntityId id = 0;
+    /// Send an update every this many ticks (1, 2 or 4). [Units: ticks]
+    std::uint8_t update_interval = 1;
+    /// Suggested position quantum. [Units: world units]
+    float position_precision = 0.125f;
+};
+
+/// What changed for one client in the last update. Ids in increasing order.
+struct ClientDecisions {
+    std::vector<EntityId> enter;      ///< newly replicated
+    std::vector<Replicated> replicated; ///< the whole set after the update (enter included)
+    std::vector<EntityId> leave;      ///< no longer replicated
+};
+
+/// Counters since the client joined.
+struct ClientStats {
+    std::uint64_t buffer_builds = 0;
+    std::uint64_t box_tests = 0;      ///< current-box tests
+    std::uint64_t tbv_tests = 0;      ///< TBV and octree-node tests
+    std::uint64_t tbvs_created = 0;
+    std::uint64_t tbvs_merged = 0;    ///< TBVs that joined an existing group
+    std::uint64_t tbvs_rejected = 0;  ///< would have been visible at creation: none made
+    std::uint64_t tbv_hits = 0;       ///< groups found visible after a rebuild
+    std::uint64_t tbvs_expired = 0;
+    std::uint64_t evictions = 0;
+    std::uint64_t teleports = 0;      ///< TBVs voided by a jump beyond the limits
+};
+
+class InterestManager {
+public:
+    /// `world_bounds`: where entities live (sizes the TBV octrees). `make_visibility`
+    /// makes each client's culler. `config` must have passed validate().
+    InterestManager(const DSOCConfig& config, const Aabb& world_bounds,
+                    RegionVisibilityFactory make_visibility);
+    ~InterestManager();
+    InterestManager(const InterestManager&) = delete;
+    InterestManager& operator=(const InterestManager&) = delete;
+
+    // Entities. Ids are the caller's; false on a duplicate/unknown id or a bad box.
+    bool add_entity(EntityId id, const EntityDesc& desc, const Aabb& box);
+    bool remove_entity(EntityId id);
+    /// The entity's box after this tick's movement. A move beyond its motion limits
+    /// since the last update is a teleport: its TBVs are voided.
+    bool set_entity_box(EntityId id, const Aabb& box);
+
+    // Clients.
+    bool add_client(ClientId id, const ClientDesc& desc);
+    bool remove_client(ClientId id);
+    /// Spectators only (no viewer entity): where the eye is this tick.
+    bool set_client_eye(ClientId id, glm::vec3 eye);
+
+    /// Everything for one tick: begin_update, then every client in turn.
+    void update(std::uint64_t tick);
+    /// Serial part of a tick (teleport bookkeeping).
+    void begin_update(std::uint64_t tick);
+    /// Per-client part; distinct indexes may run concurrently. index < client_count().
+    void update_client(std::size_t index);
+
+    [[nodiscard]] std::size_t client_count() const { return clients_.size(); }
+    [[nodiscard]] ClientId client_at(std::size_t index) const;
+    /// Decisions of the last update; nullptr for an unknown client.
+    [[nodiscard]] const ClientDecisions* decisions(ClientId id) const;
+    [[nodiscard]] const ClientStats* stats(ClientId id) const;
+    [[nodiscard]] PairState state(ClientId client, EntityId entity) const;
+    /// The client's reachable eye region at the last update (empty before it).
+    [[nodiscard]] Aabb eye_region(ClientId id) const;
+    /// The TBV box holding `entity` for `client`, or an empty box.
+    [[nodiscard]] Aabb tbv_of(ClientId client, EntityId entity) const;
+    /// Live TBV groups of a client.
+    [[nodiscard]] std::size_t tbv_count(ClientId id) const;
+    [[nodiscard]] const DSOCConfig& config() const { return config_; }
+
+    /// ValidateDSOCState: every invariant of the manager, in words; empty when all
+    /// hold. No visible pair has a TBV; every hidden_with_tbv pair's group is alive,
+    /// unexpired, in the client's octree with its box, and contains the entity's
+    /// current box; group member lists match pair states.
+    [[nodiscard]] std::vector<std::string> validate_state() const;
+
+private:
+    struct EntitySlot;
+    struct ClientSlot;
+    struct TbvGroup;
+
+    [[nodiscard]] int tbv_duration(const EntitySlot& e) const;
+    [[nodiscard]] Aabb tbv_box(const EntitySlot& e, int duration) const;
+    void hide(ClientSlot& c, std::uint32_t slot);
+    void release_group_member(ClientSlot& c, std::uint32_t slot);
+    void free_group(ClientSlot& c, std::uint32_t group);
+    std::uint32_t allocate_group(ClientSlot& c);
+    [[nodiscard]] Aabb eye_region_for(const ClientSlot& c) const;
+    void decide(ClientSlot& c);
+
+    DSOCConfig config_;
+    Aabb world_bounds_;
+    RegionVisibilityFactory make_visibility_;
+    float tick_seconds_;
+    std::uint64_t tick_ = 0;
+    std::vector<EntitySlot> entities_;
+    std::vector<std::uint32_t> free_entity_slots_;
+    std::unordered_map<EntityId, std::uint32_t> entity_slot_;
+    std::vector<std::unique_ptr<ClientSlot>> clients_;
+    std::unordered_map<ClientId, std::size_t> client_index_;
+    /// TBVs each entity slot holds across all clients; updated by concurrent
+    /// update_client() calls (deque: stable addresses for the atomics).
+    std::deque<std::atomic<std::int32_t>> tbv_counts_;
+};
+
+} // namespace dsoc::visibility

@@ -1,0 +1,664 @@
+#include "dsoc/visibility/interest_manager.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <deque>
+#include <functional>
+#include <string>
+
+namespace dsoc::visibility {
+
+namespace {
+
+constexpr std::uint32_t kNoGroup = 0xffffffffu;
+/// Slack for float noise when checking a move against the motion limits. [Units: world units]
+constexpr float kTeleportTolerance = 0.05f;
+/// Groups created this tick that a new TBV may join (bounds the merge scan).
+constexpr std::size_t kMergeCandidates = 8;
+
+bool valid_box(const Aabb& b) {
+    return std::isfinite(b.min.x) && std::isfinite(b.min.y) && std::isfinite(b.min.z) &&
+           std::isfinite(b.max.x) && std::isfinite(b.max.y) && std::isfinite(b.max.z) &&
+           !b.is_empty();
+}
+
+} // namespace
+
+const char* to_string(PairState s) noexcept {
+    switch (s) {
+    case PairState::unknown:
+        return "unknown";
+    case PairState::visible:
+        return "visible";
+    case PairState::hidden_with_tbv:
+        return "hidden_with_tbv";
+    case PairState::hidden_expired:
+        return "hidden_expired";
+    }
+    return "invalid";
+}
+
+struct InterestManager::EntitySlot {
+    EntityId id = 0;
+    bool alive = false;
+    EntityDesc desc;
+    Aabb box;
+    Aabb box_at_last_update;
+    bool seen_by_update = false;
+    std::uint64_t teleported_at = 0; ///< tick of the last detected jump (0: never)
+    float speed_per_tick = 0.0f;     ///< horizontal, from the last two updates
+    MovementHistory history;
+};
+
+struct InterestManager::TbvGroup {
+    Aabb box;
+    std::uint64_t expiry = 0; ///< last tick the group is valid
+    std::uint32_t generation = 0;
+    bool alive = false;
+    std::vector<std::uint32_t> members; ///< entity slots
+};
+
+struct InterestManager::ClientSlot {
+    struct Pair {
+        PairState state = PairState::unknown;
+        std::uint32_t group = kNoGroup;
+    };
+    struct Expiry {
+        std::uint64_t tick;
+        std::uint32_t group;
+        std::uint32_t generation;
+        bool operator>(const Expiry& o) const { return tick > o.tick; }
+    };
+
+    ClientSlot(ClientId client_id, const ClientDesc& d, const LooseOctreeConfig& tree_config,
+               std::unique_ptr<RegionVisibility> v)
+        : id(client_id), desc(d), visibility(std::move(v)), tree(tree_config) {}
+
+    ClientId id;
+    ClientDesc desc;
+    glm::vec3 spectator_eye{0.0f};
+    bool has_spectator_eye = false;
+    std::unique_ptr<RegionVisibility> visibility;
+    Aabb buffer_region;
+    Aabb region;
+    std::vector<Pair> pairs; // by entity slot
+    LooseOctree tree;        // item id = group index
+    std::vector<TbvGroup> groups;
+    std::vector<std::uint32_t> free_groups;
+    std::size_t live_groups = 0;
+    std::priority_queue<Expiry, std::vector<Expiry>, std::greater<>> expiries;
+    std::vector<std::uint32_t> new_groups;
+    std::vector<std::uint32_t> scratch;
+    std::vector<EntityId> previous; // replicated ids of the last update, increasing
+    ClientDecisions decisions;
+    ClientStats stats;
+};
+
+InterestManager::InterestManager(const DSOCConfig& config, const Aabb& world_bounds,
+                                 RegionVisibilityFactory make_visibility)
+    : config_(config), world_bounds_(world_bounds), make_visibility_(std::move(make_visibility)),
+      tick_seconds_(1.0f / static_cast<float>(config.tick_rate)) {}
+
+InterestManager::~InterestManager() = default;
+
+// ---- entities --------------------------------------------------------------------
+
+bool InterestManager::add_entity(EntityId id, const EntityDesc& desc, const Aabb& box) {
+    if (entity_slot_.contains(id) || !valid_box(box)) {
+        return false;
+    }
+    std::uint32_t slot;
+    auto& counts = tbv_counts_;
+    if (!free_entity_slots_.empty()) {
+        slot = free_entity_slots_.back();
+        free_entity_slots_.pop_back();
+    } else {
+        slot = static_cast<std::uint32_t>(entities_.size());
+        entities_.emplace_back();
+        counts.emplace_back(0);
+        for (auto& c : clients_) {
+            c->pairs.resize(entities_.size());
+        }
+    }
+    EntitySlot& e = entities_[slot];
+    e = EntitySlot{};
+    e.id = id;
+    e.alive = true;
+    e.desc = desc;
+    e.box = box;
+    e.box_at_last_update = box;
+    counts[slot].store(0);
+    entity_slot_[id] = slot;
+    return true;
+}
+
+bool InterestManager::remove_entity(EntityId id) {
+    const auto it = entity_slot_.find(id);
+    if (it == entity_slot_.end()) {
+        return false;
+    }
+    const std::uint32_t slot = it->second;
+    for (auto& c : clients_) {
+        if (c->pairs[slot].state == PairState::hidden_with_tbv) {
+            release_group_member(*c, slot);
+        }
+        c->pairs[slot] = {};
+    }
+    entities_[slot].alive = false;
+    entity_slot_.erase(it);
+    free_entity_slots_.push_back(slot);
+    return true;
+}
+
+bool InterestManager::set_entity_box(EntityId id, const Aabb& box) {
+    const auto it = entity_slot_.find(id);
+    if (it == entity_slot_.end() || !valid_box(box)) {
+        return false;
+    }
+    entities_[it->second].box = box;
+    return true;
+}
+
+// ---- clients ---------------------------------------------------------------------
+
+bool InterestManager::add_client(ClientId id, const ClientDesc& desc) {
+    if (client_index_.contains(id)) {
+        return false;
+    }
+    LooseOctreeConfig tree_config;
+    tree_config.world_bounds = world_bounds_;
+    tree_config.max_items = static_cast<std::uint32_t>(config_.max_tbvs_per_client);
+    auto slot = std::make_unique<ClientSlot>(id, desc, tree_config, make_visibility_());
+    slot->pairs.resize(entities_.size());
+    slot->groups.reserve(static_cast<std::size_t>(std::min(config_.max_tbvs_per_client, 1024)));
+    client_index_[id] = clients_.size();
+    clients_.push_back(std::move(slot));
+    return true;
+}
+
+bool InterestManager::remove_client(ClientId id) {
+    const auto it = client_index_.find(id);
+    if (it == client_index_.end()) {
+        return false;
+    }
+    const std::size_t index = it->second;
+    ClientSlot& c = *clients_[index];
+    auto& counts = tbv_counts_;
+    for (std::size_t slot = 0; slot < c.pairs.size(); ++slot) {
+        if (c.pairs[slot].state == PairState::hidden_with_tbv) {
+            counts[slot].fetch_sub(1, std::memory_order_relaxed);
+        }
+    }
+    client_index_.erase(it);
+    if (index + 1 != clients_.size()) {
+        clients_[index] = std::move(clients_.back());
+        client_index_[clients_[index]->id] = index;
+    }
+    clients_.pop_back();
+    return true;
+}
+
+bool InterestManager::set_client_eye(ClientId id, glm::vec3 eye) {
+    const auto it = client_index_.find(id);
+    if (it == client_index_.end() || !std::isfinite(eye.x) || !std::isfinite(eye.y) ||
+        !std::isfinite(eye.z)) {
+        return false;
+    }
+    clients_[it->second]->spectator_eye = eye;
+    clients_[it->second]->has_spectator_eye = true;
+    return true;
+}
+
+ClientId InterestManager::client_at(std::size_t index) const { return clients_[index]->id; }
+
+const ClientDecisions* InterestManager::decisions(ClientId id) const {
+    const auto it = client_index_.find(id);
+    return it == client_index_.end() ? nullptr : &clients_[it->second]->decisions;
+}
+
+const ClientStats* InterestManager::stats(ClientId id) const {
+    const auto it = client_index_.find(id);
+    return it == client_index_.end() ? nullptr : &clients_[it->second]->stats;
+}
+
+PairState InterestManager::state(ClientId client, EntityId entity) const {
+    const auto c = client_index_.find(client);
+    const auto e = entity_slot_.find(entity);
+    if (c == client_index_.end() || e == entity_slot_.end()) {
+        return PairState::unknown;
+    }
+    return clients_[c->second]->pairs[e->second].state;
+}
+
+Aabb InterestManager::eye_region(ClientId id) const {
+    const auto it = client_index_.find(id);
+    return it == client_index_.end() ? Aabb{} : clients_[it->second]->region;
+}
+
+Aabb InterestManager::tbv_of(ClientId client, EntityId entity) const {
+    const auto c = client_index_.find(client);
+    const auto e = entity_slot_.find(entity);
+    if (c == client_index_.end() || e == entity_slot_.end()) {
+        return {};
+    }
+    const ClientSlot& cs = *clients_[c->second];
+    const auto& pair = cs.pairs[e->second];
+    return pair.group == kNoGroup ? Aabb{} : cs.groups[pair.group].box;
+}
+
+std::size_t InterestManager::tbv_count(ClientId id) const {
+    const auto it = client_index_.find(id);
+    return it == client_index_.end() ? 0 : clients_[it->second]->live_groups;
+}
+
+// ---- the tick --------------------------------------------------------------------
+
+void InterestManager::update(std::uint64_t tick) {
+    begin_update(tick);
+    for (std::size_t i = 0; i < clients_.size(); ++i) {
+        update_client(i);
+    }
+}
+
+void InterestManager::begin_update(std::uint64_t tick) {
+    const std::uint64_t elapsed = tick > tick_ && tick_ != 0 ? tick - tick_ : 1;
+    tick_ = tick;
+    const float seconds = static_cast<float>(elapsed) * tick_seconds_;
+    for (EntitySlot& e : entities_) {
+        if (!e.alive) {
+            continue;
+        }
+        const glm::vec3 from = e.box_at_last_update.center();
+        const glm::vec3 to = e.box.center();
+        if (e.seen_by_update &&
+            !within_reach(from, to, e.desc.motion, seconds, kTeleportTolerance)) {
+            e.teleported_at = tick;
+            e.history.clear();
+        }
+        const glm::vec3 d = to - from;
+        e.speed_per_tick =
+            e.seen_by_update ? std::sqrt(d.x * d.x + d.y * d.y) / static_cast<float>(elapsed) : 0.0f;
+        e.history.push(to);
+        e.box_at_last_update = e.box;
+        e.seen_by_update = true;
+    }
+}
+
+Aabb InterestManager::eye_region_for(const ClientSlot& c) const {
+    glm::vec3 eye;
+    if (c.desc.viewer != kNoEntity) {
+        const auto it = entity_slot_.find(c.desc.viewer);
+        if (it == entity_slot_.end()) {
+            return {};
+        }
+        eye = entities_[it->second].box.center() + c.desc.eye_offset;
+    } else if (c.has_spectator_eye) {
+        eye = c.spectator_eye;
+    } else {
+        return {};
+    }
+    const float seconds = static_cast<float>(c.desc.lookahead_ticks) * tick_seconds_;
+    return reachable_box(Aabb{eye, eye}, c.desc.eye_motion, seconds);
+}
+
+void InterestManager::update_client(std::size_t index) {
+    ClientSlot& c = *clients_[index];
+    c.region = eye_region_for(c);
+    if (c.region.is_empty()) { // no eye: nothing may be known
+        for (auto& pair : c.pairs) {
+            if (pair.state == PairState::visible) {
+                pair.state = PairState::unknown;
+            }
+        }
+        decide(c);
+        return;
+    }
+
+    // 1. The culler: reuse it while the reachable region stays inside its region.
+    bool rebuilt = false;
+    if (c.buffer_region.is_empty() || !c.buffer_region.contains(c.region)) {
+        c.buffer_region = c.region.expanded(config_.region_reuse_margin);
+        c.visibility->build(c.buffer_region);
+        ++c.stats.buffer_builds;
+        rebuilt = true;
+    }
+
+    // 2. Expired TBV groups: their entities must be tested again.
+    while (!c.expiries.empty() && c.expiries.top().tick < tick_) {
+        const auto top = c.expiries.top();
+        c.expiries.pop();
+        TbvGroup& g = c.groups[top.group];
+        if (!g.alive || g.generation != top.generation) {
+            continue;
+        }
+        for (const std::uint32_t slot : g.members) {
+            c.pairs[slot].state = PairState::hidden_expired;
+            ++c.stats.tbvs_expired;
+        }
+        free_group(c, top.group);
+    }
+
+    // 3. Teleports void the TBVs of the entity that jumped.
+    for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
+        const EntitySlot& e = entities_[slot];
+        if (e.alive && e.teleported_at == tick_ &&
+            c.pairs[slot].state == PairState::hidden_with_tbv) {
+            release_group_member(c, slot);
+            c.pairs[slot].state = PairState::hidden_expired;
+            ++c.stats.teleports;
+        }
+    }
+
+    // 4. A new culler region: every TBV must prove itself hidden again. A visible TBV
+    //    triggers a real test of its entities' current boxes (below).
+    if (rebuilt && c.live_groups > 0) {
+        c.scratch.clear();
+        c.tree.traverse_front_to_back(c.region.center(), *c.visibility,
+                                      [&](ItemId group) { c.scratch.push_back(group); });
+        for (const std::uint32_t group : c.scratch) {
+            ++c.stats.tbv_hits;
+            for (const std::uint32_t slot : c.groups[group].members) {
+                c.pairs[slot].state = PairState::hidden_expired;
+            }
+            free_group(c, group);
+        }
+    }
+
+    // 5. Every entity without a hidden TBV: test its current box.
+    c.new_groups.clear();
+    const auto viewer = c.desc.viewer != kNoEntity ? entity_slot_.find(c.desc.viewer)
+                                                   : entity_slot_.end();
+    const std::uint32_t viewer_slot = viewer != entity_slot_.end() ? viewer->second : kNoGroup;
+    for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
+        const EntitySlot& e = entities_[slot];
+        auto& pair = c.pairs[slot];
+        if (!e.alive || pair.state == PairState::hidden_with_tbv) {
+            continue;
+        }
+        if (slot == viewer_slot) {
+            pair.state = PairState::visible;
+            continue;
+        }
+        ++c.stats.box_tests;
+        if (c.visibility->test_box(e.box) == Visibility::visible) {
+            pair.state = PairState::visible;
+        } else {
+            hide(c, slot);
+        }
+    }
+    decide(c);
+}
+
+int InterestManager::tbv_duration(const EntitySlot& e) const {
+    switch (config_.strategy) {
+    case TbvStrategy::explicit_duration:
+        return config_.default_tbv_duration;
+    case TbvStrategy::adaptive:
+    case TbvStrategy::fuzzy:
+        return adaptive_duration(e.speed_per_tick, e.desc.motion.horizontal_speed * tick_seconds_,
+                                 config_);
+    }
+    return config_.default_tbv_duration;
+}
+
+Aabb InterestManager::tbv_box(const EntitySlot& e, int duration) const {
+    if (config_.strategy == TbvStrategy::fuzzy) {
+        return fuzzy_box(e.box, e.history, duration, tick_seconds_, config_.fuzzy_confidence,
+                         e.desc.motion);
+    }
+    return reachable_box(e.box, e.desc.motion, static_cast<float>(duration) * tick_seconds_,
+                         config_.tbv_expansion_factor);
+}
+
+void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
+    auto& pair = c.pairs[slot];
+    auto& count = tbv_counts_[slot];
+    if (count.load(std::memory_order_relaxed) >= config_.max_tbvs_per_object) {
+        pair.state = PairState::hidden_expired;
+        return;
+    }
+    const EntitySlot& e = entities_[slot];
+    // The longest TBV that is itself hidden: halve the duration until it is.
+    Aabb box;
+    int duration = tbv_duration(e);
+    for (; duration >= 1; duration /= 2) {
+        box = tbv_box(e, duration);
+        ++c.stats.tbv_tests;
+        if (c.visibility->test_box(box) == Visibility::occluded) {
+            break;
+        }
+    }
+    if (duration < 1) {
+        pair.state = PairState::hidden_expired;
+        ++c.stats.tbvs_rejected;
+        return;
+    }
+    const std::uint64_t expiry = tick_ + static_cast<std::uint64_t>(duration);
+
+    // Group with a TBV made this tick nearby, when the grown group is still hidden.
+    std::uint32_t group = kNoGroup;
+    if (config_.tbv_merge_distance > 0.0f) {
+        const float r2 = config_.tbv_merge_distance * config_.tbv_merge_distance;
+        const std::size_t first =
+            c.new_groups.size() > kMergeCandidates ? c.new_groups.size() - kMergeCandidates : 0;
+        for (std::size_t i = c.new_groups.size(); i-- > first;) {
+            TbvGroup& g = c.groups[c.new_groups[i]];
+            const glm::vec3 d = g.box.center() - box.center();
+            if (g.expiry != expiry || glm::dot(d, d) > r2) {
+                continue;
+            }
+            Aabb merged = g.box;
+            merged.extend(box);
+            ++c.stats.tbv_tests;
+            if (c.visibility->test_box(merged) == Visibility::occluded) {
+                group = c.new_groups[i];
+                g.box = merged;
+                c.tree.move(group, merged);
+                ++c.stats.tbvs_merged;
+                break;
+            }
+        }
+    }
+    if (group == kNoGroup) {
+        group = allocate_group(c);
+        TbvGroup& g = c.groups[group];
+        g.box = box;
+        g.expiry = expiry;
+        c.tree.insert(group, box);
+        c.expiries.push({expiry, group, g.generation});
+        c.new_groups.push_back(group);
+    }
+    c.groups[group].members.push_back(slot);
+    pair.state = PairState::hidden_with_tbv;
+    pair.group = group;
+    count.fetch_add(1, std::memory_order_relaxed);
+    ++c.stats.tbvs_created;
+}
+
+std::uint32_t InterestManager::allocate_group(ClientSlot& c) {
+    if (c.free_groups.empty() &&
+        c.groups.size() >= static_cast<std::size_t>(config_.max_tbvs_per_client)) {
+        // Memory pressure: evict the group that expires first; its entities are
+        // re-tested every tick from now on, never forgotten.
+        while (!c.expiries.empty()) {
+            const auto top = c.expiries.top();
+            c.expiries.pop();
+            TbvGroup& g = c.groups[top.group];
+            if (!g.alive || g.generation != top.generation) {
+                continue;
+            }
+            for (const std::uint32_t slot : g.members) {
+                c.pairs[slot].state = PairState::hidden_expired;
+            }
+            ++c.stats.evictions;
+            free_group(c, top.group);
+            break;
+        }
+    }
+    std::uint32_t group;
+    if (!c.free_groups.empty()) {
+        group = c.free_groups.back();
+        c.free_groups.pop_back();
+    } else {
+        group = static_cast<std::uint32_t>(c.groups.size());
+        c.groups.emplace_back();
+    }
+    TbvGroup& g = c.groups[group];
+    g.alive = true;
+    ++g.generation;
+    g.members.clear();
+    ++c.live_groups;
+    return group;
+}
+
+void InterestManager::free_group(ClientSlot& c, std::uint32_t group) {
+    TbvGroup& g = c.groups[group];
+    if (!g.alive) {
+        return;
+    }
+    auto& counts = tbv_counts_;
+    for (const std::uint32_t slot : g.members) {
+        counts[slot].fetch_sub(1, std::memory_order_relaxed);
+        if (c.pairs[slot].group == group) {
+            c.pairs[slot].group = kNoGroup;
+        }
+    }
+    g.members.clear();
+    g.alive = false;
+    c.tree.remove(group);
+    c.free_groups.push_back(group);
+    --c.live_groups;
+}
+
+void InterestManager::release_group_member(ClientSlot& c, std::uint32_t slot) {
+    auto& pair = c.pairs[slot];
+    if (pair.group == kNoGroup) {
+        return;
+    }
+    TbvGroup& g = c.groups[pair.group];
+    const auto it = std::find(g.members.begin(), g.members.end(), slot);
+    if (it != g.members.end()) {
+        g.members.erase(it);
+        tbv_counts_[slot].fetch_sub(1, std::memory_order_relaxed);
+    }
+    const std::uint32_t group = pair.group;
+    pair.group = kNoGroup;
+    if (g.members.empty()) {
+        free_group(c, group);
+    }
+}
+
+void InterestManager::decide(ClientSlot& c) {
+    ClientDecisions& d = c.decisions;
+    d.enter.clear();
+    d.leave.clear();
+    d.replicated.clear();
+    for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
+        const EntitySlot& e = entities_[slot];
+        if (!e.alive || c.pairs[slot].state != PairState::visible) {
+            continue;
+        }
+        Replicated r;
+        r.id = e.id;
+        // Conservative distance: nearest points of the eye region and the box.
+        const glm::vec3 gap = glm::max(glm::vec3(0.0f), glm::max(c.region.min - e.box.max,
+                                                                 e.box.min - c.region.max));
+        const float distance = std::sqrt(glm::dot(gap, gap));
+        if (distance < config_.lod_near_distance) {
+            r.update_interval = 1;
+            r.position_precision = 0.125f;
+        } else if (distance < config_.lod_far_distance) {
+            r.update_interval = 2;
+            r.position_precision = 0.5f;
+        } else {
+            r.update_interval = 4;
+            r.position_precision = 1.0f;
+        }
+        d.replicated.push_back(r);
+    }
+    std::sort(d.replicated.begin(), d.replicated.end(),
+              [](const Replicated& a, const Replicated& b) { return a.id < b.id; });
+    // Diff against the previous set (both increasing).
+    std::size_t i = 0;
+    std::size_t j = 0;
+    while (i < c.previous.size() || j < d.replicated.size()) {
+        if (j == d.replicated.size() || (i < c.previous.size() && c.previous[i] < d.replicated[j].id)) {
+            d.leave.push_back(c.previous[i++]);
+        } else if (i == c.previous.size() || d.replicated[j].id < c.previous[i]) {
+            d.enter.push_back(d.replicated[j++].id);
+        } else {
+            ++i;
+            ++j;
+        }
+    }
+    c.previous.clear();
+    for (const auto& r : d.replicated) {
+        c.previous.push_back(r.id);
+    }
+}
+
+std::vector<std::string> InterestManager::validate_state() const {
+    std::vector<std::string> problems;
+    const auto say = [&](ClientId c, EntityId e, const std::string& what) {
+        problems.push_back("client " + std::to_string(c) + ", entity " + std::to_string(e) +
+                           ": " + what);
+    };
+    for (const auto& cp : clients_) {
+        const ClientSlot& c = *cp;
+        std::size_t live = 0;
+        for (std::uint32_t g = 0; g < c.groups.size(); ++g) {
+            const TbvGroup& group = c.groups[g];
+            if (!group.alive) {
+                continue;
+            }
+            ++live;
+            if (!c.tree.contains(g)) {
+                problems.push_back("client " + std::to_string(c.id) + ": group " +
+                                   std::to_string(g) + " missing from the octree");
+            }
+            if (group.members.empty()) {
+                problems.push_back("client " + std::to_string(c.id) + ": empty live group");
+            }
+            for (const std::uint32_t slot : group.members) {
+                if (c.pairs[slot].group != g || c.pairs[slot].state != PairState::hidden_with_tbv) {
+                    say(c.id, entities_[slot].id, "member of a group it does not point to");
+                }
+            }
+        }
+        if (live != c.live_groups) {
+            problems.push_back("client " + std::to_string(c.id) + ": live group count mismatch");
+        }
+        for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
+            const EntitySlot& e = entities_[slot];
+            const auto& pair = c.pairs[slot];
+            if (!e.alive) {
+                if (pair.state != PairState::unknown || pair.group != kNoGroup) {
+                    problems.push_back("client " + std::to_string(c.id) +
+                                       ": state kept for a removed entity");
+                }
+                continue;
+            }
+            if (pair.state == PairState::visible && pair.group != kNoGroup) {
+                say(c.id, e.id, "visible but holds a TBV");
+            }
+            if (pair.state != PairState::hidden_with_tbv) {
+                continue;
+            }
+            if (pair.group == kNoGroup || !c.groups[pair.group].alive) {
+                say(c.id, e.id, "hidden_with_tbv without a live TBV");
+                continue;
+            }
+            const TbvGroup& g = c.groups[pair.group];
+            if (g.expiry < tick_) {
+                say(c.id, e.id, "TBV expired at tick " + std::to_string(g.expiry));
+            }
+            if (!g.box.contains(e.box) && e.teleported_at != tick_) {
+                say(c.id, e.id, "box left its TBV (moved faster than its motion limits?)");
+            }
+        }
+    }
+    return problems;
+}
+
+} // namespace dsoc::visibility
