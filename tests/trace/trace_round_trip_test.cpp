@@ -1,0 +1,115 @@
+#include "dsoc/trace/trace_reader.hpp"
+#include "dsoc/trace/trace_writer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace dsoc::trace {
+namespace {
+
+std::string temp_path(const std::string& name) {
+    return (std::filesystem::temp_directory_path() /
+            (name + "-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+             ".jsonl"))
+        .string();
+}
+
+TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
+    const std::string path = temp_path("dsoc-trace");
+    TraceHeader header;
+    header.map = "oa_dm4";
+    header.tick_rate = 30;
+    header.policy = "dsoc";
+    header.lookahead_ticks = 3;
+    header.occluders.push_back({0, {{{1, 0, 0}, 8}, {{-1, 0, 0}, 8}, {{0, 1, 0}, 100},
+                                    {{0, -1, 0}, 100}, {{0, 0, 1}, 50}, {{0, 0, -1}, 0.1f}}});
+    std::string error;
+    {
+        TraceWriter w;
+        ASSERT_TRUE(w.open(path, header, error)) << error;
+        for (std::uint64_t t = 10; t <= 30; t += 10) {
+            TraceTick tick;
+            tick.t = t;
+            tick.entities.push_back({42, {{-15, -15, -24}, {15.5f, 15, 32}}});
+            tick.entities.push_back({43, {{100, 0, 0}, {130, 30, 56}}});
+            tick.clients.push_back({7, 42u, {0.1f, 0.2f, 26}, {43}});
+            tick.clients.push_back({8, std::nullopt, {5, 5, 5}, {}});
+            ASSERT_TRUE(w.write_tick(tick));
+        }
+        TraceTick backwards;
+        backwards.t = 15;
+        EXPECT_FALSE(w.write_tick(backwards)); // must increase
+        EXPECT_TRUE(w.close());
+    }
+
+    // Line by line, the spec's keys and nothing we invented.
+    std::ifstream in(path);
+    std::string first;
+    std::getline(in, first);
+    for (const char* key : {R"("type":"header")", R"("version":1)", R"("map":"oa_dm4")",
+                            R"("tick_rate":30)", R"("policy":"dsoc")", R"("lookahead_ticks":3)",
+                            R"("occluders":[{"id":0,"planes":[[1,0,0,8])"}) {
+        EXPECT_NE(first.find(key), std::string::npos) << key << " in " << first;
+    }
+    std::string tick_line;
+    std::getline(in, tick_line);
+    EXPECT_EQ(tick_line.rfind(R"({"type":"tick","t":10,"entities":[[42,-15,-15,-24,15.5,15,32])", 0),
+              0u)
+        << tick_line;
+    EXPECT_NE(tick_line.find(R"({"id":7,"entity":42,"eye":[0.1,0.2,26],"replicated":[43]})"),
+              std::string::npos);
+    EXPECT_NE(tick_line.find(R"("entity":null)"), std::string::npos);
+
+    TraceReader r;
+    ASSERT_TRUE(r.open(path)) << r.error();
+    EXPECT_EQ(r.header().map, "oa_dm4");
+    EXPECT_EQ(r.header().lookahead_ticks, 3);
+    ASSERT_EQ(r.header().occluders.size(), 1u);
+    EXPECT_EQ(r.header().occluders[0].planes.size(), 6u);
+    EXPECT_EQ(r.header().occluders[0].planes[5].distance, 0.1f);
+    TraceTick tick;
+    int ticks = 0;
+    while (r.next(tick)) {
+        ++ticks;
+        ASSERT_EQ(tick.entities.size(), 2u);
+        EXPECT_EQ(tick.entities[0].box.max.x, 15.5f);
+        ASSERT_EQ(tick.clients.size(), 2u);
+        EXPECT_EQ(tick.clients[0].entity, 42u);
+        EXPECT_EQ(tick.clients[0].eye.x, 0.1f);
+        EXPECT_EQ(tick.clients[0].replicated, std::vector<std::uint32_t>{43});
+        EXPECT_FALSE(tick.clients[1].entity.has_value());
+    }
+    EXPECT_TRUE(r.error().empty()) << r.error();
+    EXPECT_TRUE(r.finished());
+    EXPECT_EQ(ticks, 3);
+    std::filesystem::remove(path);
+}
+
+TEST(Trace, ReaderNamesTheLineAndTheProblem) {
+    const std::string path = temp_path("dsoc-bad-trace");
+    {
+        std::ofstream out(path);
+        out << R"({"type":"header","version":1,"map":"m","tick_rate":30,"policy":"p","lookahead_ticks":0,"occluders":[]})"
+            << "\n"
+            << R"({"type":"tick","t":5,"entities":[[1,0,0,0,1,1]],"clients":[]})" << "\n";
+    }
+    TraceReader r;
+    ASSERT_TRUE(r.open(path)) << r.error();
+    TraceTick tick;
+    EXPECT_FALSE(r.next(tick));
+    EXPECT_NE(r.error().find(":2: tick: an entity must be"), std::string::npos) << r.error();
+
+    {
+        std::ofstream out(path);
+        out << R"({"type":"header","version":2})" << "\n";
+    }
+    TraceReader r2;
+    EXPECT_FALSE(r2.open(path));
+    EXPECT_NE(r2.error().find("version must be 1"), std::string::npos) << r2.error();
+    std::filesystem::remove(path);
+}
+
+} // namespace
+} // namespace dsoc::trace

@@ -1,0 +1,49 @@
+#pragma once
+// The contents of a replication trace, version 1 (shared/specs/replication-trace.md).
+// Units: world units, z up. Ids: unsigned 32-bit.
+
+#include "dsoc/visibility/geometry.hpp"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace dsoc::trace {
+
+inline constexpr int kTraceVersion = 1;
+
+struct TraceOccluder {
+    std::uint32_t id = 0;
+    /// Half-spaces dot(normal, x) <= distance, unit normals pointing out of the solid.
+    std::vector<visibility::Plane> planes;
+};
+
+struct TraceHeader {
+    std::string map;
+    int tick_rate = 30;
+    std::string policy;
+    /// Ticks of the client's own movement the server promises to cover (0: present eye only).
+    int lookahead_ticks = 0;
+    std::vector<TraceOccluder> occluders;
+};
+
+struct TraceEntity {
+    std::uint32_t id = 0;
+    visibility::Aabb box;
+};
+
+struct TraceClient {
+    std::uint32_t id = 0;
+    std::optional<std::uint32_t> entity; ///< the entity it controls, if any
+    glm::vec3 eye{0.0f};
+    std::vector<std::uint32_t> replicated;
+};
+
+struct TraceTick {
+    std::uint64_t t = 0;
+    std::vector<TraceEntity> entities;
+    std::vector<TraceClient> clients;
+};
+
+} // namespace dsoc::trace
