@@ -33,7 +33,9 @@ private:
 
 constexpr glm::vec3 kHalf{15.0f, 15.0f, 28.0f};
 
-Aabb box_at(glm::vec3 c) { return Aabb::from_center_half_extents(c, kHalf); }
+Aabb box_at(glm::vec3 c) {
+    return Aabb::from_center_half_extents(c, kHalf);
+}
 
 class DsocStateMachine : public ::testing::Test {
 protected:
@@ -91,7 +93,7 @@ TEST_F(DsocStateMachine, ClientJoinCreatesTbvsForEveryHiddenEntityAtOnce) {
             ++hidden;
         }
     }
-    EXPECT_EQ(hidden, 5); // something is culled
+    EXPECT_EQ(hidden, 5);           // something is culled
     EXPECT_TRUE(replicated(*m, 1)); // the viewer's own entity
     EXPECT_EQ(m->decisions(100)->enter.size(), 6u);
     EXPECT_EQ(m->stats(100)->tbvs_created, 5u);

@@ -18,7 +18,8 @@ const char* to_string(TbvStrategy s) noexcept {
 }
 
 bool parse_tbv_strategy(const std::string& name, TbvStrategy& out) noexcept {
-    for (const auto s : {TbvStrategy::explicit_duration, TbvStrategy::adaptive, TbvStrategy::fuzzy}) {
+    for (const auto s :
+         {TbvStrategy::explicit_duration, TbvStrategy::adaptive, TbvStrategy::fuzzy}) {
         if (name == to_string(s)) {
             out = s;
             return true;
@@ -50,16 +51,16 @@ std::vector<std::string> validate(const DSOCConfig& c) {
           "tbv_expansion_factor", "must be a finite number >= 1.0");
     check(c.max_tbvs_per_object >= 1, "max_tbvs_per_object", "must be >= 1");
     check(c.max_tbvs_per_client >= 1, "max_tbvs_per_client", "must be >= 1");
-    check(std::isfinite(c.velocity_threshold) && c.velocity_threshold >= 0.0f,
-          "velocity_threshold", "must be a finite number >= 0");
+    check(std::isfinite(c.velocity_threshold) && c.velocity_threshold >= 0.0f, "velocity_threshold",
+          "must be a finite number >= 0");
     check(c.min_adaptive_duration >= 1, "min_adaptive_duration", "must be >= 1 tick");
     check(c.max_adaptive_duration >= c.min_adaptive_duration, "max_adaptive_duration",
           "must be >= min_adaptive_duration");
     check(std::isfinite(c.fuzzy_confidence) && c.fuzzy_confidence >= 0.5f &&
               c.fuzzy_confidence <= 0.999f,
           "fuzzy_confidence", "must be in [0.5, 0.999]");
-    check(std::isfinite(c.tbv_merge_distance) && c.tbv_merge_distance >= 0.0f,
-          "tbv_merge_distance", "must be a finite number >= 0");
+    check(std::isfinite(c.tbv_merge_distance) && c.tbv_merge_distance >= 0.0f, "tbv_merge_distance",
+          "must be a finite number >= 0");
     check(std::isfinite(c.region_reuse_margin) && c.region_reuse_margin >= 0.0f,
           "region_reuse_margin", "must be a finite number >= 0");
     check(std::isfinite(c.lod_near_distance) && c.lod_near_distance > 0.0f, "lod_near_distance",

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <deque>
 #include <functional>
+#include <stdexcept>
 #include <string>
 
 namespace dsoc::visibility {
@@ -16,6 +17,11 @@ constexpr std::uint32_t kNoGroup = 0xffffffffu;
 constexpr float kTeleportTolerance = 0.05f;
 /// Groups created this tick that a new TBV may join (bounds the merge scan).
 constexpr std::size_t kMergeCandidates = 8;
+/// A visible entity gets the culler's full test every this many ticks, the quick one
+/// otherwise (both conservative; the full one proves more). [Units: ticks]
+constexpr std::uint64_t kFullTestInterval = 4;
+/// Candidate TBV durations tried per hide (each half the previous).
+constexpr int kMaxTbvAttempts = 3;
 
 bool valid_box(const Aabb& b) {
     return std::isfinite(b.min.x) && std::isfinite(b.min.y) && std::isfinite(b.min.z) &&
@@ -48,6 +54,7 @@ struct InterestManager::EntitySlot {
     bool seen_by_update = false;
     std::uint64_t teleported_at = 0; ///< tick of the last detected jump (0: never)
     float speed_per_tick = 0.0f;     ///< horizontal, from the last two updates
+    float down_velocity = -1.0f;     ///< current downward speed, < 0 when unknown
     MovementHistory history;
 };
 
@@ -77,6 +84,7 @@ struct InterestManager::ClientSlot {
 
     ClientId id;
     ClientDesc desc;
+    glm::vec3 eye{0.0f}; ///< at the last update
     glm::vec3 spectator_eye{0.0f};
     bool has_spectator_eye = false;
     std::unique_ptr<RegionVisibility> visibility;
@@ -96,9 +104,9 @@ struct InterestManager::ClientSlot {
 };
 
 InterestManager::InterestManager(const DSOCConfig& config, const Aabb& world_bounds,
-                                 RegionVisibilityFactory make_visibility)
+                                 RegionVisibilityFactory make_visibility, EyeRegionClipper clipper)
     : config_(config), world_bounds_(world_bounds), make_visibility_(std::move(make_visibility)),
-      tick_seconds_(1.0f / static_cast<float>(config.tick_rate)) {}
+      clipper_(std::move(clipper)), tick_seconds_(1.0f / static_cast<float>(config.tick_rate)) {}
 
 InterestManager::~InterestManager() = default;
 
@@ -151,12 +159,14 @@ bool InterestManager::remove_entity(EntityId id) {
     return true;
 }
 
-bool InterestManager::set_entity_box(EntityId id, const Aabb& box) {
+bool InterestManager::set_entity_box(EntityId id, const Aabb& box, glm::vec3 velocity) {
     const auto it = entity_slot_.find(id);
     if (it == entity_slot_.end() || !valid_box(box)) {
         return false;
     }
-    entities_[it->second].box = box;
+    EntitySlot& e = entities_[it->second];
+    e.box = box;
+    e.down_velocity = std::isfinite(velocity.z) ? std::max(0.0f, -velocity.z) : -1.0f;
     return true;
 }
 
@@ -210,7 +220,9 @@ bool InterestManager::set_client_eye(ClientId id, glm::vec3 eye) {
     return true;
 }
 
-ClientId InterestManager::client_at(std::size_t index) const { return clients_[index]->id; }
+ClientId InterestManager::client_at(std::size_t index) const {
+    return clients_[index]->id;
+}
 
 const ClientDecisions* InterestManager::decisions(ClientId id) const {
     const auto it = client_index_.find(id);
@@ -259,6 +271,14 @@ void InterestManager::update(std::uint64_t tick) {
     for (std::size_t i = 0; i < clients_.size(); ++i) {
         update_client(i);
     }
+    if (config_.validate_state) {
+        const auto problems = validate_state();
+        if (!problems.empty()) {
+            throw std::logic_error("ValidateDSOCState at tick " + std::to_string(tick) + ": " +
+                                   problems.front() + " (and " +
+                                   std::to_string(problems.size() - 1) + " more)");
+        }
+    }
 }
 
 void InterestManager::begin_update(std::uint64_t tick) {
@@ -277,16 +297,16 @@ void InterestManager::begin_update(std::uint64_t tick) {
             e.history.clear();
         }
         const glm::vec3 d = to - from;
-        e.speed_per_tick =
-            e.seen_by_update ? std::sqrt(d.x * d.x + d.y * d.y) / static_cast<float>(elapsed) : 0.0f;
+        e.speed_per_tick = e.seen_by_update
+                               ? std::sqrt(d.x * d.x + d.y * d.y) / static_cast<float>(elapsed)
+                               : 0.0f;
         e.history.push(to);
         e.box_at_last_update = e.box;
         e.seen_by_update = true;
     }
 }
 
-Aabb InterestManager::eye_region_for(const ClientSlot& c) const {
-    glm::vec3 eye;
+Aabb InterestManager::eye_region_for(const ClientSlot& c, glm::vec3& eye) const {
     if (c.desc.viewer != kNoEntity) {
         const auto it = entity_slot_.find(c.desc.viewer);
         if (it == entity_slot_.end()) {
@@ -298,13 +318,19 @@ Aabb InterestManager::eye_region_for(const ClientSlot& c) const {
     } else {
         return {};
     }
+    float down_velocity = -1.0f;
+    if (c.desc.viewer != kNoEntity) {
+        down_velocity = entities_[entity_slot_.at(c.desc.viewer)].down_velocity;
+    }
     const float seconds = static_cast<float>(c.desc.lookahead_ticks) * tick_seconds_;
-    return reachable_box(Aabb{eye, eye}, c.desc.eye_motion, seconds);
+    const Aabb region =
+        clip(reachable_box(Aabb{eye, eye}, c.desc.eye_motion, seconds, 1.0f, down_velocity));
+    return clipper_ ? clipper_(eye, region) : region;
 }
 
 void InterestManager::update_client(std::size_t index) {
     ClientSlot& c = *clients_[index];
-    c.region = eye_region_for(c);
+    c.region = eye_region_for(c, c.eye);
     if (c.region.is_empty()) { // no eye: nothing may be known
         for (auto& pair : c.pairs) {
             if (pair.state == PairState::visible) {
@@ -317,8 +343,13 @@ void InterestManager::update_client(std::size_t index) {
 
     // 1. The culler: reuse it while the reachable region stays inside its region.
     bool rebuilt = false;
-    if (c.buffer_region.is_empty() || !c.buffer_region.contains(c.region)) {
-        c.buffer_region = c.region.expanded(config_.region_reuse_margin);
+    if (!config_.reuse_buffers || c.buffer_region.is_empty() ||
+        !c.buffer_region.contains(c.region)) {
+        c.buffer_region = c.region;
+        if (config_.reuse_buffers && config_.region_reuse_margin > 0.0f) {
+            const Aabb grown = clip(c.region.expanded(config_.region_reuse_margin));
+            c.buffer_region = clipper_ ? clipper_(c.eye, grown) : grown;
+        }
         c.visibility->build(c.buffer_region);
         ++c.stats.buffer_builds;
         rebuilt = true;
@@ -367,8 +398,8 @@ void InterestManager::update_client(std::size_t index) {
 
     // 5. Every entity without a hidden TBV: test its current box.
     c.new_groups.clear();
-    const auto viewer = c.desc.viewer != kNoEntity ? entity_slot_.find(c.desc.viewer)
-                                                   : entity_slot_.end();
+    const auto viewer =
+        c.desc.viewer != kNoEntity ? entity_slot_.find(c.desc.viewer) : entity_slot_.end();
     const std::uint32_t viewer_slot = viewer != entity_slot_.end() ? viewer->second : kNoGroup;
     for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
         const EntitySlot& e = entities_[slot];
@@ -381,13 +412,27 @@ void InterestManager::update_client(std::size_t index) {
             continue;
         }
         ++c.stats.box_tests;
-        if (c.visibility->test_box(e.box) == Visibility::visible) {
+        // Temporal coherence: an entity visible last tick most likely still is; give
+        // it the full (slower) test only every kFullTestInterval ticks, staggered.
+        const bool quick =
+            pair.state == PairState::visible && (tick_ + slot) % kFullTestInterval != 0;
+        const Visibility v =
+            quick ? c.visibility->test_box_quick(e.box) : c.visibility->test_box(e.box);
+        if (v == Visibility::visible) {
             pair.state = PairState::visible;
         } else {
             hide(c, slot);
         }
     }
     decide(c);
+}
+
+Aabb InterestManager::clip(const Aabb& box) const {
+    if (world_bounds_.is_empty()) {
+        return box;
+    }
+    Aabb out{glm::max(box.min, world_bounds_.min), glm::min(box.max, world_bounds_.max)};
+    return out.is_empty() ? box : out;
 }
 
 int InterestManager::tbv_duration(const EntitySlot& e) const {
@@ -404,17 +449,18 @@ int InterestManager::tbv_duration(const EntitySlot& e) const {
 
 Aabb InterestManager::tbv_box(const EntitySlot& e, int duration) const {
     if (config_.strategy == TbvStrategy::fuzzy) {
-        return fuzzy_box(e.box, e.history, duration, tick_seconds_, config_.fuzzy_confidence,
-                         e.desc.motion);
+        return clip(fuzzy_box(e.box, e.history, duration, tick_seconds_, config_.fuzzy_confidence,
+                              e.desc.motion));
     }
-    return reachable_box(e.box, e.desc.motion, static_cast<float>(duration) * tick_seconds_,
-                         config_.tbv_expansion_factor);
+    return clip(reachable_box(e.box, e.desc.motion, static_cast<float>(duration) * tick_seconds_,
+                              config_.tbv_expansion_factor, e.down_velocity));
 }
 
 void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
     auto& pair = c.pairs[slot];
     auto& count = tbv_counts_[slot];
-    if (count.load(std::memory_order_relaxed) >= config_.max_tbvs_per_object) {
+    if (!config_.tbvs_enabled ||
+        count.load(std::memory_order_relaxed) >= config_.max_tbvs_per_object) {
         pair.state = PairState::hidden_expired;
         return;
     }
@@ -422,7 +468,11 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
     // The longest TBV that is itself hidden: halve the duration until it is.
     Aabb box;
     int duration = tbv_duration(e);
-    for (; duration >= 1; duration /= 2) {
+    for (int attempt = 0; duration >= 1; duration /= 2, ++attempt) {
+        if (attempt == kMaxTbvAttempts) {
+            duration = 0;
+            break;
+        }
         box = tbv_box(e, duration);
         ++c.stats.tbv_tests;
         if (c.visibility->test_box(box) == Visibility::occluded) {
@@ -562,8 +612,8 @@ void InterestManager::decide(ClientSlot& c) {
         Replicated r;
         r.id = e.id;
         // Conservative distance: nearest points of the eye region and the box.
-        const glm::vec3 gap = glm::max(glm::vec3(0.0f), glm::max(c.region.min - e.box.max,
-                                                                 e.box.min - c.region.max));
+        const glm::vec3 gap =
+            glm::max(glm::vec3(0.0f), glm::max(c.region.min - e.box.max, e.box.min - c.region.max));
         const float distance = std::sqrt(glm::dot(gap, gap));
         if (distance < config_.lod_near_distance) {
             r.update_interval = 1;
@@ -583,7 +633,8 @@ void InterestManager::decide(ClientSlot& c) {
     std::size_t i = 0;
     std::size_t j = 0;
     while (i < c.previous.size() || j < d.replicated.size()) {
-        if (j == d.replicated.size() || (i < c.previous.size() && c.previous[i] < d.replicated[j].id)) {
+        if (j == d.replicated.size() ||
+            (i < c.previous.size() && c.previous[i] < d.replicated[j].id)) {
             d.leave.push_back(c.previous[i++]);
         } else if (i == c.previous.size() || d.replicated[j].id < c.previous[i]) {
             d.enter.push_back(d.replicated[j++].id);
@@ -601,8 +652,8 @@ void InterestManager::decide(ClientSlot& c) {
 std::vector<std::string> InterestManager::validate_state() const {
     std::vector<std::string> problems;
     const auto say = [&](ClientId c, EntityId e, const std::string& what) {
-        problems.push_back("client " + std::to_string(c) + ", entity " + std::to_string(e) +
-                           ": " + what);
+        problems.push_back("client " + std::to_string(c) + ", entity " + std::to_string(e) + ": " +
+                           what);
     };
     for (const auto& cp : clients_) {
         const ClientSlot& c = *cp;

@@ -5,15 +5,20 @@
 
 namespace dsoc::visibility {
 
-Aabb reachable_box(const Aabb& box, const MotionLimits& limits, float seconds, float expansion) {
+Aabb reachable_box(const Aabb& box, const MotionLimits& limits, float seconds, float expansion,
+                   float down_velocity) {
     const float h = limits.horizontal_speed * seconds * expansion;
+    float fall = limits.down_speed * seconds;
+    if (limits.gravity > 0.0f && down_velocity >= 0.0f) {
+        fall = std::min(fall, down_velocity * seconds + 0.5f * limits.gravity * seconds * seconds);
+    }
     Aabb out = box;
     out.min.x -= h;
     out.min.y -= h;
     out.max.x += h;
     out.max.y += h;
-    out.min.z -= limits.down_speed * seconds * expansion;
-    out.max.z += limits.up_speed * seconds * expansion;
+    out.min.z -= (fall + limits.vertical_slack) * expansion;
+    out.max.z += (limits.up_speed * seconds + limits.vertical_slack) * expansion;
     return out;
 }
 
@@ -24,10 +29,10 @@ bool within_reach(glm::vec3 from, glm::vec3 to, const MotionLimits& limits, floa
     if (d.x * d.x + d.y * d.y > h * h) {
         return false;
     }
-    if (d.z > limits.up_speed * seconds + tolerance) {
+    if (d.z > limits.up_speed * seconds + limits.vertical_slack + tolerance) {
         return false;
     }
-    return -d.z <= limits.down_speed * seconds + tolerance;
+    return -d.z <= limits.down_speed * seconds + limits.vertical_slack + tolerance;
 }
 
 void MovementHistory::push(glm::vec3 center) {

@@ -2,6 +2,8 @@
 
 namespace dsoc {
 
-const char* version() noexcept { return DSOC_VERSION_STRING; }
+const char* version() noexcept {
+    return DSOC_VERSION_STRING;
+}
 
 } // namespace dsoc

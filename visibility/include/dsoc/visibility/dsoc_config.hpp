@@ -55,7 +55,7 @@ struct DSOCConfig {
     // Viewer side (latency safety)
     /// A client's occlusion buffer covers its reachable eye region grown by this, and
     /// is rebuilt only when the reachable region leaves it. [Units: world units] [Limit: >= 0]
-    float region_reuse_margin = 48.0f;
+    float region_reuse_margin = 16.0f;
 
     // Network level of detail, from the conservative distance between the client's
     // eye region and the entity (or its TBV).
@@ -65,7 +65,14 @@ struct DSOCConfig {
     /// [Limit: >= lod_near_distance]
     float lod_far_distance = 2048.0f;
 
-    /// Run ValidateDSOCState after every update (debug and test builds). [Units: flag]
+    /// false: no TBVs at all - every hidden entity is re-tested every tick (the plain
+    /// "occlusion" policy, for comparison). [Units: flag]
+    bool tbvs_enabled = true;
+    /// false: rebuild every client's culler every tick (no region reuse). [Units: flag]
+    bool reuse_buffers = true;
+
+    /// Run ValidateDSOCState after every update() and throw std::logic_error naming
+    /// the first broken invariant (debug and test runs; costs O(clients x entities)).
     bool validate_state = false;
 };
 

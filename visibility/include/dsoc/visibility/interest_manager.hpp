@@ -24,6 +24,8 @@
 #include <atomic>
 #include <cstdint>
 #include <deque>
+#include <functional>
+#include <limits>
 #include <memory>
 #include <queue>
 #include <unordered_map>
@@ -50,6 +52,12 @@ struct EntityDesc {
     MotionLimits motion;
 };
 
+/// Optional game knowledge that shrinks a client's reachable eye region: given the
+/// eye and the region from the motion limits, a box that still contains every eye
+/// the client can reach (e.g. sim::ReachClipper: players do not walk through walls).
+/// Must be thread-safe; called once or twice per client per tick.
+using EyeRegionClipper = std::function<Aabb(glm::vec3 eye, const Aabb& region)>;
+
 struct ClientDesc {
     /// The entity the client controls and views from; kNoEntity for a spectator
     /// (then set_client_eye() places the eye).
@@ -74,23 +82,23 @@ struct Replicated {
 
 /// What changed for one client in the last update. Ids in increasing order.
 struct ClientDecisions {
-    std::vector<EntityId> enter;      ///< newly replicated
+    std::vector<EntityId> enter;        ///< newly replicated
     std::vector<Replicated> replicated; ///< the whole set after the update (enter included)
-    std::vector<EntityId> leave;      ///< no longer replicated
+    std::vector<EntityId> leave;        ///< no longer replicated
 };
 
 /// Counters since the client joined.
 struct ClientStats {
     std::uint64_t buffer_builds = 0;
-    std::uint64_t box_tests = 0;      ///< current-box tests
-    std::uint64_t tbv_tests = 0;      ///< TBV and octree-node tests
+    std::uint64_t box_tests = 0; ///< current-box tests
+    std::uint64_t tbv_tests = 0; ///< TBV and octree-node tests
     std::uint64_t tbvs_created = 0;
-    std::uint64_t tbvs_merged = 0;    ///< TBVs that joined an existing group
-    std::uint64_t tbvs_rejected = 0;  ///< would have been visible at creation: none made
-    std::uint64_t tbv_hits = 0;       ///< groups found visible after a rebuild
+    std::uint64_t tbvs_merged = 0;   ///< TBVs that joined an existing group
+    std::uint64_t tbvs_rejected = 0; ///< would have been visible at creation: none made
+    std::uint64_t tbv_hits = 0;      ///< groups found visible after a rebuild
     std::uint64_t tbvs_expired = 0;
     std::uint64_t evictions = 0;
-    std::uint64_t teleports = 0;      ///< TBVs voided by a jump beyond the limits
+    std::uint64_t teleports = 0; ///< TBVs voided by a jump beyond the limits
 };
 
 class InterestManager {
@@ -98,7 +106,7 @@ public:
     /// `world_bounds`: where entities live (sizes the TBV octrees). `make_visibility`
     /// makes each client's culler. `config` must have passed validate().
     InterestManager(const DSOCConfig& config, const Aabb& world_bounds,
-                    RegionVisibilityFactory make_visibility);
+                    RegionVisibilityFactory make_visibility, EyeRegionClipper clipper = {});
     ~InterestManager();
     InterestManager(const InterestManager&) = delete;
     InterestManager& operator=(const InterestManager&) = delete;
@@ -106,9 +114,13 @@ public:
     // Entities. Ids are the caller's; false on a duplicate/unknown id or a bad box.
     bool add_entity(EntityId id, const EntityDesc& desc, const Aabb& box);
     bool remove_entity(EntityId id);
-    /// The entity's box after this tick's movement. A move beyond its motion limits
-    /// since the last update is a teleport: its TBVs are voided.
-    bool set_entity_box(EntityId id, const Aabb& box);
+    /// The entity's box after this tick's movement, and its velocity when known
+    /// (units/s; a non-finite value means unknown: then falls are bounded by
+    /// down_speed alone). A move beyond its motion limits since the last update is a
+    /// teleport: its TBVs are voided. The box must stay inside the world bounds
+    /// given to the constructor (TBVs and eye regions are clipped to them).
+    bool set_entity_box(EntityId id, const Aabb& box,
+                        glm::vec3 velocity = glm::vec3(std::numeric_limits<float>::quiet_NaN()));
 
     // Clients.
     bool add_client(ClientId id, const ClientDesc& desc);
@@ -154,12 +166,16 @@ private:
     void release_group_member(ClientSlot& c, std::uint32_t slot);
     void free_group(ClientSlot& c, std::uint32_t group);
     std::uint32_t allocate_group(ClientSlot& c);
-    [[nodiscard]] Aabb eye_region_for(const ClientSlot& c) const;
+    /// The reachable eye region of `c` now; `eye` receives the present eye.
+    [[nodiscard]] Aabb eye_region_for(const ClientSlot& c, glm::vec3& eye) const;
+    /// `box` intersected with the world bounds (entities never leave them).
+    [[nodiscard]] Aabb clip(const Aabb& box) const;
     void decide(ClientSlot& c);
 
     DSOCConfig config_;
     Aabb world_bounds_;
     RegionVisibilityFactory make_visibility_;
+    EyeRegionClipper clipper_;
     float tick_seconds_;
     std::uint64_t tick_ = 0;
     std::vector<EntitySlot> entities_;

@@ -18,6 +18,10 @@ public:
     /// `occluded` only when `box` is hidden from EVERY point of the last built region;
     /// `visible` otherwise (may be a false positive). Const and thread-safe after build.
     [[nodiscard]] virtual Visibility test_box(const Aabb& box) const = 0;
+    /// A cheaper test with the same guarantee (`occluded` is never wrong) that may
+    /// prove less; used for entities that were visible last tick, most of which still
+    /// are. Defaults to test_box().
+    [[nodiscard]] virtual Visibility test_box_quick(const Aabb& box) const { return test_box(box); }
 };
 
 /// Makes one RegionVisibility per client (each client owns its buffer).

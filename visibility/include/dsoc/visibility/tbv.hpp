@@ -17,16 +17,27 @@ struct MotionLimits {
     float horizontal_speed = 320.0f;
     /// Bound on the upward speed (jumps, stairs, lifts).
     float up_speed = 320.0f;
-    /// Bound on the downward speed (falls).
+    /// Bound on the downward speed (falls: the terminal speed).
     float down_speed = 800.0f;
+    /// Downward acceleration when known (> 0): a fall that starts at downward speed v0
+    /// covers at most v0 * t + gravity * t^2 / 2. 0: use down_speed alone.
+    /// [Units: world units / s^2] [Limit: >= 0]
+    float gravity = 0.0f;
+    /// Distance added up and down whatever the time (e.g. a step-up or step-down a
+    /// movement code may take in one move). [Units: world units] [Limit: >= 0]
+    float vertical_slack = 0.0f;
 };
 
 /// The box `box` can sweep within `seconds`: grown by horizontal_speed * seconds on
-/// x and y, up_speed * seconds above and down_speed * seconds below, then every
-/// growth scaled by `expansion` (>= 1, a safety margin). Axis-separable, so it
-/// contains the exact reachable set (a disc is inside its bounding square).
+/// x and y, up_speed * seconds + vertical_slack above and the fall bound +
+/// vertical_slack below, then every growth scaled by `expansion` (>= 1, a safety
+/// margin). The fall bound is down_speed * seconds, or, when gravity > 0 and the
+/// current downward speed `down_velocity` (>= 0) is known, the smaller of that and
+/// down_velocity * t + gravity * t^2 / 2. Pass a negative down_velocity when unknown.
+/// Axis-separable, so it contains the exact reachable set (a disc is inside its
+/// bounding square).
 [[nodiscard]] Aabb reachable_box(const Aabb& box, const MotionLimits& limits, float seconds,
-                                 float expansion = 1.0f);
+                                 float expansion = 1.0f, float down_velocity = -1.0f);
 
 /// The farthest a point moving within `limits` can get in `seconds`, per direction:
 /// x and y use horizontal_speed, z up/down the vertical speeds. Used to detect jumps

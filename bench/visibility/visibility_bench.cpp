@@ -1,0 +1,285 @@
+// Usage: visibility_bench [--benchmark_filter=...] [google benchmark flags]
+// Scene: make_corridor_world(seed 42, 11 x 10 rooms) (~1,000 brushes), eye in room
+// (5, 5) at standing height, 512 player-sized boxes spread over the whole map.
+// Before timing, the setup checks that neither backend culls a box the reference
+// sees (aborts otherwise), and reports how many boxes each culls.
+
+#include "dsoc/visibility/bsp_tree.hpp"
+#include "dsoc/visibility/loose_octree.hpp"
+#include "dsoc/visibility/occlusion_beams.hpp"
+#include "dsoc/visibility/occlusion_buffer.hpp"
+#include "dsoc/visibility/reference_visibility.hpp"
+#include "dsoc/visibility/test_worlds.hpp"
+
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <vector>
+
+namespace dsoc::visibility {
+namespace {
+
+struct Scene {
+    TestWorld tw;
+    BspTree bsp;
+    glm::vec3 eye;
+    std::vector<Aabb> boxes;
+    int reference_hidden = 0;
+    int buffer_culled = 0;
+    int beams_culled = 0;
+
+    Scene()
+        : tw(make_corridor_world(42, 11, 10)),
+          eye(5 * 512.0f + 200.0f, 5 * 512.0f + 300.0f, 56.0f) {
+        bsp.build(tw.world);
+        std::mt19937 rng(7);
+        std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+        const Aabb area = tw.play_area;
+        while (boxes.size() < 512) {
+            const glm::vec3 c = area.min + area.size() * glm::vec3(unit(rng), unit(rng), 0.0f) +
+                                glm::vec3(0.0f, 0.0f, 28.0f + 100.0f * unit(rng));
+            boxes.push_back(Aabb::from_center_half_extents(c, {16.0f, 16.0f, 28.0f}));
+        }
+        const ReferenceVisibility reference(tw.world);
+        OcclusionBuffer buffer;
+        buffer.build(eye, tw.world, bsp);
+        OcclusionBeams beams;
+        beams.build(eye, tw.world, bsp);
+        for (const Aabb& b : boxes) {
+            const bool seen = reference.test_box(eye, b) == Visibility::visible;
+            const bool zb = buffer.test_box(b) == Visibility::occluded;
+            const bool bm = beams.test_box(b) == Visibility::occluded;
+            if (seen && (zb || bm)) {
+                std::fprintf(stderr, "validation failed: a backend culled a visible box\n");
+                std::abort();
+            }
+            reference_hidden += seen ? 0 : 1;
+            buffer_culled += zb ? 1 : 0;
+            beams_culled += bm ? 1 : 0;
+        }
+    }
+};
+
+const Scene& scene() {
+    static const Scene s;
+    return s;
+}
+
+void report_scene(benchmark::State& state) {
+    const Scene& s = scene();
+    state.counters["brushes"] = static_cast<double>(s.tw.world.size());
+    state.counters["boxes"] = static_cast<double>(s.boxes.size());
+    state.counters["ref_hidden"] = s.reference_hidden;
+    state.counters["zpyr_culled"] = s.buffer_culled;
+    state.counters["beams_culled"] = s.beams_culled;
+}
+
+void BM_OcclusionBufferBuild(benchmark::State& state) {
+    const Scene& s = scene();
+    OcclusionBufferConfig config;
+    config.face_resolution = static_cast<int>(state.range(0));
+    OcclusionBuffer buffer(config);
+    for (auto _ : state) {
+        buffer.build(s.eye, s.tw.world, s.bsp);
+        benchmark::ClobberMemory();
+    }
+    state.counters["occluders"] = buffer.stats().occluders_visited;
+    state.counters["texels_written"] = static_cast<double>(buffer.stats().texels_written);
+    report_scene(state);
+}
+BENCHMARK(BM_OcclusionBufferBuild)->Arg(32)->Arg(64)->Arg(128)->Unit(benchmark::kMicrosecond);
+
+/// From-region build for a viewer region of +-48 units sideways, +-16 up and down
+/// (320 units/s x 150 ms of latency allowance).
+void BM_OcclusionBufferBuildRegion(benchmark::State& state) {
+    const Scene& s = scene();
+    OcclusionBuffer buffer;
+    const Aabb region = Aabb::from_center_half_extents(s.eye, {48.0f, 48.0f, 16.0f});
+    int culled = 0;
+    for (auto _ : state) {
+        buffer.build_region(region, s.tw.world, s.bsp);
+        benchmark::ClobberMemory();
+    }
+    for (const Aabb& b : s.boxes) {
+        culled += buffer.test_box(b) == Visibility::occluded;
+    }
+    state.counters["occluders"] = buffer.stats().occluders_visited;
+    state.counters["culled"] = culled;
+}
+BENCHMARK(BM_OcclusionBufferBuildRegion)->Unit(benchmark::kMicrosecond);
+
+void BM_OcclusionBufferTestBox(benchmark::State& state) {
+    const Scene& s = scene();
+    OcclusionBufferConfig config;
+    config.face_resolution = static_cast<int>(state.range(0));
+    OcclusionBuffer buffer(config);
+    buffer.build(s.eye, s.tw.world, s.bsp);
+    int culled = 0;
+    for (auto _ : state) {
+        culled = 0;
+        for (const Aabb& b : s.boxes) {
+            culled += buffer.test_box(b) == Visibility::occluded;
+        }
+        benchmark::DoNotOptimize(culled);
+    }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(s.boxes.size()));
+    state.counters["ns_per_box"] = benchmark::Counter(
+        static_cast<double>(state.iterations() * s.boxes.size()),
+        benchmark::Counter::kIsRate | benchmark::Counter::kInvert, benchmark::Counter::kIs1000);
+    state.counters["culled"] = culled;
+}
+BENCHMARK(BM_OcclusionBufferTestBox)->Arg(32)->Arg(64)->Arg(128);
+
+void BM_OcclusionBeamsBuild(benchmark::State& state) {
+    const Scene& s = scene();
+    OcclusionBeams beams;
+    for (auto _ : state) {
+        beams.build(s.eye, s.tw.world, s.bsp);
+        benchmark::ClobberMemory();
+    }
+    state.counters["beams"] = beams.stats().beams;
+}
+BENCHMARK(BM_OcclusionBeamsBuild)->Unit(benchmark::kMicrosecond);
+
+void BM_OcclusionBeamsTestBox(benchmark::State& state) {
+    const Scene& s = scene();
+    OcclusionBeams beams;
+    beams.build(s.eye, s.tw.world, s.bsp);
+    int culled = 0;
+    for (auto _ : state) {
+        culled = 0;
+        for (const Aabb& b : s.boxes) {
+            culled += beams.test_box(b) == Visibility::occluded;
+        }
+        benchmark::DoNotOptimize(culled);
+    }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(s.boxes.size()));
+    state.counters["culled"] = culled;
+}
+BENCHMARK(BM_OcclusionBeamsTestBox);
+
+void BM_ReferenceTestBox(benchmark::State& state) {
+    const Scene& s = scene();
+    const ReferenceVisibility reference(s.tw.world);
+    int hidden = 0;
+    for (auto _ : state) {
+        hidden = 0;
+        for (const Aabb& b : s.boxes) {
+            hidden += reference.test_box(s.eye, b) == Visibility::occluded;
+        }
+        benchmark::DoNotOptimize(hidden);
+    }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(s.boxes.size()));
+    state.counters["hidden"] = hidden;
+}
+BENCHMARK(BM_ReferenceTestBox)->Unit(benchmark::kMillisecond);
+
+/// One run, one ratio: build + 512 tests with the z-pyramid versus the same 512
+/// boxes answered by the brute-force reference, timed back to back.
+void BM_SpeedupVersusReference(benchmark::State& state) {
+    const Scene& s = scene();
+    const ReferenceVisibility reference(s.tw.world);
+    OcclusionBuffer buffer;
+    double fast_ns = 0.0;
+    double slow_ns = 0.0;
+    using clock = std::chrono::steady_clock;
+    for (auto _ : state) {
+        const auto t0 = clock::now();
+        buffer.build(s.eye, s.tw.world, s.bsp);
+        int culled = 0;
+        for (const Aabb& b : s.boxes) {
+            culled += buffer.test_box(b) == Visibility::occluded;
+        }
+        const auto t1 = clock::now();
+        int hidden = 0;
+        for (const Aabb& b : s.boxes) {
+            hidden += reference.test_box(s.eye, b) == Visibility::occluded;
+        }
+        const auto t2 = clock::now();
+        benchmark::DoNotOptimize(culled + hidden);
+        fast_ns += std::chrono::duration<double, std::nano>(t1 - t0).count();
+        slow_ns += std::chrono::duration<double, std::nano>(t2 - t1).count();
+    }
+    state.counters["zpyr_build_and_512_tests_us"] =
+        fast_ns / 1000.0 / static_cast<double>(state.iterations());
+    state.counters["reference_512_tests_us"] =
+        slow_ns / 1000.0 / static_cast<double>(state.iterations());
+    state.counters["speedup"] = slow_ns / fast_ns;
+    report_scene(state);
+}
+BENCHMARK(BM_SpeedupVersusReference)->Unit(benchmark::kMillisecond);
+
+void BM_OctreeMove(benchmark::State& state) {
+    const Scene& s = scene();
+    LooseOctreeConfig config;
+    config.world_bounds = s.tw.play_area.expanded(256.0f);
+    config.max_items = 4096;
+    LooseOctree tree(config);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::vector<Aabb> boxes(config.max_items);
+    for (ItemId id = 0; id < config.max_items; ++id) {
+        const glm::vec3 c =
+            s.tw.play_area.min + s.tw.play_area.size() * glm::vec3(unit(rng), unit(rng), unit(rng));
+        boxes[id] = Aabb::from_center_half_extents(c, {16.0f, 16.0f, 28.0f});
+        (void)tree.insert(id, boxes[id]);
+    }
+    // Per-tick player motion: up to 320 units/s at 60 Hz, about 5 units per move.
+    std::vector<glm::vec3> steps(1024);
+    for (auto& d : steps) {
+        d = glm::vec3(unit(rng) - 0.5f, unit(rng) - 0.5f, 0.0f) * 10.0f;
+    }
+    std::size_t k = 0;
+    for (auto _ : state) {
+        const ItemId id = static_cast<ItemId>(k % config.max_items);
+        const glm::vec3 d = steps[k % steps.size()];
+        boxes[id] = {boxes[id].min + d, boxes[id].max + d};
+        benchmark::DoNotOptimize(tree.move(id, boxes[id]));
+        ++k;
+    }
+    state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_OctreeMove);
+
+void BM_OctreeCulledTraversal(benchmark::State& state) {
+    const Scene& s = scene();
+    LooseOctreeConfig config;
+    config.world_bounds = s.tw.play_area.expanded(256.0f);
+    config.max_items = 512;
+    LooseOctree tree(config);
+    for (ItemId id = 0; id < 512; ++id) {
+        (void)tree.insert(id, s.boxes[id]);
+    }
+    OcclusionBuffer buffer;
+    buffer.build(s.eye, s.tw.world, s.bsp);
+    int visible = 0;
+    for (auto _ : state) {
+        visible = 0;
+        tree.traverse_front_to_back(s.eye, buffer, [&](ItemId) { ++visible; });
+        benchmark::DoNotOptimize(visible);
+    }
+    state.counters["visible"] = visible;
+}
+BENCHMARK(BM_OctreeCulledTraversal)->Unit(benchmark::kMicrosecond);
+
+void BM_BspBuild(benchmark::State& state) {
+    // 10 x 10 rooms ~ 1k brushes; 32 x 32 rooms ~ 10k brushes.
+    const int rooms = static_cast<int>(state.range(0));
+    const TestWorld tw = make_corridor_world(9, rooms, rooms);
+    BspTree bsp;
+    for (auto _ : state) {
+        bsp.build(tw.world);
+        benchmark::ClobberMemory();
+    }
+    state.counters["brushes"] = static_cast<double>(tw.world.size());
+    state.counters["depth"] = bsp.depth();
+}
+BENCHMARK(BM_BspBuild)->Arg(10)->Arg(32)->Unit(benchmark::kMillisecond);
+
+} // namespace
+} // namespace dsoc::visibility
+
+BENCHMARK_MAIN();

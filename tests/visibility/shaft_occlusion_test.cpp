@@ -1,0 +1,86 @@
+// The exact single-occluder shaft test against brute-force segments from many eyes.
+
+#include "dsoc/visibility/occluder_region_visibility.hpp"
+#include "dsoc/visibility/reference_visibility.hpp"
+#include "dsoc/visibility/shaft_occlusion.hpp"
+#include "dsoc/visibility/test_worlds.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace dsoc::visibility {
+namespace {
+
+std::vector<Plane> wall_planes(glm::vec3 lo, glm::vec3 hi) {
+    return ConvexPolyhedron::from_aabb({lo, hi}).planes();
+}
+
+TEST(ShaftOcclusion, WallBetweenRegionAndBoxBlocksEverySegment) {
+    const auto wall = wall_planes({-8, -500, -500}, {8, 500, 500});
+    const Aabb region{{-100, -40, -40}, {-50, 40, 40}};
+    EXPECT_TRUE(shaft_blocked_by(region, Aabb{{50, -20, -20}, {80, 20, 20}}, wall));
+    // A box beside the wall's end is seen from the region.
+    EXPECT_FALSE(shaft_blocked_by(region, Aabb{{50, 2000, -20}, {80, 2040, 20}}, wall));
+}
+
+TEST(ShaftOcclusion, APillarHidesFromTheCentreButNotFromACorner) {
+    // A narrow pillar: the centre of the region is behind it, the region's corners
+    // look past it.
+    const auto pillar = wall_planes({-8, -10, -500}, {8, 10, 500});
+    const Aabb box{{200, -5, -5}, {210, 5, 5}};
+    EXPECT_TRUE(shaft_blocked_by(Aabb{{-100, -1, -1}, {-99, 1, 1}}, box, pillar));
+    EXPECT_FALSE(shaft_blocked_by(Aabb{{-100, -30, -1}, {-90, 30, 1}}, box, pillar));
+}
+
+TEST(ShaftOcclusion, RandomRegionsNeverHideWhatAnEyeSees) {
+    std::mt19937 rng(11);
+    int configurations = 0;
+    int culled = 0;
+    int misses = 0;
+    std::vector<glm::vec3> samples;
+    for (int w = 0; w < 3; ++w) {
+        const TestWorld tw =
+            w == 0   ? make_walls_world(40u + static_cast<std::uint32_t>(w), 60, 3000.0f)
+            : w == 1 ? make_corridor_world(7, 4, 4)
+                     : make_city_world(3, 4, 4);
+        OccluderGrid grid(tw.world);
+        ShaftOcclusion shaft(tw.world, grid);
+        OccluderGrid::Scratch scratch;
+        ReferenceVisibility ref(tw.world);
+        std::uniform_real_distribution<float> ux(tw.play_area.min.x, tw.play_area.max.x);
+        std::uniform_real_distribution<float> uy(tw.play_area.min.y, tw.play_area.max.y);
+        std::uniform_real_distribution<float> uz(tw.play_area.min.z, tw.play_area.max.z);
+        std::uniform_real_distribution<float> half(0.0f, 60.0f);
+        for (int i = 0; i < 700; ++i) {
+            const glm::vec3 c(ux(rng), uy(rng), uz(rng));
+            const Aabb region{c - glm::vec3(half(rng), half(rng), half(rng) * 0.5f),
+                              c + glm::vec3(half(rng), half(rng), half(rng) * 0.5f)};
+            const glm::vec3 b(ux(rng), uy(rng), uz(rng));
+            const Aabb box{b - glm::vec3(15, 15, 28), b + glm::vec3(15, 15, 28)};
+            ++configurations;
+            if (shaft.test(region, box, scratch) != Visibility::occluded) {
+                continue;
+            }
+            ++culled;
+            // Every eye of a 4x4x4 lattice over the region, plus random ones.
+            std::uniform_real_distribution<float> t01(0.0f, 1.0f);
+            bool seen = false;
+            for (int k = 0; k < 64 + 16 && !seen; ++k) {
+                glm::vec3 f = k < 64 ? glm::vec3(k % 4, (k / 4) % 4, k / 16) / 3.0f
+                                     : glm::vec3(t01(rng), t01(rng), t01(rng));
+                const glm::vec3 eye = region.min + region.size() * f;
+                seen = ref.test_box(eye, box, 5) == Visibility::visible;
+            }
+            misses += seen ? 1 : 0;
+        }
+    }
+    EXPECT_EQ(misses, 0) << "of " << culled << " culled";
+    // It must cull something: a meaningful share of random configurations.
+    EXPECT_GT(culled, configurations / 20) << culled << " of " << configurations;
+    std::printf("shaft stage: %d configurations, %d culled, %d misses\n", configurations, culled,
+                misses);
+}
+
+} // namespace
+} // namespace dsoc::visibility

@@ -1,0 +1,488 @@
+// Conservative cube-map z-pyramid. The key facts (docs/visibility.md has the proofs):
+//  * Coverage: from an eye outside a convex solid, the set of ray directions that
+//    hit it is a convex cone. A texel's directions are the convex hull of its four
+//    corner rays, so if all four corner rays hit, every ray of the texel hits.
+//  * Depth: along the ray eye + t*(F + u*R + v*U) (F the face axis, so t is view z),
+//    the entry depth is max over front-facing planes of num_i / den_i(u,v), where
+//    num_i = d_i - n_i.eye < 0 and den_i is linear in (u,v). With w_i = den_i / num_i
+//    (also linear), entry z = 1 / min_front w_i and exit z = 1 / max_back w_i. Over a
+//    fully covered texel every front plane has den_i < 0, so each plane's z is
+//    monotone along any line and extremal at the corners: the max of the four corner
+//    entry depths bounds the farthest entry depth over the texel.
+//  * Margins: hits need min_front w > max_back w * (1 + 1e-4); written depths are
+//    scaled up by 1 + 1e-4 and tested depths down by 1 - 1e-5, all toward `visible`.
+
+#include "dsoc/visibility/occlusion_buffer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace dsoc::visibility {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kHitMargin = 1.0e-4f;
+constexpr float kDepthUp = 1.0f + 1.0e-4f;
+constexpr float kDepthDown = 1.0f - 1.0e-5f;
+constexpr float kRectMargin = 1.0e-5f;
+/// Planes passing within this distance of the eye are pushed inwards so the eye is
+/// strictly outside them (shrinking the occluder is always conservative).
+constexpr float kEyePlaneMargin = 1.0e-3f;
+constexpr float kInvSqrt3 = 0.57735026f;
+
+/// Face f looks along sign * axis; R and U are the other two axes (positive).
+struct FaceAxes {
+    int axis, right, up;
+    float sign;
+};
+constexpr FaceAxes kFaces[6] = {{0, 1, 2, 1.0f},  {0, 1, 2, -1.0f}, {1, 0, 2, 1.0f},
+                                {1, 0, 2, -1.0f}, {2, 0, 1, 1.0f},  {2, 0, 1, -1.0f}};
+
+bool is_power_of_two(int v) {
+    return v > 0 && (v & (v - 1)) == 0;
+}
+
+/// d - n.p in double: map coordinates reach thousands of units while the eye may be
+/// a unit from the plane, and a float difference would lose the margins below.
+float plane_offset(const Plane& plane, glm::vec3 p) {
+    return static_cast<float>(static_cast<double>(plane.distance) -
+                              glm::dot(glm::dvec3(plane.normal), glm::dvec3(p)));
+}
+
+/// B - R = [B.min - R.max, B.max - R.min], subtracted in double for the same reason.
+Aabb difference_box(const Aabb& b, const Aabb& r) {
+    return {glm::vec3(glm::dvec3(b.min) - glm::dvec3(r.max)),
+            glm::vec3(glm::dvec3(b.max) - glm::dvec3(r.min))};
+}
+
+bool is_finite(const Aabb& b) {
+    return std::isfinite(b.min.x) && std::isfinite(b.min.y) && std::isfinite(b.min.z) &&
+           std::isfinite(b.max.x) && std::isfinite(b.max.y) && std::isfinite(b.max.z);
+}
+
+} // namespace
+
+std::vector<std::string> validate(const OcclusionBufferConfig& c) {
+    std::vector<std::string> problems;
+    if (!is_power_of_two(c.face_resolution) || c.face_resolution < 8 || c.face_resolution > 1024) {
+        problems.push_back("face_resolution must be a power of two in 8..1024, is " +
+                           std::to_string(c.face_resolution));
+    }
+    if (c.max_occluders < 0) {
+        problems.push_back("max_occluders must be >= 0, is " + std::to_string(c.max_occluders));
+    }
+    if (!(c.max_occluder_distance > 0.0f)) {
+        problems.push_back("max_occluder_distance must be > 0");
+    }
+    if (!(c.near_distance > 0.0f) || !std::isfinite(c.near_distance)) {
+        problems.push_back("near_distance must be finite and > 0");
+    }
+    return problems;
+}
+
+OcclusionBuffer::OcclusionBuffer(const OcclusionBufferConfig& config) : config_(config) {
+    if (!validate(config_).empty()) {
+        // Invalid settings fall back to defaults rather than corrupting memory; a
+        // server validates at start-up and refuses to run with them.
+        config_ = OcclusionBufferConfig{};
+    }
+    resolution_ = config_.face_resolution;
+    levels_ = 0;
+    std::size_t offset = 0;
+    for (int size = resolution_; size >= 1; size /= 2) {
+        level_offset_.push_back(offset);
+        offset += static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
+        ++levels_;
+    }
+    face_stride_ = offset;
+    depth_.assign(6 * face_stride_, kInf);
+    corner_u_.resize(static_cast<std::size_t>(resolution_) + 1);
+    for (int k = 0; k <= resolution_; ++k) {
+        corner_u_[static_cast<std::size_t>(k)] =
+            -1.0f + 2.0f * static_cast<float>(k) / static_cast<float>(resolution_);
+    }
+    const std::size_t row = static_cast<std::size_t>(resolution_) + 1;
+    row_prev_.resize(row);
+    row_cur_.resize(row);
+    w_front_.resize(row);
+    w_back_.resize(row);
+    coef_.resize(8 * 6 * kMaxOccluderPlanes);
+    num_.resize(8 * kMaxOccluderPlanes);
+    heap_.reserve(256);
+}
+
+void OcclusionBuffer::begin(glm::vec3 eye) {
+    begin_region(Aabb{eye, eye});
+}
+
+void OcclusionBuffer::begin_region(const Aabb& region) {
+    region_ = region;
+    eye_ = region.center();
+    region_mode_ = region.min != region.max;
+    eye_count_ = region_mode_ ? 8 : 1;
+    for (int j = 0; j < eye_count_; ++j) {
+        eyes_[j] = region_mode_ ? glm::vec3((j & 1) ? region.max.x : region.min.x,
+                                            (j & 2) ? region.max.y : region.min.y,
+                                            (j & 4) ? region.max.z : region.min.z)
+                                : eye_;
+    }
+    stats_ = {};
+    any_written_ = false;
+    for (int f = 0; f < 6; ++f) {
+        float* level0 = level_data(f, 0);
+        std::fill(level0, level0 + static_cast<std::size_t>(resolution_) * resolution_, kInf);
+    }
+}
+
+bool OcclusionBuffer::face_rect(int face, const Aabb& rel, float min_z, Rect& rect) const {
+    const FaceAxes& fa = kFaces[face];
+    float z_lo = fa.sign > 0.0f ? rel.min[fa.axis] : -rel.max[fa.axis];
+    const float z_hi = fa.sign > 0.0f ? rel.max[fa.axis] : -rel.min[fa.axis];
+    const float xl = rel.min[fa.right], xh = rel.max[fa.right];
+    const float yl = rel.min[fa.up], yh = rel.max[fa.up];
+    // Points in the face's (closed) frustum have z >= |x| and z >= |y|, so the box
+    // part inside it is no nearer than the box's smallest |x| and |y|.
+    const float min_abs_x = xl > 0.0f ? xl : (xh < 0.0f ? -xh : 0.0f);
+    const float min_abs_y = yl > 0.0f ? yl : (yh < 0.0f ? -yh : 0.0f);
+    z_lo = std::max(std::max(z_lo, min_z), std::max(min_abs_x, min_abs_y));
+    if (!(z_hi >= z_lo)) {
+        return false;
+    }
+    // u = x / z over the box part with z in [z_lo, z_hi]: extremal at the corners.
+    const float inv_lo = 1.0f / z_lo;
+    const float inv_hi = 1.0f / z_hi;
+    const float u0 = std::min(xl * inv_lo, xl * inv_hi) - kRectMargin;
+    const float u1 = std::max(xh * inv_lo, xh * inv_hi) + kRectMargin;
+    const float v0 = std::min(yl * inv_lo, yl * inv_hi) - kRectMargin;
+    const float v1 = std::max(yh * inv_lo, yh * inv_hi) + kRectMargin;
+    if (u1 < -1.0f || u0 > 1.0f || v1 < -1.0f || v0 > 1.0f) {
+        return false;
+    }
+    const float half = 0.5f * static_cast<float>(resolution_);
+    const int last = resolution_ - 1;
+    auto pixel = [&](float u) {
+        const float p = std::clamp((u + 1.0f) * half, 0.0f, static_cast<float>(last));
+        return static_cast<int>(p);
+    };
+    rect.x0 = pixel(u0);
+    rect.x1 = pixel(u1);
+    rect.y0 = pixel(v0);
+    rect.y1 = pixel(v1);
+    rect.z_near = z_lo;
+    return true;
+}
+
+bool OcclusionBuffer::add_occluder(std::span<const Plane> planes, const Aabb& bounds) {
+    ++stats_.occluders_visited;
+    const std::size_t count = planes.size();
+    if (count < 4 || count > kMaxOccluderPlanes || bounds.is_empty() || !is_finite(bounds)) {
+        return false;
+    }
+    // num[j][i] = d_i - n_i.eye_j: negative when eye j is outside plane i.
+    float* num = num_.data();
+    if (!region_mode_) {
+        bool eye_inside = true;
+        for (std::size_t i = 0; i < count; ++i) {
+            num[i] = plane_offset(planes[i], eye_);
+            eye_inside = eye_inside && num[i] >= -kEyePlaneMargin;
+            if (!std::isfinite(num[i])) {
+                return false;
+            }
+        }
+        if (eye_inside) {
+            return false;
+        }
+        // Planes through (or almost through) the eye: push them inwards. This is one
+        // fixed, smaller solid, so every argument above still applies to it.
+        for (std::size_t i = 0; i < count; ++i) {
+            if (num[i] > -kEyePlaneMargin && num[i] < kEyePlaneMargin) {
+                num[i] = -kEyePlaneMargin;
+            }
+        }
+    } else {
+        // From a region: the occluder must lie strictly outside the whole region,
+        // proven by one of its planes having every region corner outside it
+        // (otherwise skip it; skipping is always conservative).
+        bool separated = false;
+        for (std::size_t i = 0; i < count; ++i) {
+            float nearest = std::numeric_limits<float>::max();
+            for (int j = 0; j < eye_count_; ++j) {
+                const float v = plane_offset(planes[i], eyes_[j]);
+                if (!std::isfinite(v)) {
+                    return false;
+                }
+                num[static_cast<std::size_t>(j) * kMaxOccluderPlanes + i] = v;
+                nearest = std::min(nearest, -v);
+            }
+            separated = separated || nearest > kEyePlaneMargin;
+        }
+        if (!separated) {
+            return false;
+        }
+        // A plane passing (almost) through a corner eye would divide by ~0. Shrink
+        // such planes for all eyes alike (one smaller solid); give up after a few
+        // tries, which is conservative.
+        for (std::size_t i = 0; i < count; ++i) {
+            for (int attempt = 0;; ++attempt) {
+                bool near_zero = false;
+                for (int j = 0; j < eye_count_; ++j) {
+                    const float v = num[static_cast<std::size_t>(j) * kMaxOccluderPlanes + i];
+                    near_zero = near_zero || (v > -kEyePlaneMargin && v < kEyePlaneMargin);
+                }
+                if (!near_zero) {
+                    break;
+                }
+                if (attempt == 4) {
+                    return false;
+                }
+                for (int j = 0; j < eye_count_; ++j) {
+                    num[static_cast<std::size_t>(j) * kMaxOccluderPlanes + i] -=
+                        2.0f * kEyePlaneMargin;
+                }
+            }
+        }
+    }
+    // Directions from any eye of the region to the occluder: the box O - R.
+    const Aabb rel = difference_box(bounds, region_);
+    const float dist = std::sqrt(distance_squared(rel, glm::vec3(0.0f)));
+    const float min_z = std::max(dist * kInvSqrt3 * kDepthDown, 1.0e-4f);
+    const std::int64_t before = stats_.texels_written;
+    for (int face = 0; face < 6; ++face) {
+        Rect rect;
+        if (face_rect(face, rel, min_z, rect) && !level0_hides(face, rect, rect.z_near)) {
+            rasterize_face(face, rect, planes, num, count);
+        }
+    }
+    const bool wrote = stats_.texels_written != before;
+    stats_.occluders_written += wrote ? 1 : 0;
+    any_written_ = any_written_ || wrote;
+    return wrote;
+}
+
+bool OcclusionBuffer::level0_hides(int face, const Rect& r, float z) const {
+    // An occluder entirely behind what is already written cannot lower any texel.
+    const float* level0 = level_data(face, 0);
+    for (int y = r.y0; y <= r.y1; ++y) {
+        const float* row = level0 + static_cast<std::size_t>(y) * resolution_;
+        for (int x = r.x0; x <= r.x1; ++x) {
+            if (!(z > row[x])) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
+void OcclusionBuffer::rasterize_face(int face, const Rect& rect, std::span<const Plane> planes,
+                                     const float* num, std::size_t plane_count) {
+    const FaceAxes& fa = kFaces[face];
+    // Per eye j: w_ij(u, v) = (n.F + n.R u + n.U v) / num_ij, as (a, b, c) triples,
+    // front planes (num < 0) first, then back planes.
+    float* coef = coef_.data();
+    std::size_t front_count[8];
+    std::size_t back_count[8];
+    for (int j = 0; j < eye_count_; ++j) {
+        const float* nj = num + static_cast<std::size_t>(j) * kMaxOccluderPlanes;
+        float* front = coef + static_cast<std::size_t>(j) * 6 * kMaxOccluderPlanes;
+        float* back = front + 3 * kMaxOccluderPlanes;
+        std::size_t fc = 0;
+        std::size_t bc = 0;
+        for (std::size_t i = 0; i < plane_count; ++i) {
+            const glm::vec3 n = planes[i].normal;
+            const float inv = 1.0f / nj[i];
+            float* dst = nj[i] < 0.0f ? front + 3 * fc++ : back + 3 * bc++;
+            dst[0] = n[fa.axis] * fa.sign * inv;
+            dst[1] = n[fa.right] * inv;
+            dst[2] = n[fa.up] * inv;
+        }
+        front_count[j] = fc;
+        back_count[j] = bc;
+    }
+    const int cols = rect.x1 - rect.x0 + 2; // corners per row
+    const float* u = corner_u_.data() + rect.x0;
+    float* wf = w_front_.data();
+    float* wb = w_back_.data();
+    float* prev = row_prev_.data();
+    float* cur = row_cur_.data();
+    float* level0 = level_data(face, 0);
+    std::int64_t written = 0;
+    for (int cy = rect.y0; cy <= rect.y1 + 1; ++cy) {
+        const float v = corner_u_[static_cast<std::size_t>(cy)];
+        // cur[k]: the corner ray's entry depth, max over eyes; +inf when any misses.
+        for (int k = 0; k < cols; ++k) {
+            cur[k] = 0.0f;
+        }
+        for (int j = 0; j < eye_count_; ++j) {
+            const float* front = coef + static_cast<std::size_t>(j) * 6 * kMaxOccluderPlanes;
+            const float* back = front + 3 * kMaxOccluderPlanes;
+            for (int k = 0; k < cols; ++k) {
+                wf[k] = kInf;
+                wb[k] = 0.0f;
+            }
+            for (std::size_t p = 0; p < front_count[j]; ++p) {
+                const float base = front[3 * p] + front[3 * p + 2] * v;
+                const float slope = front[3 * p + 1];
+                for (int k = 0; k < cols; ++k) {
+                    wf[k] = std::min(wf[k], base + slope * u[k]);
+                }
+            }
+            for (std::size_t p = 0; p < back_count[j]; ++p) {
+                const float base = back[3 * p] + back[3 * p + 2] * v;
+                const float slope = back[3 * p + 1];
+                for (int k = 0; k < cols; ++k) {
+                    wb[k] = std::max(wb[k], base + slope * u[k]);
+                }
+            }
+            for (int k = 0; k < cols; ++k) {
+                // wb >= 0, so a hit also means wf > 0 (every front plane faces the
+                // ray). Branch-free so it vectorizes; the division is masked on a miss.
+                const bool hit = wf[k] > wb[k] * (1.0f + kHitMargin);
+                const float depth = kDepthUp / wf[k];
+                cur[k] = std::max(cur[k], hit ? depth : kInf);
+            }
+            if (j + 1 < eye_count_) {
+                // Region mode: once every corner of the row misses from some eye,
+                // the other eyes cannot change that.
+                bool any_hit = false;
+                for (int k = 0; k < cols; ++k) {
+                    any_hit = any_hit || cur[k] < kInf;
+                }
+                if (!any_hit) {
+                    break;
+                }
+            }
+        }
+        if (cy > rect.y0) {
+            float* row = level0 + static_cast<std::size_t>(cy - 1) * resolution_ + rect.x0;
+            for (int k = 0; k + 1 < cols; ++k) {
+                const float d =
+                    std::max(std::max(prev[k], prev[k + 1]), std::max(cur[k], cur[k + 1]));
+                written += d < row[k] ? 1 : 0;
+                row[k] = std::min(row[k], d);
+            }
+        }
+        std::swap(prev, cur);
+    }
+    stats_.texels_written += written;
+}
+
+void OcclusionBuffer::finish() {
+    for (int f = 0; f < 6; ++f) {
+        for (int level = 1; level < levels_; ++level) {
+            const int size = resolution_ >> level;
+            const float* src = level_data(f, level - 1);
+            float* dst = level_data(f, level);
+            const int src_size = size * 2;
+            for (int y = 0; y < size; ++y) {
+                const float* r0 = src + static_cast<std::size_t>(2 * y) * src_size;
+                const float* r1 = r0 + src_size;
+                for (int x = 0; x < size; ++x) {
+                    dst[static_cast<std::size_t>(y) * size + x] = std::max(
+                        std::max(r0[2 * x], r0[2 * x + 1]), std::max(r1[2 * x], r1[2 * x + 1]));
+                }
+            }
+        }
+    }
+}
+
+void OcclusionBuffer::build(glm::vec3 eye, const OccluderWorld& world, const BspTree& bsp) {
+    build_region(Aabb{eye, eye}, world, bsp);
+}
+
+void OcclusionBuffer::build_region(const Aabb& region, const OccluderWorld& world,
+                                   const BspTree& bsp) {
+    begin_region(region);
+    const glm::vec3 eye = region.center();
+    const float max_d = config_.max_occluder_distance;
+    const float max_sq = max_d * max_d;
+    int budget = config_.max_occluders;
+    if (budget > 0) {
+        bsp.traverse_nearest_first(
+            eye, heap_,
+            [&](const BspNode& node) { return distance_squared(node.bounds, eye) <= max_sq; },
+            [&](OccluderId id) {
+                (void)add_occluder(world.solid_planes(id), world.occluder(id).bounds());
+                return --budget > 0;
+            });
+    }
+    finish();
+}
+
+float OcclusionBuffer::depth(int face, int level, int x, int y) const {
+    const int size = resolution_ >> level;
+    return level_data(face, level)[static_cast<std::size_t>(y) * size + x];
+}
+
+bool OcclusionBuffer::texel_occluded(int face, int level, int tx, int ty, const Rect& r,
+                                     float z) const {
+    const int size = resolution_ >> level;
+    if (z > level_data(face, level)[static_cast<std::size_t>(ty) * size + tx]) {
+        return true;
+    }
+    if (level == 0) {
+        return false;
+    }
+    // Children of this texel that overlap the rectangle (in level-0 pixels).
+    const int shift = level - 1;
+    for (int cy = 2 * ty; cy <= 2 * ty + 1; ++cy) {
+        if ((cy << shift) > r.y1 || (((cy + 1) << shift) - 1) < r.y0) {
+            continue;
+        }
+        for (int cx = 2 * tx; cx <= 2 * tx + 1; ++cx) {
+            if ((cx << shift) > r.x1 || (((cx + 1) << shift) - 1) < r.x0) {
+                continue;
+            }
+            if (!texel_occluded(face, level - 1, cx, cy, r, z)) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
+bool OcclusionBuffer::rect_occluded(int face, const Rect& r, float z) const {
+    // Start where the rectangle spans at most 2x2 texels.
+    int level = 0;
+    while (level + 1 < levels_ &&
+           (((r.x1 >> level) - (r.x0 >> level)) > 1 || ((r.y1 >> level) - (r.y0 >> level)) > 1)) {
+        ++level;
+    }
+    for (int ty = r.y0 >> level; ty <= (r.y1 >> level); ++ty) {
+        for (int tx = r.x0 >> level; tx <= (r.x1 >> level); ++tx) {
+            if (!texel_occluded(face, level, tx, ty, r, z)) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
+Visibility OcclusionBuffer::test_box(const Aabb& box) const {
+    if (!any_written_ || box.is_empty() || !is_finite(box)) {
+        return Visibility::visible;
+    }
+    // Every vector from an eye of the region to a point of the box lies in B - R;
+    // for a point eye this is just the box relative to the eye.
+    const Aabb rel = difference_box(box, region_);
+    const float d2 = distance_squared(rel, glm::vec3(0.0f));
+    if (!(d2 > config_.near_distance * config_.near_distance)) {
+        return Visibility::visible;
+    }
+    // Points of the box inside a face's frustum have view z >= |p - eye| / sqrt(3).
+    const float min_z = std::sqrt(d2) * kInvSqrt3 * kDepthDown;
+    int faces_touched = 0;
+    for (int face = 0; face < 6; ++face) {
+        Rect rect;
+        if (!face_rect(face, rel, min_z, rect)) {
+            continue;
+        }
+        ++faces_touched;
+        if (!rect_occluded(face, rect, rect.z_near * kDepthDown)) {
+            return Visibility::visible;
+        }
+    }
+    return faces_touched > 0 ? Visibility::occluded : Visibility::visible;
+}
+
+} // namespace dsoc::visibility
