@@ -20,22 +20,18 @@ float wrap_degrees(float deg) {
 
 } // namespace
 
-GameWorld::GameWorld(const ServerConfig& config)
-    : max_speed_(config.max_speed), bot_speed_(config.max_speed * config.bot_speed_fraction),
-      half_size_(config.world_half_size), rng_(config.seed) {
+GameWorld::GameWorld(const ServerConfig& config, std::shared_ptr<const maps::Map> map)
+    : map_(std::move(map)), collision_(map_->collision_brushes) {
+    move_.max_speed = config.max_speed;
     entities_.reserve(static_cast<std::size_t>(config.bots) + 64);
-    for (int i = 0; i < config.bots; ++i) {
+    bots_ = sim::spawn_wander_bots(collision_, move_, map_->spawn_points,
+                                   static_cast<std::size_t>(config.bots), config.seed);
+    for (std::size_t i = 0; i < bots_.size(); ++i) {
         Entity& bot = add(EntityKind::bot);
-        bot.position = random_open_point();
-        bot.goal = random_open_point();
+        bot.bot = static_cast<std::int32_t>(i);
+        bot.move = bots_[i].state;
     }
-}
-
-glm::vec3 GameWorld::random_open_point() {
-    std::uniform_real_distribution<float> coord(-half_size_ * 0.95f, half_size_ * 0.95f);
-    const float x = coord(rng_);
-    const float y = coord(rng_);
-    return {x, y, 24.0f};
+    next_spawn_ = static_cast<std::uint32_t>(config.seed % map_->spawn_points.size());
 }
 
 Entity& GameWorld::add(EntityKind kind) {
@@ -48,8 +44,10 @@ Entity& GameWorld::add(EntityKind kind) {
 }
 
 std::uint32_t GameWorld::spawn_player() {
+    const auto& spawn = map_->spawn_points[next_spawn_++ % map_->spawn_points.size()];
     Entity& p = add(EntityKind::player);
-    p.position = random_open_point();
+    p.move = sim::spawn_state(collision_, move_, spawn.origin);
+    p.yaw_deg = wrap_degrees(spawn.yaw_degrees);
     return p.id;
 }
 
@@ -74,45 +72,45 @@ const Entity* GameWorld::find(std::uint32_t id) const {
     return it == index_.end() ? nullptr : &entities_[it->second];
 }
 
-void GameWorld::set_player_input(std::uint32_t id, glm::vec3 wish, float yaw_deg,
+visibility::Aabb GameWorld::box_of(const Entity& e) const {
+    return {e.move.position + move_.mins, e.move.position + move_.maxs};
+}
+
+glm::vec3 GameWorld::eye_of(const Entity& e) const {
+    return e.move.position + glm::vec3(0.0f, 0.0f, move_.eye_height);
+}
+
+void GameWorld::set_player_input(std::uint32_t id, glm::vec3 wish, bool jump, float yaw_deg,
                                  float pitch_deg) {
     const auto it = index_.find(id);
     if (it == index_.end()) {
         return;
     }
     Entity& e = entities_[it->second];
-    wish.z = 0.0f; // the skeleton world is flat
+    wish.z = 0.0f;
     const float len = glm::length(wish);
-    e.wish = len > 1.0f ? wish / len : wish;
+    e.input.wish_direction = len > 1e-6f ? wish / len : glm::vec3(0.0f);
+    e.input.jump = jump;
     e.yaw_deg = wrap_degrees(yaw_deg);
     e.pitch_deg = std::clamp(pitch_deg, -90.0f, 90.0f);
 }
 
 void GameWorld::step(float dt) {
-    const float limit = half_size_ - 16.0f;
     for (Entity& e : entities_) {
-        glm::vec3 velocity{0.0f};
-        if (e.kind == EntityKind::bot) {
-            glm::vec3 to_goal = e.goal - e.position;
-            to_goal.z = 0.0f;
-            const float dist = glm::length(to_goal);
-            if (dist < bot_speed_ * dt + 1.0f) {
-                e.goal = random_open_point();
-            } else {
-                velocity = to_goal / dist * bot_speed_;
-                e.yaw_deg = glm::degrees(std::atan2(to_goal.y, to_goal.x));
+        if (e.bot >= 0) {
+            sim::WanderBot& brain = bots_[static_cast<std::size_t>(e.bot)];
+            sim::wander_step(brain, collision_, wander_, move_, map_->spawn_points, map_->hazards,
+                             dt);
+            e.move = brain.state;
+            e.teleported = brain.respawned;
+            const glm::vec3 v = e.move.velocity;
+            if (v.x * v.x + v.y * v.y > 1.0f) {
+                e.yaw_deg = glm::degrees(std::atan2(v.y, v.x));
             }
         } else {
-            velocity = e.wish * max_speed_;
+            sim::player_move(collision_, move_, e.input, dt, e.move);
+            e.teleported = false;
         }
-        const float speed = glm::length(velocity);
-        if (speed > max_speed_) {
-            velocity *= max_speed_ / speed;
-        }
-        e.velocity = velocity;
-        e.position += velocity * dt;
-        e.position.x = std::clamp(e.position.x, -limit, limit);
-        e.position.y = std::clamp(e.position.y, -limit, limit);
     }
 }
 

@@ -1,5 +1,8 @@
 #include "dsoc/server/interest_policy.hpp"
 
+#include "dsoc/server/culling_policy.hpp"
+#include "dsoc/visibility/occluder_region_visibility.hpp"
+
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
@@ -19,8 +22,8 @@ void DistancePolicy::select(const GameWorld& world, const Viewer& viewer,
     const float r2 = radius_ * radius_;
     for (const Entity& e : world.entities()) {
         // Distance from the eye to the nearest point of the entity's box.
-        const glm::vec3 nearest =
-            glm::clamp(viewer.eye, e.position - e.half_extents, e.position + e.half_extents);
+        const visibility::Aabb box = world.box_of(e);
+        const glm::vec3 nearest = glm::clamp(viewer.eye, box.min, box.max);
         const glm::vec3 d = nearest - viewer.eye;
         if (glm::dot(d, d) <= r2) {
             out.push_back(e.id);
@@ -28,11 +31,25 @@ void DistancePolicy::select(const GameWorld& world, const Viewer& viewer,
     }
 }
 
-std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config) {
+std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const GameWorld& world) {
     if (config.policy == "broadcast") {
         return std::make_unique<BroadcastPolicy>();
     }
-    return std::make_unique<DistancePolicy>(config.distance_radius);
+    if (config.policy == "distance") {
+        return std::make_unique<DistancePolicy>(config.distance_radius);
+    }
+    visibility::DSOCConfig dsoc;
+    dsoc.tick_rate = config.tick_rate;
+    [[maybe_unused]] const bool known =
+        visibility::parse_tbv_strategy(config.tbv_strategy, dsoc.strategy);
+    if (config.policy == "occlusion") {
+        dsoc.tbvs_enabled = false;
+        dsoc.reuse_buffers = false;
+    }
+    auto scene = visibility::OccluderScene::build(world.map().occluders);
+    return std::make_unique<CullingPolicy>(config.policy, dsoc, world,
+                                           visibility::occluder_region_visibility(scene),
+                                           lookahead_ticks(config));
 }
 
 } // namespace dsoc::server

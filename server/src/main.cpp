@@ -1,5 +1,6 @@
 // dsoc-server: the game server with occlusion-aware interest management.
 
+#include "dsoc/maps/map_source.hpp"
 #include "dsoc/server/server.hpp"
 #include "dsoc/server/stats_report.hpp"
 
@@ -19,13 +20,24 @@ int main(int argc, char** argv) {
     std::string stats_json;
 
     CLI::App app{"dsoc-server: authoritative game server with interest management"};
-    app.add_option("--bind", config.bind_address, "Address to listen on")
-        ->capture_default_str();
+    app.add_option("--bind", config.bind_address, "Address to listen on")->capture_default_str();
     app.add_option("--port", config.port, "TCP port; 0 picks a free one")->capture_default_str();
     app.add_option("--tick-rate", config.tick_rate, "Ticks (snapshots) per second [Hz]")
         ->capture_default_str();
     app.add_option("--bots", config.bots, "Wandering bots")->capture_default_str();
-    app.add_option("--policy", config.policy, "Interest policy: broadcast | distance")
+    app.add_option("--map", config.map,
+                   "Map: name (e.g. oa_dm4), path to .bsp/text map, or gen:city / gen:rooms")
+        ->capture_default_str();
+    app.add_option("--policy", config.policy,
+                   "Interest policy: dsoc | occlusion | distance | broadcast")
+        ->capture_default_str();
+    app.add_option("--tbv-strategy", config.tbv_strategy, "dsoc TBVs: adaptive | explicit | fuzzy")
+        ->capture_default_str();
+    app.add_option("--latency-allowance-ms", config.latency_allowance_ms,
+                   "Client movement the server covers: RTT + interpolation delay [ms]")
+        ->capture_default_str();
+    app.add_option("--trace", config.trace_file, "Write a replication trace (JSON Lines) here");
+    app.add_option("--trace-every", config.trace_every, "Record every k-th tick in the trace")
         ->capture_default_str();
     app.add_option("--distance-radius", config.distance_radius,
                    "Radius of the distance policy [units]")
@@ -44,7 +56,8 @@ int main(int argc, char** argv) {
     app.add_option("--max-speed", config.max_speed, "Speed bound of every entity [units/s]")
         ->capture_default_str();
     app.add_option("--seed", config.seed, "Seed for bots and spawns")->capture_default_str();
-    app.add_option("--duration", config.duration_s, "Stop after this many seconds (0: run until signalled)")
+    app.add_option("--duration", config.duration_s,
+                   "Stop after this many seconds (0: run until signalled)")
         ->capture_default_str();
     app.add_option("--log-level", log_level, "trace|debug|info|warn|error")->capture_default_str();
     app.add_option("--stats-json", stats_json, "Write the end-of-run figures as JSON to this file");
@@ -61,13 +74,31 @@ int main(int argc, char** argv) {
         return 2;
     }
 
+    const auto started = std::chrono::steady_clock::now();
+    auto loaded = dsoc::maps::load_map(config.map, dsoc::maps::MapSearch::from_environment());
+    if (!loaded) {
+        spdlog::error("cannot load map '{}': {}", config.map, loaded.error().message());
+        return 2;
+    }
+    auto map = std::make_shared<const dsoc::maps::Map>(std::move(loaded).value());
+    if (map->spawn_points.empty()) {
+        spdlog::error("map '{}' has no spawn points", config.map);
+        return 2;
+    }
+    spdlog::info(
+        "map {} loaded in {:.0f} ms: {} occluders, {} collision brushes, {} spawn points",
+        map->name,
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started)
+            .count(),
+        map->occluders.size(), map->collision_brushes.size(), map->spawn_points.size());
+
     boost::asio::io_context io;
-    dsoc::server::Server server(io, config);
+    dsoc::server::Server server(io, config, map);
     std::uint16_t port = 0;
     try {
         port = server.start();
     } catch (const std::exception& e) {
-        spdlog::error("cannot listen on {}:{}: {}", config.bind_address, config.port, e.what());
+        spdlog::error("cannot start on {}:{}: {}", config.bind_address, config.port, e.what());
         return 1;
     }
     // A machine-readable line for scripts that started us with --port 0.
@@ -83,7 +114,8 @@ int main(int argc, char** argv) {
     });
     boost::asio::steady_timer stop_timer(io);
     if (config.duration_s > 0.0) {
-        stop_timer.expires_after(std::chrono::milliseconds(static_cast<long>(config.duration_s * 1000)));
+        stop_timer.expires_after(
+            std::chrono::milliseconds(static_cast<long>(config.duration_s * 1000)));
         stop_timer.async_wait([&](const boost::system::error_code& ec) {
             if (!ec) {
                 server.shutdown([&] { signals.cancel(); });

@@ -4,24 +4,25 @@ namespace dsoc::server {
 
 namespace {
 
-void fill_state(const Entity& e, protocol::pb::EntityState& s) {
+void fill_state(const GameWorld& world, const Entity& e, protocol::pb::EntityState& s) {
     s.set_id(e.id);
-    s.set_x(e.position.x);
-    s.set_y(e.position.y);
-    s.set_z(e.position.z);
+    s.set_x(e.move.position.x);
+    s.set_y(e.move.position.y);
+    s.set_z(e.move.position.z);
     s.set_yaw(e.yaw_deg);
     s.set_pitch(e.pitch_deg);
-    s.set_half_x(e.half_extents.x);
-    s.set_half_y(e.half_extents.y);
-    s.set_half_z(e.half_extents.z);
+    const glm::vec3 half = world.box_of(e).half_extents();
+    s.set_half_x(half.x);
+    s.set_half_y(half.y);
+    s.set_half_z(half.z);
     s.set_kind(static_cast<std::uint32_t>(e.kind));
 }
 
 } // namespace
 
 void ReplicationState::build_snapshot(const GameWorld& world,
-                                      std::span<const std::uint32_t> interest,
-                                      std::uint64_t tick, protocol::pb::Snapshot& snapshot) {
+                                      std::span<const std::uint32_t> interest, std::uint64_t tick,
+                                      protocol::pb::Snapshot& snapshot) {
     snapshot.Clear();
     snapshot.set_server_tick(tick);
     next_known_.clear();
@@ -30,8 +31,10 @@ void ReplicationState::build_snapshot(const GameWorld& world,
     std::size_t i = 0;
     std::size_t j = 0;
     while (i < known_.size() || j < interest.size()) {
-        const bool take_old = j == interest.size() || (i < known_.size() && known_[i] < interest[j]);
-        const bool take_new = i == known_.size() || (j < interest.size() && interest[j] < known_[i]);
+        const bool take_old =
+            j == interest.size() || (i < known_.size() && known_[i] < interest[j]);
+        const bool take_new =
+            i == known_.size() || (j < interest.size() && interest[j] < known_[i]);
         if (take_old) { // known, no longer of interest (or gone from the world)
             snapshot.add_leave(known_[i]);
             sent_.erase(known_[i]);
@@ -53,21 +56,21 @@ void ReplicationState::build_snapshot(const GameWorld& world,
         }
         next_known_.push_back(id);
         if (take_new) {
-            fill_state(*e, *snapshot.add_enter());
-            sent_[id] = {e->position, e->yaw_deg, e->pitch_deg};
+            fill_state(world, *e, *snapshot.add_enter());
+            sent_[id] = {e->move.position, e->yaw_deg, e->pitch_deg};
             continue;
         }
         SentState& last = sent_[id];
-        if (last.position != e->position || last.yaw_deg != e->yaw_deg ||
+        if (last.position != e->move.position || last.yaw_deg != e->yaw_deg ||
             last.pitch_deg != e->pitch_deg) {
             protocol::pb::EntityUpdate& u = *snapshot.add_update();
             u.set_id(id);
-            u.set_x(e->position.x);
-            u.set_y(e->position.y);
-            u.set_z(e->position.z);
+            u.set_x(e->move.position.x);
+            u.set_y(e->move.position.y);
+            u.set_z(e->move.position.z);
             u.set_yaw(e->yaw_deg);
             u.set_pitch(e->pitch_deg);
-            last = {e->position, e->yaw_deg, e->pitch_deg};
+            last = {e->move.position, e->yaw_deg, e->pitch_deg};
         }
     }
     known_.swap(next_known_);

@@ -19,10 +19,10 @@ namespace {
 constexpr std::size_t kMaxTickSamples = 4'000'000;
 } // namespace
 
-Server::Server(asio::io_context& io, ServerConfig config)
+Server::Server(asio::io_context& io, ServerConfig config, std::shared_ptr<const maps::Map> map)
     : io_(io), config_(std::move(config)), acceptor_(io), tick_timer_(io),
       tick_period_(std::chrono::nanoseconds(1'000'000'000LL / config_.tick_rate)),
-      world_(config_), policy_(make_policy(config_)) {}
+      world_(config_, std::move(map)), policy_(make_policy(config_, world_)) {}
 
 Server::~Server() = default;
 
@@ -35,8 +35,26 @@ std::uint16_t Server::start() {
     acceptor_.listen();
     const std::uint16_t port = acceptor_.local_endpoint().port();
     spdlog::info("dsoc-server listening on {}:{} map={} policy={} tick_rate={} Hz bots={}",
-                 config_.bind_address, port, config_.map_name, policy_->name(),
-                 config_.tick_rate, config_.bots);
+                 config_.bind_address, port, world_.map().name, policy_->name(), config_.tick_rate,
+                 config_.bots);
+    if (!config_.trace_file.empty()) {
+        trace::TraceHeader header;
+        header.map = world_.map().name;
+        header.tick_rate = config_.tick_rate;
+        header.policy = std::string(policy_->name());
+        header.lookahead_ticks = lookahead_ticks(config_);
+        const auto& occluders = world_.map().occluders;
+        for (std::size_t i = 0; i < occluders.size(); ++i) {
+            header.occluders.push_back({static_cast<std::uint32_t>(i), occluders[i].planes()});
+        }
+        trace_ = std::make_unique<trace::TraceWriter>();
+        std::string error;
+        if (!trace_->open(config_.trace_file, header, error)) {
+            throw std::runtime_error(error);
+        }
+        spdlog::info("writing a replication trace to {} (every {} tick(s))", config_.trace_file,
+                     config_.trace_every);
+    }
     accept_next();
     tick_epoch_ = Clock::now();
     schedule_tick();
@@ -44,28 +62,28 @@ std::uint16_t Server::start() {
 }
 
 void Server::accept_next() {
-    acceptor_.async_accept([this](const boost::system::error_code& ec,
-                                  asio::ip::tcp::socket socket) {
-        if (ec) {
-            if (ec != asio::error::operation_aborted && !shutting_down_) {
-                spdlog::warn("accept failed: {}", ec.message());
-                accept_next();
+    acceptor_.async_accept(
+        [this](const boost::system::error_code& ec, asio::ip::tcp::socket socket) {
+            if (ec) {
+                if (ec != asio::error::operation_aborted && !shutting_down_) {
+                    spdlog::warn("accept failed: {}", ec.message());
+                    accept_next();
+                }
+                return;
             }
-            return;
-        }
-        const std::uint32_t id = next_client_id_++;
-        auto session = std::make_shared<Session>(std::move(socket), id, config_,
-                                                      static_cast<SessionHost&>(*this));
-        sessions_[id] = session;
-        ++stats_.clients_accepted;
-        session->start();
-        if (sessions_.size() > static_cast<std::size_t>(config_.max_clients)) {
-            session->disconnect(pb::DISCONNECT_REASON_SERVER_FULL,
-                                "server holds " + std::to_string(config_.max_clients) +
-                                    " clients at most");
-        }
-        accept_next();
-    });
+            const std::uint32_t id = next_client_id_++;
+            auto session = std::make_shared<Session>(std::move(socket), id, config_,
+                                                     static_cast<SessionHost&>(*this));
+            sessions_[id] = session;
+            ++stats_.clients_accepted;
+            session->start();
+            if (sessions_.size() > static_cast<std::size_t>(config_.max_clients)) {
+                session->disconnect(pb::DISCONNECT_REASON_SERVER_FULL,
+                                    "server holds " + std::to_string(config_.max_clients) +
+                                        " clients at most");
+            }
+            accept_next();
+        });
 }
 
 void Server::schedule_tick() {
@@ -92,6 +110,9 @@ void Server::run_tick() {
     world_.step(dt);
     policy_->begin_tick(world_, tick_);
     send_snapshots();
+    if (trace_ && tick_ % static_cast<std::uint64_t>(config_.trace_every) == 0) {
+        write_trace_tick();
+    }
     ++stats_.ticks;
     if (stats_.tick_cost_us.size() < kMaxTickSamples) {
         stats_.tick_cost_us.push_back(
@@ -109,7 +130,7 @@ void Server::send_snapshots() {
         if (self == nullptr) {
             continue;
         }
-        const Viewer viewer{id, session.entity_id(), GameWorld::eye_of(*self)};
+        const Viewer viewer{id, session.entity_id(), world_.eye_of(*self)};
         policy_->select(world_, viewer, interest_);
         const auto own = std::lower_bound(interest_.begin(), interest_.end(), viewer.entity_id);
         if (own == interest_.end() || *own != viewer.entity_id) {
@@ -122,6 +143,26 @@ void Server::send_snapshots() {
         ++stats_.snapshots_sent;
         session.send(envelope_);
     }
+}
+
+void Server::write_trace_tick() {
+    trace::TraceTick& t = trace_tick_;
+    t.t = tick_;
+    t.entities.clear();
+    for (const Entity& e : world_.entities()) {
+        t.entities.push_back({e.id, world_.box_of(e)});
+    }
+    t.clients.clear();
+    for (const auto& [id, client] : clients_) {
+        const Session& session = *client.session;
+        const Entity* self = world_.find(session.entity_id());
+        if (!session.active() || self == nullptr) {
+            continue;
+        }
+        t.clients.push_back(
+            {id, session.entity_id(), world_.eye_of(*self), client.replication.known()});
+    }
+    trace_->write_tick(t);
 }
 
 void Server::on_hello(Session& session, const pb::ClientHello& /*hello*/) {
@@ -137,26 +178,27 @@ void Server::on_hello(Session& session, const pb::ClientHello& /*hello*/) {
     }
     const std::uint32_t entity = world_.spawn_player();
     session.set_entity_id(entity);
+    policy_->add_viewer(session.client_id(), entity);
     pb::Envelope reply;
     auto& hello = *reply.mutable_server_hello();
     hello.set_protocol_version(protocol::kProtocolVersion);
     hello.set_client_id(session.client_id());
     hello.set_entity_id(entity);
     hello.set_tick_rate(static_cast<std::uint32_t>(config_.tick_rate));
-    hello.set_map_name(config_.map_name);
+    hello.set_map_name(world_.map().name);
     hello.set_server_tick(tick_);
     hello.set_max_speed(config_.max_speed);
     session.send(reply);
     session.mark_active();
     auto it = sessions_.find(session.client_id());
     clients_[session.client_id()].session = it->second;
-    spdlog::debug("client {} '{}' from {} joined as entity {}", session.client_id(),
-                  session.name(), session.remote(), entity);
+    spdlog::debug("client {} '{}' from {} joined as entity {}", session.client_id(), session.name(),
+                  session.remote(), entity);
 }
 
 void Server::on_input(Session& session, const pb::ClientInput& input) {
     world_.set_player_input(session.entity_id(),
-                            glm::vec3(input.move_x(), input.move_y(), input.move_z()),
+                            glm::vec3(input.move_x(), input.move_y(), input.move_z()), input.jump(),
                             input.view_yaw(), input.view_pitch());
 }
 
@@ -184,6 +226,11 @@ void Server::shutdown(std::function<void()> on_done) {
     shutting_down_ = true;
     on_shutdown_done_ = std::move(on_done);
     spdlog::info("shutting down: {} connection(s) to close", sessions_.size());
+    if (trace_) {
+        trace_->close();
+        spdlog::info("trace: {} tick(s) written to {}", trace_->ticks_written(),
+                     config_.trace_file);
+    }
     boost::system::error_code ec;
     acceptor_.close(ec);
     tick_timer_.cancel();

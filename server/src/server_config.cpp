@@ -22,25 +22,34 @@ std::vector<std::string> validate(const ServerConfig& c) {
           "must be 1..240 Hz, got " + std::to_string(c.tick_rate));
     check(p, c.bots >= 0 && c.bots <= 100000, "bots",
           "must be 0..100000, got " + std::to_string(c.bots));
-    check(p, c.policy == "broadcast" || c.policy == "distance", "policy",
-          "must be one of broadcast, distance; got '" + c.policy + "'");
+    check(p,
+          c.policy == "broadcast" || c.policy == "distance" || c.policy == "occlusion" ||
+              c.policy == "dsoc",
+          "policy", "must be one of dsoc, occlusion, distance, broadcast; got '" + c.policy + "'");
+    check(p,
+          c.tbv_strategy == "adaptive" || c.tbv_strategy == "explicit" || c.tbv_strategy == "fuzzy",
+          "tbv_strategy", "must be one of adaptive, explicit, fuzzy; got '" + c.tbv_strategy + "'");
+    check(p, c.latency_allowance_ms >= 0 && c.latency_allowance_ms <= 2000, "latency_allowance_ms",
+          "must be 0..2000 ms, got " + std::to_string(c.latency_allowance_ms));
+    check(p, c.trace_every >= 1, "trace_every", "must be >= 1");
     check(p, std::isfinite(c.distance_radius) && c.distance_radius > 0.0f, "distance_radius",
           "must be a finite number > 0");
     check(p, c.max_clients >= 1 && c.max_clients <= 100000, "max_clients",
           "must be 1..100000, got " + std::to_string(c.max_clients));
-    check(p, c.max_frame_bytes >= 64 && c.max_frame_bytes <= 16u * 1024u * 1024u,
-          "max_frame_bytes", "must be 64..16777216, got " + std::to_string(c.max_frame_bytes));
+    check(p, c.max_frame_bytes >= 64 && c.max_frame_bytes <= 16u * 1024u * 1024u, "max_frame_bytes",
+          "must be 64..16777216, got " + std::to_string(c.max_frame_bytes));
     check(p, c.max_send_queue_bytes >= c.max_frame_bytes, "max_send_queue_bytes",
           "must be at least max_frame_bytes");
     check(p, c.handshake_timeout_ms > 0, "handshake_timeout_ms", "must be > 0");
     check(p, std::isfinite(c.max_speed) && c.max_speed > 0.0f, "max_speed",
           "must be a finite number > 0");
-    check(p, c.bot_speed_fraction >= 0.0f && c.bot_speed_fraction <= 1.0f, "bot_speed_fraction",
-          "must be in [0, 1]");
-    check(p, std::isfinite(c.world_half_size) && c.world_half_size > 0.0f, "world_half_size",
-          "must be a finite number > 0");
+    check(p, !c.map.empty(), "map", "must name a map");
     check(p, std::isfinite(c.duration_s) && c.duration_s >= 0.0, "duration_s", "must be >= 0");
     return p;
+}
+
+int lookahead_ticks(const ServerConfig& c) {
+    return static_cast<int>((static_cast<long>(c.latency_allowance_ms) * c.tick_rate + 999) / 1000);
 }
 
 } // namespace dsoc::server

@@ -51,7 +51,8 @@ Session::Session(asio::ip::tcp::socket socket, std::uint32_t client_id, const Se
       config_(config), host_(host), decoder_(config.max_frame_bytes) {
     boost::system::error_code ec;
     const auto endpoint = socket_.remote_endpoint(ec);
-    remote_ = ec ? "unknown" : endpoint.address().to_string() + ":" + std::to_string(endpoint.port());
+    remote_ =
+        ec ? "unknown" : endpoint.address().to_string() + ":" + std::to_string(endpoint.port());
     socket_.set_option(asio::ip::tcp::no_delay(true), ec);
 }
 
@@ -236,29 +237,28 @@ void Session::write_next() {
         return;
     }
     writing_ = true;
-    asio::async_write(socket_, asio::buffer(write_queue_.front()),
-                      [self = shared_from_this()](const boost::system::error_code& ec,
-                                                  std::size_t n) {
-                          self->writing_ = false;
-                          if (self->state_ == State::closed) {
-                              return;
-                          }
-                          if (ec) {
-                              self->close_now();
-                              return;
-                          }
-                          self->bytes_sent_ += n;
-                          self->queued_bytes_ -= self->write_queue_.front().size();
-                          self->write_queue_.pop_front();
-                          if (!self->write_queue_.empty()) {
-                              self->write_next();
-                          } else if (self->state_ == State::closing) {
-                              // Half-close: the peer reads our last frames, then closes.
-                              boost::system::error_code ignored;
-                              self->socket_.shutdown(asio::ip::tcp::socket::shutdown_send,
-                                                     ignored);
-                          }
-                      });
+    asio::async_write(
+        socket_, asio::buffer(write_queue_.front()),
+        [self = shared_from_this()](const boost::system::error_code& ec, std::size_t n) {
+            self->writing_ = false;
+            if (self->state_ == State::closed) {
+                return;
+            }
+            if (ec) {
+                self->close_now();
+                return;
+            }
+            self->bytes_sent_ += n;
+            self->queued_bytes_ -= self->write_queue_.front().size();
+            self->write_queue_.pop_front();
+            if (!self->write_queue_.empty()) {
+                self->write_next();
+            } else if (self->state_ == State::closing) {
+                // Half-close: the peer reads our last frames, then closes.
+                boost::system::error_code ignored;
+                self->socket_.shutdown(asio::ip::tcp::socket::shutdown_send, ignored);
+            }
+        });
 }
 
 void Session::close_now() {

@@ -37,8 +37,11 @@ std::string format_json(const ServerStats& stats, const ServerConfig& config) {
     j["tick_rate"] = config.tick_rate;
     j["ticks"] = stats.ticks;
     j["late_ticks"] = stats.late_ticks;
-    j["tick_cost_us"] = {{"mean", cost.mean}, {"p50", cost.p50}, {"p95", cost.p95},
-                         {"p99", cost.p99},   {"max", cost.max}};
+    j["tick_cost_us"] = {{"mean", cost.mean},
+                         {"p50", cost.p50},
+                         {"p95", cost.p95},
+                         {"p99", cost.p99},
+                         {"max", cost.max}};
     j["bytes_sent"] = stats.bytes_sent;
     j["bytes_received"] = stats.bytes_received;
     j["snapshots_sent"] = stats.snapshots_sent;

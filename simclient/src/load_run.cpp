@@ -18,7 +18,8 @@ LoadRun::LoadRun(asio::io_context& io, LoadConfig config)
 void LoadRun::start() {
     started_ = Clock::now();
     connect_next();
-    end_timer_.expires_after(std::chrono::milliseconds(static_cast<long>(config_.duration_s * 1000)));
+    end_timer_.expires_after(
+        std::chrono::milliseconds(static_cast<long>(config_.duration_s * 1000)));
     end_timer_.async_wait([this](const boost::system::error_code& ec) {
         if (!ec) {
             stop();

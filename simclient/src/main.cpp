@@ -15,15 +15,19 @@ int main(int argc, char** argv) {
     std::string report_file;
     bool quiet = false;
 
-    CLI::App app{"dsoc-simclient: simulated clients that load a dsoc server and check the protocol.\n"
-                 "Exits 1 when a client failed to connect, saw a protocol error or was dropped."};
+    CLI::App app{
+        "dsoc-simclient: simulated clients that load a dsoc server and check the protocol.\n"
+        "Exits 1 when a client failed to connect, saw a protocol error or was dropped."};
     app.add_option("--server", server, "Server address HOST:PORT")->capture_default_str();
-    app.add_option("--clients", config.clients, "Simulated clients")->capture_default_str()
+    app.add_option("--clients", config.clients, "Simulated clients")
+        ->capture_default_str()
         ->check(CLI::Range(1, 100000));
     app.add_option("--duration", config.duration_s, "Run time, ramp-up included [s]")
-        ->capture_default_str()->check(CLI::PositiveNumber);
+        ->capture_default_str()
+        ->check(CLI::PositiveNumber);
     app.add_option("--ramp-up", config.ramp_up_s, "Spread the connects over this time [s]")
-        ->capture_default_str()->check(CLI::NonNegativeNumber);
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
     app.add_option("--report", report_file, "Write the JSON report to this file");
     app.add_option("--seed", config.seed, "Seed of the wandering inputs")->capture_default_str();
     app.add_flag("--quiet", quiet, "No progress lines");

@@ -39,14 +39,15 @@ void SimClient::start() {
         return;
     }
     const asio::ip::tcp::endpoint endpoint(address, config_.port);
-    socket_.async_connect(endpoint, [self = shared_from_this()](const boost::system::error_code& e) {
-        if (e) {
-            self->stats_.connect_failed = true;
-            self->state_ = State::closed;
-            return;
-        }
-        self->on_connected();
-    });
+    socket_.async_connect(endpoint,
+                          [self = shared_from_this()](const boost::system::error_code& e) {
+                              if (e) {
+                                  self->stats_.connect_failed = true;
+                                  self->state_ = State::closed;
+                                  return;
+                              }
+                              self->on_connected();
+                          });
 }
 
 void SimClient::on_connected() {
@@ -124,12 +125,12 @@ void SimClient::handle(const pb::Envelope& message) {
         apply_snapshot(message.snapshot());
         return;
     case pb::Envelope::kPong: {
-        const auto now_us = std::chrono::duration_cast<std::chrono::microseconds>(
-                                Clock::now().time_since_epoch())
-                                .count();
-        stats_.rtt_ms.push_back(
-            static_cast<double>(now_us - static_cast<std::int64_t>(message.pong().client_time_us())) /
-            1000.0);
+        const auto now_us =
+            std::chrono::duration_cast<std::chrono::microseconds>(Clock::now().time_since_epoch())
+                .count();
+        stats_.rtt_ms.push_back(static_cast<double>(now_us - static_cast<std::int64_t>(
+                                                                 message.pong().client_time_us())) /
+                                1000.0);
         return;
     }
     case pb::Envelope::kDisconnect:
@@ -237,23 +238,22 @@ void SimClient::write_next() {
         return;
     }
     writing_ = true;
-    asio::async_write(socket_, asio::buffer(write_queue_.front()),
-                      [self = shared_from_this()](const boost::system::error_code& ec,
-                                                  std::size_t n) {
-                          self->writing_ = false;
-                          if (ec || self->state_ == State::closed) {
-                              return; // the read side reports the loss
-                          }
-                          self->stats_.bytes_up += n;
-                          self->write_queue_.pop_front();
-                          if (!self->write_queue_.empty()) {
-                              self->write_next();
-                          } else if (self->goodbye_sent_) {
-                              boost::system::error_code ignored;
-                              self->socket_.shutdown(asio::ip::tcp::socket::shutdown_send,
-                                                     ignored);
-                          }
-                      });
+    asio::async_write(
+        socket_, asio::buffer(write_queue_.front()),
+        [self = shared_from_this()](const boost::system::error_code& ec, std::size_t n) {
+            self->writing_ = false;
+            if (ec || self->state_ == State::closed) {
+                return; // the read side reports the loss
+            }
+            self->stats_.bytes_up += n;
+            self->write_queue_.pop_front();
+            if (!self->write_queue_.empty()) {
+                self->write_next();
+            } else if (self->goodbye_sent_) {
+                boost::system::error_code ignored;
+                self->socket_.shutdown(asio::ip::tcp::socket::shutdown_send, ignored);
+            }
+        });
 }
 
 void SimClient::stop() {
@@ -281,7 +281,9 @@ void SimClient::stop() {
     });
 }
 
-void SimClient::error(const std::string& kind) { ++stats_.protocol_errors[kind]; }
+void SimClient::error(const std::string& kind) {
+    ++stats_.protocol_errors[kind];
+}
 
 void SimClient::close() {
     if (state_ == State::closed) {

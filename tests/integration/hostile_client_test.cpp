@@ -29,7 +29,9 @@ public:
         socket_.connect({asio::ip::make_address("127.0.0.1"), port});
     }
 
-    void send_bytes(const std::vector<std::uint8_t>& bytes) { asio::write(socket_, asio::buffer(bytes)); }
+    void send_bytes(const std::vector<std::uint8_t>& bytes) {
+        asio::write(socket_, asio::buffer(bytes));
+    }
 
     void send_message(const pb::Envelope& message) {
         std::vector<std::uint8_t> frame;

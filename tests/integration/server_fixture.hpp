@@ -2,6 +2,7 @@
 // Runs a real dsoc server on loopback (port 0) on its own thread.
 
 #include "dsoc/server/server.hpp"
+#include "support/test_maps.hpp"
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/post.hpp>
@@ -13,7 +14,8 @@ namespace dsoc::testing {
 
 class RunningServer {
 public:
-    explicit RunningServer(server::ServerConfig config) : server_(io_, prepare(std::move(config))) {
+    explicit RunningServer(server::ServerConfig config)
+        : server_(io_, prepare(std::move(config)), rooms_map()) {
         port_ = server_.start();
         thread_ = std::thread([this] { io_.run(); });
     }

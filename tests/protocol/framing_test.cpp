@@ -9,7 +9,9 @@
 namespace dsoc::protocol {
 namespace {
 
-std::vector<std::uint8_t> bytes_of(const std::string& s) { return {s.begin(), s.end()}; }
+std::vector<std::uint8_t> bytes_of(const std::string& s) {
+    return {s.begin(), s.end()};
+}
 
 /// Feeds `stream` in pieces cut at `cuts` and collects every frame payload.
 std::vector<std::vector<std::uint8_t>> decode_in_pieces(const std::vector<std::uint8_t>& stream,
@@ -93,7 +95,8 @@ TEST(Framing, OneByteAtATime) {
 TEST(Framing, RandomPiecesRandomPayloads) {
     std::mt19937 rng(42);
     for (int round = 0; round < 200; ++round) {
-        std::vector<std::vector<std::uint8_t>> payloads(std::uniform_int_distribution<int>(1, 8)(rng));
+        std::vector<std::vector<std::uint8_t>> payloads(
+            std::uniform_int_distribution<int>(1, 8)(rng));
         std::vector<std::uint8_t> stream;
         for (auto& p : payloads) {
             p.resize(std::uniform_int_distribution<std::size_t>(0, 300)(rng));
@@ -172,7 +175,8 @@ TEST(Framing, TruncatedFrameWaitsForMore) {
     const std::uint8_t last = 'd';
     decoder.feed(std::span(&last, 1));
     ASSERT_EQ(decoder.next(payload), FrameDecoder::Status::frame);
-    EXPECT_EQ(std::vector<std::uint8_t>(payload.begin(), payload.end()), bytes_of("truncated payload"));
+    EXPECT_EQ(std::vector<std::uint8_t>(payload.begin(), payload.end()),
+              bytes_of("truncated payload"));
 }
 
 } // namespace

@@ -1,4 +1,5 @@
 #include "dsoc/server/replication_state.hpp"
+#include "support/test_maps.hpp"
 
 #include <gtest/gtest.h>
 
@@ -19,7 +20,7 @@ std::vector<std::uint32_t> ids(const google::protobuf::RepeatedField<std::uint32
 }
 
 TEST(ReplicationState, EnterThenUpdateThenLeave) {
-    GameWorld world(config_with_bots(3)); // ids 1, 2, 3
+    GameWorld world(config_with_bots(3), testing::rooms_map()); // ids 1, 2, 3
     ReplicationState state;
     protocol::pb::Snapshot snap;
 
@@ -48,7 +49,7 @@ TEST(ReplicationState, EnterThenUpdateThenLeave) {
 }
 
 TEST(ReplicationState, RemovedEntityLeaves) {
-    GameWorld world(config_with_bots(2));
+    GameWorld world(config_with_bots(2), testing::rooms_map());
     ReplicationState state;
     protocol::pb::Snapshot snap;
     const std::vector<std::uint32_t> both = {1, 2};
@@ -61,7 +62,7 @@ TEST(ReplicationState, RemovedEntityLeaves) {
 }
 
 TEST(ReplicationState, RandomSequencesKeepKnowledgeExact) {
-    GameWorld world(config_with_bots(40));
+    GameWorld world(config_with_bots(40), testing::rooms_map());
     ReplicationState state;
     protocol::pb::Snapshot snap;
     std::vector<std::uint32_t> client_view; // what a client applying the snapshots knows

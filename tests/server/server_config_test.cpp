@@ -7,7 +7,9 @@
 namespace dsoc::server {
 namespace {
 
-TEST(ServerConfig, DefaultsAreValid) { EXPECT_TRUE(validate(ServerConfig{}).empty()); }
+TEST(ServerConfig, DefaultsAreValid) {
+    EXPECT_TRUE(validate(ServerConfig{}).empty());
+}
 
 TEST(ServerConfig, EachProblemNamesItsField) {
     ServerConfig c;

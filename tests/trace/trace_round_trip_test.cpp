@@ -23,8 +23,13 @@ TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
     header.tick_rate = 30;
     header.policy = "dsoc";
     header.lookahead_ticks = 3;
-    header.occluders.push_back({0, {{{1, 0, 0}, 8}, {{-1, 0, 0}, 8}, {{0, 1, 0}, 100},
-                                    {{0, -1, 0}, 100}, {{0, 0, 1}, 50}, {{0, 0, -1}, 0.1f}}});
+    header.occluders.push_back({0,
+                                {{{1, 0, 0}, 8},
+                                 {{-1, 0, 0}, 8},
+                                 {{0, 1, 0}, 100},
+                                 {{0, -1, 0}, 100},
+                                 {{0, 0, 1}, 50},
+                                 {{0, 0, -1}, 0.1f}}});
     std::string error;
     {
         TraceWriter w;
@@ -55,8 +60,8 @@ TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
     }
     std::string tick_line;
     std::getline(in, tick_line);
-    EXPECT_EQ(tick_line.rfind(R"({"type":"tick","t":10,"entities":[[42,-15,-15,-24,15.5,15,32])", 0),
-              0u)
+    EXPECT_EQ(
+        tick_line.rfind(R"({"type":"tick","t":10,"entities":[[42,-15,-15,-24,15.5,15,32])", 0), 0u)
         << tick_line;
     EXPECT_NE(tick_line.find(R"({"id":7,"entity":42,"eye":[0.1,0.2,26],"replicated":[43]})"),
               std::string::npos);
@@ -93,7 +98,8 @@ TEST(Trace, ReaderNamesTheLineAndTheProblem) {
         std::ofstream out(path);
         out << R"({"type":"header","version":1,"map":"m","tick_rate":30,"policy":"p","lookahead_ticks":0,"occluders":[]})"
             << "\n"
-            << R"({"type":"tick","t":5,"entities":[[1,0,0,0,1,1]],"clients":[]})" << "\n";
+            << R"({"type":"tick","t":5,"entities":[[1,0,0,0,1,1]],"clients":[]})"
+            << "\n";
     }
     TraceReader r;
     ASSERT_TRUE(r.open(path)) << r.error();
@@ -103,7 +109,8 @@ TEST(Trace, ReaderNamesTheLineAndTheProblem) {
 
     {
         std::ofstream out(path);
-        out << R"({"type":"header","version":2})" << "\n";
+        out << R"({"type":"header","version":2})"
+            << "\n";
     }
     TraceReader r2;
     EXPECT_FALSE(r2.open(path));

@@ -150,8 +150,8 @@ bool TraceReader::next(TraceTick& tick) {
     tick.clients.clear();
     for (const auto& c : j["clients"]) {
         TraceClient tc;
-        if (!c.is_object() || !c.contains("id") || !get_u32(c["id"], tc.id) ||
-            !c.contains("eye") || !get_vec3(c["eye"], tc.eye) || !c.contains("replicated") ||
+        if (!c.is_object() || !c.contains("id") || !get_u32(c["id"], tc.id) || !c.contains("eye") ||
+            !get_vec3(c["eye"], tc.eye) || !c.contains("replicated") ||
             !c["replicated"].is_array()) {
             return fail("tick: a client needs id, eye [x,y,z] and replicated");
         }

@@ -18,7 +18,9 @@ void append_vec(std::string& out, glm::vec3 v) {
 
 } // namespace
 
-TraceWriter::~TraceWriter() { close(); }
+TraceWriter::~TraceWriter() {
+    close();
+}
 
 bool TraceWriter::open(const std::string& path, const TraceHeader& header, std::string& error) {
     close();

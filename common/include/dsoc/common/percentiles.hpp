@@ -36,8 +36,8 @@ inline Summary summarize(std::vector<double> samples) {
         return s;
     }
     std::sort(samples.begin(), samples.end());
-    s.mean = std::accumulate(samples.begin(), samples.end(), 0.0) /
-             static_cast<double>(samples.size());
+    s.mean =
+        std::accumulate(samples.begin(), samples.end(), 0.0) / static_cast<double>(samples.size());
     s.p50 = percentile_sorted(samples, 0.50);
     s.p95 = percentile_sorted(samples, 0.95);
     s.p99 = percentile_sorted(samples, 0.99);

@@ -1,13 +1,21 @@
 #pragma once
-// The server's authoritative entities: bots and players, and how they move.
-// Clients only send intent; every entity moves at most `max_speed` units/s, which
-// is the speed bound interest policies (and TBVs) rely on.
+// The server's authoritative entities, bots and players, walking on a map with
+// Quake 3 style movement (dsoc::sim). Clients only send intent; the server moves
+// every entity, so every entity obeys sim::motion_bound() — the speed contract that
+// interest policies and TBVs rely on. A bot that falls into a hazard respawns (a
+// teleport, flagged for that tick).
 
+#include "dsoc/maps/map.hpp"
 #include "dsoc/server/server_config.hpp"
+#include "dsoc/sim/collision_world.hpp"
+#include "dsoc/sim/player_move.hpp"
+#include "dsoc/sim/wander_bot.hpp"
+#include "dsoc/visibility/geometry.hpp"
 
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <random>
 #include <unordered_map>
 #include <vector>
@@ -19,27 +27,27 @@ enum class EntityKind : std::uint8_t { bot = 0, player = 1 };
 struct Entity {
     std::uint32_t id = 0;
     EntityKind kind = EntityKind::bot;
-    glm::vec3 position{0.0f};         ///< origin, world units
-    glm::vec3 velocity{0.0f};         ///< units/s
-    glm::vec3 half_extents{15.0f, 15.0f, 28.0f};
-    float yaw_deg = 0.0f;             ///< [-180, 180)
-    float pitch_deg = 0.0f;           ///< [-90, 90]
-    glm::vec3 wish{0.0f};             ///< players: movement intent, |wish| <= 1
-    glm::vec3 goal{0.0f};             ///< bots: where they wander to
+    sim::MoveState move;     ///< position is the origin (feet + 24), world units
+    float yaw_deg = 0.0f;    ///< [-180, 180)
+    float pitch_deg = 0.0f;  ///< [-90, 90]
+    sim::MoveInput input;    ///< players: this tick's intent
+    std::int32_t bot = -1;   ///< index into the bot brains, or -1
+    bool teleported = false; ///< respawned during the last step()
 };
 
 class GameWorld {
 public:
-    explicit GameWorld(const ServerConfig& config);
+    /// `map` must outlive the world and have at least one spawn point.
+    GameWorld(const ServerConfig& config, std::shared_ptr<const maps::Map> map);
 
-    /// Adds a player entity at a random open position; returns its id (never 0,
-    /// never reused).
+    /// Adds a player entity at a spawn point; returns its id (never 0, never reused).
     std::uint32_t spawn_player();
     /// Removes an entity; unknown ids are ignored.
     void remove(std::uint32_t id);
-    /// Sets a player's intent; `wish` is clamped to length <= 1, angles are wrapped
-    /// and clamped. Non-finite values must be rejected by the caller.
-    void set_player_input(std::uint32_t id, glm::vec3 wish, float yaw_deg, float pitch_deg);
+    /// Sets a player's intent: `wish` horizontal, clamped to length <= 1; angles are
+    /// wrapped and clamped. Non-finite values must be rejected by the caller.
+    void set_player_input(std::uint32_t id, glm::vec3 wish, bool jump, float yaw_deg,
+                          float pitch_deg);
 
     /// Advances every entity by `dt` seconds.
     void step(float dt);
@@ -47,22 +55,28 @@ public:
     /// All entities in increasing id order.
     [[nodiscard]] const std::vector<Entity>& entities() const { return entities_; }
     [[nodiscard]] const Entity* find(std::uint32_t id) const;
+    /// The entity's collision box in world space.
+    [[nodiscard]] visibility::Aabb box_of(const Entity& e) const;
     /// Where an entity's view is taken from.
-    [[nodiscard]] static glm::vec3 eye_of(const Entity& e) { return e.position + glm::vec3(0, 0, 26); }
-    [[nodiscard]] float max_speed() const { return max_speed_; }
+    [[nodiscard]] glm::vec3 eye_of(const Entity& e) const;
+    [[nodiscard]] float max_speed() const { return move_.max_speed; }
+    [[nodiscard]] const sim::MoveConfig& move_config() const { return move_; }
+    [[nodiscard]] const maps::Map& map() const { return *map_; }
+    [[nodiscard]] const std::shared_ptr<const maps::Map>& map_ptr() const { return map_; }
 
 private:
     Entity& add(EntityKind kind);
-    glm::vec3 random_open_point();
     void rebuild_index();
 
+    std::shared_ptr<const maps::Map> map_;
+    sim::CollisionWorld collision_;
+    sim::MoveConfig move_;
+    sim::WanderConfig wander_;
     std::vector<Entity> entities_;
+    std::vector<sim::WanderBot> bots_;
     std::unordered_map<std::uint32_t, std::size_t> index_;
     std::uint32_t next_id_ = 1;
-    float max_speed_;
-    float bot_speed_;
-    float half_size_;
-    std::mt19937_64 rng_;
+    std::uint32_t next_spawn_ = 0;
 };
 
 } // namespace dsoc::server

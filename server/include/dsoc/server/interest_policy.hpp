@@ -29,6 +29,9 @@ public:
     /// `viewer` should know. The server adds the viewer's own entity itself.
     virtual void select(const GameWorld& world, const Viewer& viewer,
                         std::vector<std::uint32_t>& out) = 0;
+    /// A client joined, viewing from `entity_id`; it gets its first snapshot after the
+    /// next begin_tick().
+    virtual void add_viewer(std::uint32_t /*client_id*/, std::uint32_t /*entity_id*/) {}
     /// A client left: forget any per-client state.
     virtual void remove_viewer(std::uint32_t /*client_id*/) {}
 };
@@ -54,7 +57,7 @@ private:
     float radius_;
 };
 
-/// The policy named by config.policy; config must have passed validate().
-std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config);
+/// The policy named by config.policy, for `world`; config must have passed validate().
+std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const GameWorld& world);
 
 } // namespace dsoc::server

@@ -9,6 +9,7 @@
 #include "dsoc/server/replication_state.hpp"
 #include "dsoc/server/server_config.hpp"
 #include "dsoc/server/session.hpp"
+#include "dsoc/trace/trace_writer.hpp"
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
@@ -26,9 +27,9 @@ namespace dsoc::server {
 /// Totals since start; read them on the io_context thread or after run() returned.
 struct ServerStats {
     std::uint64_t ticks = 0;
-    std::uint64_t late_ticks = 0;      ///< ticks that started more than one period late
-    std::uint64_t bytes_sent = 0;      ///< to clients, frame headers included
-    std::uint64_t bytes_received = 0;  ///< from clients, frame headers included
+    std::uint64_t late_ticks = 0;     ///< ticks that started more than one period late
+    std::uint64_t bytes_sent = 0;     ///< to clients, frame headers included
+    std::uint64_t bytes_received = 0; ///< from clients, frame headers included
     std::uint64_t snapshots_sent = 0;
     std::uint64_t entity_updates_sent = 0; ///< enters + updates
     std::uint64_t clients_accepted = 0;
@@ -38,14 +39,15 @@ struct ServerStats {
 
 class Server final : private SessionHost {
 public:
-    /// `config` must have passed validate().
-    Server(boost::asio::io_context& io, ServerConfig config);
+    /// `config` must have passed validate(); `map` is the loaded config.map.
+    Server(boost::asio::io_context& io, ServerConfig config, std::shared_ptr<const maps::Map> map);
     ~Server() override;
     Server(const Server&) = delete;
     Server& operator=(const Server&) = delete;
 
     /// Binds, listens and starts the tick loop. Returns the bound port (useful with
-    /// port 0). Throws boost::system::system_error when the address cannot be bound.
+    /// port 0). Throws boost::system::system_error when the address cannot be bound,
+    /// std::runtime_error when the trace file cannot be opened.
     std::uint16_t start();
 
     /// Stops accepting, stops ticking, tells every client `server_shutdown`, and lets
@@ -69,6 +71,7 @@ private:
     void run_tick();
     void send_snapshots();
     void maybe_finish_shutdown();
+    void write_trace_tick();
 
     void on_hello(Session& session, const protocol::pb::ClientHello& hello) override;
     void on_input(Session& session, const protocol::pb::ClientInput& input) override;
@@ -91,6 +94,8 @@ private:
     ServerStats stats_;
     std::vector<std::uint32_t> interest_;
     protocol::pb::Envelope envelope_;
+    std::unique_ptr<trace::TraceWriter> trace_;
+    trace::TraceTick trace_tick_;
 };
 
 } // namespace dsoc::server

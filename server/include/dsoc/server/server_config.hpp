@@ -16,8 +16,23 @@ struct ServerConfig {
     int tick_rate = 30;
     /// Wandering bots. [Limit: 0..100000]
     int bots = 200;
-    /// Interest policy name: "broadcast" or "distance".
-    std::string policy = "distance";
+    /// Map: a name looked up in OpenArena's .pk3 archives (and $DSOC_MAP_PATH), a path
+    /// to a .bsp or text map, or "gen:city[:seed]" / "gen:rooms[:seed]".
+    std::string map = "oa_dm4";
+    /// Interest policy: "dsoc" (occlusion culling with TBVs, latency-safe),
+    /// "occlusion" (the same culler, every entity tested every tick, no TBVs),
+    /// "distance" (radius) or "broadcast" (everything).
+    std::string policy = "dsoc";
+    /// TBV strategy of the dsoc policy: "adaptive", "explicit" or "fuzzy" (not
+    /// conservative: for evaluation only).
+    std::string tbv_strategy = "adaptive";
+    /// Time the server must cover a client's own movement for: round trip plus the
+    /// client's interpolation delay. Rounded up to whole ticks. [Units: ms] [Limit: 0..2000]
+    int latency_allowance_ms = 150;
+    /// Write a replication trace (shared/specs/replication-trace.md) to this file; empty: none.
+    std::string trace_file;
+    /// Record every k-th tick in the trace. [Limit: >= 1]
+    int trace_every = 1;
     /// Radius of the distance policy, from the viewer's eye. [Units: world units] [Limit: > 0]
     float distance_radius = 1500.0f;
     /// Connected clients at most; more are refused with `server_full`. [Limit: 1..100000]
@@ -29,21 +44,19 @@ struct ServerConfig {
     std::size_t max_send_queue_bytes = 1024 * 1024;
     /// A connection that has not said a valid hello by then is closed. [Units: ms] [Limit: > 0]
     int handshake_timeout_ms = 5000;
-    /// Horizontal speed bound of every entity, enforced by the server. [Units: units/s] [Limit: > 0]
+    /// Horizontal speed bound of every entity, enforced by the server. [Units: units/s] [Limit: >
+    /// 0]
     float max_speed = 320.0f;
-    /// Bots move at this fraction of max_speed. [Limit: 0..1]
-    float bot_speed_fraction = 0.8f;
-    /// Half size of the square open world the skeleton uses. [Units: world units] [Limit: > 0]
-    float world_half_size = 2048.0f;
     /// Seed for bots and spawn positions; the same seed gives the same bot motion.
     std::uint64_t seed = 1;
-    /// Name reported to clients in the server hello.
-    std::string map_name = "open-square";
     /// Stop by itself after this long; 0 runs until SIGINT/SIGTERM. [Units: s] [Limit: >= 0]
     double duration_s = 0.0;
 };
 
 /// Every problem with the settings, each naming the field and why; empty when usable.
 std::vector<std::string> validate(const ServerConfig& config);
+
+/// The latency allowance in ticks (rounded up).
+[[nodiscard]] int lookahead_ticks(const ServerConfig& config);
 
 } // namespace dsoc::server

@@ -19,9 +19,9 @@ struct ClientStats {
     std::uint64_t bytes_down = 0; ///< frame headers included
     std::uint64_t bytes_up = 0;
     std::uint64_t snapshots = 0;
-    std::uint64_t entity_updates = 0;   ///< enters + updates received
-    double active_seconds = 0.0;        ///< from server hello to stop
-    std::vector<double> known_samples;  ///< entities known after each snapshot
+    std::uint64_t entity_updates = 0;  ///< enters + updates received
+    double active_seconds = 0.0;       ///< from server hello to stop
+    std::vector<double> known_samples; ///< entities known after each snapshot
     std::vector<double> interarrival_ms;
     std::vector<double> rtt_ms;
     std::map<std::string, std::uint64_t> protocol_errors; ///< by kind

@@ -34,7 +34,7 @@ struct LoadReport {
     double bytes_down_per_client_s = 0.0; ///< mean over connected clients of bytes / active s
     double bytes_up_per_client_s = 0.0;
     double entity_updates_per_client_s = 0.0;
-    common::Summary entities_known;        ///< over every snapshot of every client
+    common::Summary entities_known; ///< over every snapshot of every client
     common::Summary snapshot_interarrival_ms;
     common::Summary rtt_ms;
 
@@ -56,7 +56,9 @@ public:
     void stop();
 
     [[nodiscard]] LoadReport report() const;
-    [[nodiscard]] const std::vector<std::shared_ptr<SimClient>>& clients() const { return clients_; }
+    [[nodiscard]] const std::vector<std::shared_ptr<SimClient>>& clients() const {
+        return clients_;
+    }
 
 private:
     void connect_next();

@@ -1,0 +1,26 @@
+#pragma once
+// Reading entries out of .pk3 archives (zip files) with libzip.
+
+#include "dsoc/maps/load_error.hpp"
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace dsoc::maps {
+
+/// Largest entry read_pk3_entry() accepts. [Units: bytes]
+inline constexpr std::size_t kMaxPk3EntryBytes = 256u * 1024u * 1024u;
+
+/// Reads one entry (e.g. "maps/oa_dm4.bsp", matched case-insensitively, as Quake 3
+/// does). Errors: archive missing or corrupt, entry missing, larger than
+/// kMaxPk3EntryBytes, or shorter than its directory says.
+[[nodiscard]] Result<std::vector<std::byte>> read_pk3_entry(const std::filesystem::path& pk3,
+                                                            std::string_view entry);
+
+/// Names of the maps in an archive: "maps/<name>.bsp" entries give "<name>", sorted.
+[[nodiscard]] Result<std::vector<std::string>> list_pk3_maps(const std::filesystem::path& pk3);
+
+} // namespace dsoc::maps

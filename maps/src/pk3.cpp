@@ -1,0 +1,116 @@
+#include "dsoc/maps/pk3.hpp"
+
+#include <zip.h>
+
+#include <algorithm>
+#include <cctype>
+#include <memory>
+
+namespace dsoc::maps {
+namespace {
+
+struct ZipCloser {
+    void operator()(zip_t* archive) const { zip_discard(archive); }
+};
+struct ZipFileCloser {
+    void operator()(zip_file_t* file) const { zip_fclose(file); }
+};
+using ZipPtr = std::unique_ptr<zip_t, ZipCloser>;
+
+Result<ZipPtr> open_archive(const std::filesystem::path& pk3) {
+    int code = 0;
+    zip_t* archive = zip_open(pk3.c_str(), ZIP_RDONLY | ZIP_CHECKCONS, &code);
+    if (archive == nullptr) {
+        zip_error_t error;
+        zip_error_init_with_code(&error, code);
+        std::string what = std::string("cannot open archive: ") + zip_error_strerror(&error);
+        zip_error_fini(&error);
+        return LoadError{pk3.string(), "", std::move(what)};
+    }
+    return ZipPtr(archive);
+}
+
+std::string lower(std::string_view text) {
+    std::string out(text);
+    std::transform(out.begin(), out.end(), out.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return out;
+}
+
+} // namespace
+
+Result<std::vector<std::byte>> read_pk3_entry(const std::filesystem::path& pk3,
+                                              std::string_view entry) {
+    auto archive = open_archive(pk3);
+    if (!archive) {
+        return archive.error();
+    }
+    zip_t* zip = archive.value().get();
+    const std::string name(entry);
+    const zip_int64_t index = zip_name_locate(zip, name.c_str(), ZIP_FL_NOCASE);
+    if (index < 0) {
+        return LoadError{pk3.string(), name, "no such entry in the archive"};
+    }
+    zip_stat_t stat;
+    zip_stat_init(&stat);
+    if (zip_stat_index(zip, static_cast<zip_uint64_t>(index), 0, &stat) != 0 ||
+        (stat.valid & ZIP_STAT_SIZE) == 0) {
+        return LoadError{pk3.string(), name,
+                         std::string("cannot stat entry: ") + zip_strerror(zip)};
+    }
+    if (stat.size > kMaxPk3EntryBytes) {
+        return LoadError{pk3.string(), name,
+                         "entry is " + std::to_string(stat.size) + " bytes, over the limit of " +
+                             std::to_string(kMaxPk3EntryBytes)};
+    }
+    std::unique_ptr<zip_file_t, ZipFileCloser> file(
+        zip_fopen_index(zip, static_cast<zip_uint64_t>(index), 0));
+    if (!file) {
+        return LoadError{pk3.string(), name,
+                         std::string("cannot open entry: ") + zip_strerror(zip)};
+    }
+    std::vector<std::byte> bytes(static_cast<std::size_t>(stat.size));
+    std::size_t done = 0;
+    while (done < bytes.size()) {
+        const zip_int64_t got = zip_fread(file.get(), bytes.data() + done, bytes.size() - done);
+        if (got < 0) {
+            return LoadError{pk3.string(), name,
+                             std::string("corrupt entry: ") + zip_file_strerror(file.get())};
+        }
+        if (got == 0) {
+            return LoadError{pk3.string(), name,
+                             "entry ends after " + std::to_string(done) + " of " +
+                                 std::to_string(bytes.size()) + " bytes"};
+        }
+        done += static_cast<std::size_t>(got);
+    }
+    return bytes;
+}
+
+Result<std::vector<std::string>> list_pk3_maps(const std::filesystem::path& pk3) {
+    auto archive = open_archive(pk3);
+    if (!archive) {
+        return archive.error();
+    }
+    zip_t* zip = archive.value().get();
+    const zip_int64_t count = zip_get_num_entries(zip, 0);
+    std::vector<std::string> names;
+    for (zip_int64_t i = 0; i < count; ++i) {
+        const char* raw = zip_get_name(zip, static_cast<zip_uint64_t>(i), 0);
+        if (raw == nullptr) {
+            continue;
+        }
+        const std::string name = lower(raw);
+        constexpr std::string_view prefix = "maps/";
+        constexpr std::string_view suffix = ".bsp";
+        if (name.size() > prefix.size() + suffix.size() && name.starts_with(prefix) &&
+            name.ends_with(suffix) && name.find('/', prefix.size()) == std::string::npos) {
+            names.push_back(std::string(raw).substr(prefix.size(),
+                                                    name.size() - prefix.size() - suffix.size()));
+        }
+    }
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+} // namespace dsoc::maps

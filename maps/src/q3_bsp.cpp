@@ -1,0 +1,484 @@
+#include "dsoc/maps/q3_bsp.hpp"
+
+#include "byte_reader.hpp"
+
+#include <algorithm>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+namespace dsoc::maps::q3 {
+
+using detail::read_f32;
+using detail::read_i32;
+using detail::read_u32;
+
+namespace {
+
+constexpr std::size_t kHeaderSize = 8 + 8 * kLumpCount;
+constexpr std::size_t kShaderSize = 72;
+constexpr std::size_t kPlaneSize = 16;
+constexpr std::size_t kNodeSize = 36;
+constexpr std::size_t kLeafSize = 48;
+constexpr std::size_t kIndexSize = 4;
+constexpr std::size_t kModelSize = 40;
+constexpr std::size_t kBrushSize = 12;
+constexpr std::size_t kBrushSideSize = 8;
+constexpr std::size_t kSurfaceSize = 104;
+constexpr std::int32_t kSurfacePatch = 2;
+
+class Parser {
+public:
+    Parser(std::span<const std::byte> bytes, Q3Bsp& bsp) : bytes_(bytes), bsp_(bsp) {}
+
+    std::optional<LoadError> run();
+
+private:
+    LoadError error(Lump lump, std::string what) const {
+        return {bsp_.file, lump_label(lump), std::move(what)};
+    }
+    /// Checks that the lump's length divides by `record_size`; sets `count`.
+    std::optional<LoadError> count_records(Lump lump, std::size_t record_size,
+                                           std::size_t& count) const;
+    std::span<const std::byte> lump_bytes(Lump lump) const {
+        const LumpInfo& info = bsp_.lumps[static_cast<int>(lump)];
+        return bytes_.subspan(info.offset, info.length);
+    }
+    /// `first` and `count` must describe a range inside [0, size).
+    static bool range_ok(std::int64_t first, std::int64_t count, std::size_t size) {
+        return first >= 0 && count >= 0 && first + count <= static_cast<std::int64_t>(size);
+    }
+
+    std::optional<LoadError> parse_header();
+    std::optional<LoadError> parse_shaders();
+    std::optional<LoadError> parse_planes();
+    std::optional<LoadError> parse_brushes();
+    std::optional<LoadError> parse_models();
+    std::optional<LoadError> parse_tree();
+    std::optional<LoadError> parse_surfaces();
+    std::optional<LoadError> parse_visibility();
+
+    std::span<const std::byte> bytes_;
+    Q3Bsp& bsp_;
+};
+
+std::optional<LoadError> Parser::run() {
+    for (auto step : {&Parser::parse_header, &Parser::parse_shaders, &Parser::parse_planes,
+                      &Parser::parse_brushes, &Parser::parse_surfaces, &Parser::parse_models,
+                      &Parser::parse_visibility, &Parser::parse_tree}) {
+        if (auto failure = (this->*step)()) {
+            return failure;
+        }
+    }
+    return std::nullopt;
+}
+
+std::optional<LoadError> Parser::parse_header() {
+    if (bytes_.size() < kHeaderSize) {
+        std::ostringstream what;
+        what << "file is " << bytes_.size() << " bytes, shorter than the " << kHeaderSize
+             << "-byte IBSP header";
+        return LoadError{bsp_.file, "header", what.str()};
+    }
+    const char magic[4] = {static_cast<char>(bytes_[0]), static_cast<char>(bytes_[1]),
+                           static_cast<char>(bytes_[2]), static_cast<char>(bytes_[3])};
+    if (std::string_view(magic, 4) != "IBSP") {
+        return LoadError{bsp_.file, "header", "wrong magic (expected \"IBSP\", a Quake 3 BSP)"};
+    }
+    const std::int32_t version = read_i32(bytes_, 4);
+    if (version != kBspVersion) {
+        return LoadError{bsp_.file, "header",
+                         "unsupported BSP version " + std::to_string(version) +
+                             " (expected 46, Quake 3 / OpenArena)"};
+    }
+    for (int i = 0; i < kLumpCount; ++i) {
+        LumpInfo& info = bsp_.lumps[static_cast<std::size_t>(i)];
+        const std::int32_t offset = read_i32(bytes_, 8 + 8 * static_cast<std::size_t>(i));
+        const std::int32_t length = read_i32(bytes_, 12 + 8 * static_cast<std::size_t>(i));
+        const auto lump = static_cast<Lump>(i);
+        if (offset < 0 || length < 0) {
+            return error(lump, "negative offset " + std::to_string(offset) + " or length " +
+                                   std::to_string(length));
+        }
+        const auto end = static_cast<std::uint64_t>(offset) + static_cast<std::uint64_t>(length);
+        if (end > bytes_.size()) {
+            return error(lump, "offset " + std::to_string(offset) + " + length " +
+                                   std::to_string(length) + " is past the end of the file (" +
+                                   std::to_string(bytes_.size()) + " bytes)");
+        }
+        info.offset = static_cast<std::uint32_t>(offset);
+        info.length = static_cast<std::uint32_t>(length);
+    }
+    // Entities: text, possibly NUL-terminated.
+    const auto text = lump_bytes(Lump::entities);
+    bsp_.entities.assign(reinterpret_cast<const char*>(text.data()), text.size());
+    const auto nul = bsp_.entities.find('\0');
+    if (nul != std::string::npos) {
+        bsp_.entities.resize(nul);
+    }
+    return std::nullopt;
+}
+
+std::optional<LoadError> Parser::count_records(Lump lump, std::size_t record_size,
+                                               std::size_t& count) const {
+    const std::size_t length = bsp_.lumps[static_cast<int>(lump)].length;
+    if (length % record_size != 0) {
+        return error(lump, "length " + std::to_string(length) + " is not a multiple of the " +
+                               std::to_string(record_size) + "-byte record size");
+    }
+    count = length / record_size;
+    return std::nullopt;
+}
+
+std::optional<LoadError> Parser::parse_shaders() {
+    std::size_t count = 0;
+    if (auto failure = count_records(Lump::shaders, kShaderSize, count)) {
+        return failure;
+    }
+    const auto data = lump_bytes(Lump::shaders);
+    bsp_.shaders.resize(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        const std::size_t base = i * kShaderSize;
+        const char* name = reinterpret_cast<const char*>(data.data() + base);
+        std::size_t length = 0;
+        while (length < 64 && name[length] != '\0') {
+            ++length;
+        }
+        bsp_.shaders[i].name.assign(name, length);
+        bsp_.shaders[i].surface_flags = read_u32(data, base + 64);
+        bsp_.shaders[i].content_flags = read_u32(data, base + 68);
+    }
+    return std::nullopt;
+}
+
+std::optional<LoadError> Parser::parse_planes() {
+    std::size_t count = 0;
+    if (auto failure = count_records(Lump::planes, kPlaneSize, count)) {
+        return failure;
+    }
+    const auto data = lump_bytes(Lump::planes);
+    bsp_.planes.resize(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        const std::size_t base = i * kPlaneSize;
+        bsp_.planes[i].normal = {read_f32(data, base), read_f32(data, base + 4),
+                                 read_f32(data, base + 8)};
+        bsp_.planes[i].dist = read_f32(data, base + 12);
+    }
+    return std::nullopt;
+}
+
+std::optional<LoadError> Parser::parse_brushes() {
+    std::size_t side_count = 0;
+    if (auto failure = count_records(Lump::brush_sides, kBrushSideSize, side_count)) {
+        return failure;
+    }
+    const auto side_data = lump_bytes(Lump::brush_sides);
+    bsp_.brush_sides.resize(side_count);
+    for (std::size_t i = 0; i < side_count; ++i) {
+        BrushSide& side = bsp_.brush_sides[i];
+        side.plane = read_i32(side_data, i * kBrushSideSize);
+        side.shader = read_i32(side_data, i * kBrushSideSize + 4);
+        if (!range_ok(side.plane, 1, bsp_.planes.size())) {
+            return error(Lump::brush_sides, "side " + std::to_string(i) + ": plane index " +
+                                                std::to_string(side.plane) + " out of range (" +
+                                                std::to_string(bsp_.planes.size()) + " planes)");
+        }
+        if (!range_ok(side.shader, 1, bsp_.shaders.size())) {
+            return error(Lump::brush_sides, "side " + std::to_string(i) + ": shader index " +
+                                                std::to_string(side.shader) + " out of range (" +
+                                                std::to_string(bsp_.shaders.size()) + " shaders)");
+        }
+    }
+    std::size_t brush_count = 0;
+    if (auto failure = count_records(Lump::brushes, kBrushSize, brush_count)) {
+        return failure;
+    }
+    const auto brush_data = lump_bytes(Lump::brushes);
+    bsp_.brushes.resize(brush_count);
+    for (std::size_t i = 0; i < brush_count; ++i) {
+        Brush& brush = bsp_.brushes[i];
+        brush.first_side = read_i32(brush_data, i * kBrushSize);
+        brush.num_sides = read_i32(brush_data, i * kBrushSize + 4);
+        brush.shader = read_i32(brush_data, i * kBrushSize + 8);
+        if (!range_ok(brush.first_side, brush.num_sides, side_count)) {
+            return error(Lump::brushes, "brush " + std::to_string(i) + ": sides [" +
+                                            std::to_string(brush.first_side) + ", +" +
+                                            std::to_string(brush.num_sides) + ") out of range (" +
+                                            std::to_string(side_count) + " brush sides)");
+        }
+        if (!range_ok(brush.shader, 1, bsp_.shaders.size())) {
+            return error(Lump::brushes, "brush " + std::to_string(i) + ": shader index " +
+                                            std::to_string(brush.shader) + " out of range (" +
+                                            std::to_string(bsp_.shaders.size()) + " shaders)");
+        }
+    }
+    return std::nullopt;
+}
+
+std::optional<LoadError> Parser::parse_surfaces() {
+    std::size_t count = 0;
+    if (auto failure = count_records(Lump::surfaces, kSurfaceSize, count)) {
+        return failure;
+    }
+    const auto data = lump_bytes(Lump::surfaces);
+    bsp_.surface_count = static_cast<std::uint32_t>(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        if (read_i32(data, i * kSurfaceSize + 8) == kSurfacePatch) {
+            ++bsp_.patch_surface_count;
+        }
+    }
+    std::size_t leaf_surfaces = 0;
+    if (auto failure = count_records(Lump::leaf_surfaces, kIndexSize, leaf_surfaces)) {
+        return failure;
+    }
+    bsp_.leaf_surface_count = static_cast<std::uint32_t>(leaf_surfaces);
+    return std::nullopt;
+}
+
+std::optional<LoadError> Parser::parse_models() {
+    std::size_t count = 0;
+    if (auto failure = count_records(Lump::models, kModelSize, count)) {
+        return failure;
+    }
+    if (count == 0) {
+        return error(Lump::models, "no models (model 0, the world, is required)");
+    }
+    const auto data = lump_bytes(Lump::models);
+    bsp_.models.resize(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        const std::size_t base = i * kModelSize;
+        Model& model = bsp_.models[i];
+        model.mins = {read_f32(data, base), read_f32(data, base + 4), read_f32(data, base + 8)};
+        model.maxs = {read_f32(data, base + 12), read_f32(data, base + 16),
+                      read_f32(data, base + 20)};
+        model.first_surface = read_i32(data, base + 24);
+        model.num_surfaces = read_i32(data, base + 28);
+        model.first_brush = read_i32(data, base + 32);
+        model.num_brushes = read_i32(data, base + 36);
+        if (!range_ok(model.first_brush, model.num_brushes, bsp_.brushes.size())) {
+            return error(Lump::models, "model " + std::to_string(i) + ": brushes [" +
+                                           std::to_string(model.first_brush) + ", +" +
+                                           std::to_string(model.num_brushes) + ") out of range (" +
+                                           std::to_string(bsp_.brushes.size()) + " brushes)");
+        }
+        if (!range_ok(model.first_surface, model.num_surfaces, bsp_.surface_count)) {
+            return error(Lump::models, "model " + std::to_string(i) + ": surfaces [" +
+                                           std::to_string(model.first_surface) + ", +" +
+                                           std::to_string(model.num_surfaces) + ") out of range (" +
+                                           std::to_string(bsp_.surface_count) + " surfaces)");
+        }
+    }
+    return std::nullopt;
+}
+
+std::optional<LoadError> Parser::parse_visibility() {
+    const auto data = lump_bytes(Lump::visibility);
+    if (data.empty()) {
+        return std::nullopt; // compiled without vis: everything potentially visible
+    }
+    if (data.size() < 8) {
+        return error(Lump::visibility, "length " + std::to_string(data.size()) +
+                                           " is shorter than its 8-byte header");
+    }
+    const std::int32_t clusters = read_i32(data, 0);
+    const std::int32_t row_bytes = read_i32(data, 4);
+    if (clusters < 0 || row_bytes < 0) {
+        return error(Lump::visibility, "negative cluster count " + std::to_string(clusters) +
+                                           " or row size " + std::to_string(row_bytes));
+    }
+    const auto needed =
+        static_cast<std::uint64_t>(clusters) * static_cast<std::uint64_t>(row_bytes);
+    if (needed > data.size() - 8) {
+        return error(Lump::visibility, std::to_string(clusters) + " clusters x " +
+                                           std::to_string(row_bytes) + " bytes need " +
+                                           std::to_string(needed) + " bytes, lump has " +
+                                           std::to_string(data.size() - 8));
+    }
+    if (static_cast<std::uint64_t>(row_bytes) * 8 < static_cast<std::uint64_t>(clusters)) {
+        return error(Lump::visibility, "row of " + std::to_string(row_bytes) +
+                                           " bytes cannot hold " + std::to_string(clusters) +
+                                           " cluster bits");
+    }
+    bsp_.visibility.num_clusters = clusters;
+    bsp_.visibility.bytes_per_cluster = row_bytes;
+    bsp_.visibility.bits.resize(static_cast<std::size_t>(needed));
+    for (std::size_t i = 0; i < needed; ++i) {
+        bsp_.visibility.bits[i] = static_cast<std::uint8_t>(data[8 + i]);
+    }
+    return std::nullopt;
+}
+
+std::optional<LoadError> Parser::parse_tree() {
+    std::size_t leaf_brush_count = 0;
+    if (auto failure = count_records(Lump::leaf_brushes, kIndexSize, leaf_brush_count)) {
+        return failure;
+    }
+    const auto lb_data = lump_bytes(Lump::leaf_brushes);
+    bsp_.leaf_brushes.resize(leaf_brush_count);
+    for (std::size_t i = 0; i < leaf_brush_count; ++i) {
+        bsp_.leaf_brushes[i] = read_i32(lb_data, i * kIndexSize);
+        if (!range_ok(bsp_.leaf_brushes[i], 1, bsp_.brushes.size())) {
+            return error(Lump::leaf_brushes, "entry " + std::to_string(i) + ": brush index " +
+                                                 std::to_string(bsp_.leaf_brushes[i]) +
+                                                 " out of range (" +
+                                                 std::to_string(bsp_.brushes.size()) + " brushes)");
+        }
+    }
+    std::size_t leaf_count = 0;
+    if (auto failure = count_records(Lump::leafs, kLeafSize, leaf_count)) {
+        return failure;
+    }
+    const auto leaf_data = lump_bytes(Lump::leafs);
+    bsp_.leafs.resize(leaf_count);
+    const std::int32_t clusters = bsp_.visibility.num_clusters;
+    for (std::size_t i = 0; i < leaf_count; ++i) {
+        const std::size_t base = i * kLeafSize;
+        Leaf& leaf = bsp_.leafs[i];
+        leaf.cluster = read_i32(leaf_data, base);
+        leaf.area = read_i32(leaf_data, base + 4);
+        for (std::size_t a = 0; a < 3; ++a) {
+            leaf.mins[a] = read_i32(leaf_data, base + 8 + 4 * a);
+            leaf.maxs[a] = read_i32(leaf_data, base + 20 + 4 * a);
+        }
+        leaf.first_leaf_surface = read_i32(leaf_data, base + 32);
+        leaf.num_leaf_surfaces = read_i32(leaf_data, base + 36);
+        leaf.first_leaf_brush = read_i32(leaf_data, base + 40);
+        leaf.num_leaf_brushes = read_i32(leaf_data, base + 44);
+        const std::string which = "leaf " + std::to_string(i);
+        if (leaf.cluster < -1 || (clusters > 0 && leaf.cluster >= clusters)) {
+            return error(Lump::leafs, which + ": cluster " + std::to_string(leaf.cluster) +
+                                          " out of range (" + std::to_string(clusters) +
+                                          " clusters in the visibility lump)");
+        }
+        if (!range_ok(leaf.first_leaf_brush, leaf.num_leaf_brushes, leaf_brush_count)) {
+            return error(Lump::leafs,
+                         which + ": leaf brushes [" + std::to_string(leaf.first_leaf_brush) +
+                             ", +" + std::to_string(leaf.num_leaf_brushes) + ") out of range (" +
+                             std::to_string(leaf_brush_count) + ")");
+        }
+        if (!range_ok(leaf.first_leaf_surface, leaf.num_leaf_surfaces, bsp_.leaf_surface_count)) {
+            return error(Lump::leafs,
+                         which + ": leaf surfaces [" + std::to_string(leaf.first_leaf_surface) +
+                             ", +" + std::to_string(leaf.num_leaf_surfaces) + ") out of range (" +
+                             std::to_string(bsp_.leaf_surface_count) + ")");
+        }
+    }
+    std::size_t node_count = 0;
+    if (auto failure = count_records(Lump::nodes, kNodeSize, node_count)) {
+        return failure;
+    }
+    const auto node_data = lump_bytes(Lump::nodes);
+    bsp_.nodes.resize(node_count);
+    for (std::size_t i = 0; i < node_count; ++i) {
+        const std::size_t base = i * kNodeSize;
+        Node& node = bsp_.nodes[i];
+        node.plane = read_i32(node_data, base);
+        node.children = {read_i32(node_data, base + 4), read_i32(node_data, base + 8)};
+        for (std::size_t a = 0; a < 3; ++a) {
+            node.mins[a] = read_i32(node_data, base + 12 + 4 * a);
+            node.maxs[a] = read_i32(node_data, base + 24 + 4 * a);
+        }
+        const std::string which = "node " + std::to_string(i);
+        if (!range_ok(node.plane, 1, bsp_.planes.size())) {
+            return error(Lump::nodes, which + ": plane index " + std::to_string(node.plane) +
+                                          " out of range (" + std::to_string(bsp_.planes.size()) +
+                                          " planes)");
+        }
+        for (const std::int32_t child : node.children) {
+            // Nodes only point forward in a well-formed tree, so a walk always ends;
+            // requiring child > i rules out cycles in hostile input.
+            const std::int64_t leaf = -(static_cast<std::int64_t>(child) + 1);
+            const bool ok = child >= 0 ? (static_cast<std::size_t>(child) < node_count &&
+                                          static_cast<std::size_t>(child) > i)
+                                       : leaf < static_cast<std::int64_t>(leaf_count);
+            if (!ok) {
+                return error(Lump::nodes, which + ": child " + std::to_string(child) +
+                                              " out of range or not after its parent (" +
+                                              std::to_string(node_count) + " nodes, " +
+                                              std::to_string(leaf_count) + " leafs)");
+            }
+        }
+    }
+    return std::nullopt;
+}
+
+} // namespace
+
+const char* lump_label(Lump lump) noexcept {
+    switch (lump) {
+    case Lump::entities:
+        return "entities (lump 0)";
+    case Lump::shaders:
+        return "shaders (lump 1)";
+    case Lump::planes:
+        return "planes (lump 2)";
+    case Lump::nodes:
+        return "nodes (lump 3)";
+    case Lump::leafs:
+        return "leafs (lump 4)";
+    case Lump::leaf_surfaces:
+        return "leaf surfaces (lump 5)";
+    case Lump::leaf_brushes:
+        return "leaf brushes (lump 6)";
+    case Lump::models:
+        return "models (lump 7)";
+    case Lump::brushes:
+        return "brushes (lump 8)";
+    case Lump::brush_sides:
+        return "brush sides (lump 9)";
+    case Lump::draw_verts:
+        return "draw vertexes (lump 10)";
+    case Lump::draw_indexes:
+        return "draw indexes (lump 11)";
+    case Lump::fogs:
+        return "fogs (lump 12)";
+    case Lump::surfaces:
+        return "surfaces (lump 13)";
+    case Lump::lightmaps:
+        return "lightmaps (lump 14)";
+    case Lump::light_grid:
+        return "light grid (lump 15)";
+    case Lump::visibility:
+        return "visibility (lump 16)";
+    }
+    return "unknown lump";
+}
+
+std::span<const std::byte> Q3Bsp::raw_lump(Lump lump) const {
+    const LumpInfo& info = lumps[static_cast<int>(lump)];
+    return std::span<const std::byte>(bytes).subspan(info.offset, info.length);
+}
+
+std::span<const BrushSide> Q3Bsp::sides_of(const Brush& brush) const {
+    return std::span<const BrushSide>(brush_sides)
+        .subspan(static_cast<std::size_t>(brush.first_side),
+                 static_cast<std::size_t>(brush.num_sides));
+}
+
+Result<Q3Bsp> parse_q3_bsp(std::span<const std::byte> bytes, std::string file) {
+    Q3Bsp bsp;
+    bsp.file = std::move(file);
+    Parser parser(bytes, bsp);
+    if (auto failure = parser.run()) {
+        return std::move(*failure);
+    }
+    bsp.bytes.assign(bytes.begin(), bytes.end());
+    return bsp;
+}
+
+Result<Q3Bsp> read_q3_bsp_file(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        return LoadError{path.string(), "", "cannot open file"};
+    }
+    std::vector<char> buffer((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
+    if (in.bad()) {
+        return LoadError{path.string(), "", "read error"};
+    }
+    const auto* begin = reinterpret_cast<const std::byte*>(buffer.data());
+    return parse_q3_bsp(std::span<const std::byte>(begin, buffer.size()), path.string());
+}
+
+} // namespace dsoc::maps::q3

@@ -1,0 +1,86 @@
+#include "dsoc/server/culling_policy.hpp"
+
+#include <algorithm>
+
+namespace dsoc::server {
+
+visibility::MotionLimits walking_limits(const sim::MoveConfig& move) {
+    visibility::MotionLimits m;
+    m.horizontal_speed = move.max_speed;
+    m.up_speed = move.jump_velocity + move.climb_rate;
+    m.down_speed = move.max_fall_speed;
+    m.gravity = move.gravity;
+    m.vertical_slack = move.step_height;
+    return m;
+}
+
+CullingPolicy::CullingPolicy(std::string_view name, const visibility::DSOCConfig& config,
+                             const GameWorld& world,
+                             visibility::RegionVisibilityFactory make_visibility,
+                             int lookahead_ticks)
+    : name_(name), clipper_(std::make_shared<const sim::ReachClipper>(world.map().collision_brushes,
+                                                                      world.move_config())),
+      manager_(config, world.map().bounds.expanded(64.0f), std::move(make_visibility),
+               [clipper = clipper_](glm::vec3 eye, const visibility::Aabb& region) {
+                   return clipper->clip(eye, region);
+               }) {
+    const auto& move = world.move_config();
+    entity_desc_.half_extents = (move.maxs - move.mins) * 0.5f;
+    entity_desc_.motion = walking_limits(move);
+    client_desc_.eye_motion = entity_desc_.motion;
+    client_desc_.lookahead_ticks = lookahead_ticks;
+    // The manager's eye is the box centre plus this offset.
+    client_desc_.eye_offset =
+        glm::vec3(0.0f, 0.0f, move.eye_height - (move.mins.z + move.maxs.z) * 0.5f);
+}
+
+void CullingPolicy::sync_entities(const GameWorld& world) {
+    // Entities are kept in increasing id order by the world; diff against ours.
+    scratch_.clear();
+    std::size_t k = 0;
+    for (const Entity& e : world.entities()) {
+        while (k < known_entities_.size() && known_entities_[k] < e.id) {
+            manager_.remove_entity(known_entities_[k++]);
+        }
+        const visibility::Aabb box = world.box_of(e);
+        if (k < known_entities_.size() && known_entities_[k] == e.id) {
+            ++k;
+            manager_.set_entity_box(e.id, box, e.move.velocity);
+        } else {
+            manager_.add_entity(e.id, entity_desc_, box);
+            manager_.set_entity_box(e.id, box, e.move.velocity);
+        }
+        scratch_.push_back(e.id);
+    }
+    while (k < known_entities_.size()) {
+        manager_.remove_entity(known_entities_[k++]);
+    }
+    known_entities_.swap(scratch_);
+}
+
+void CullingPolicy::begin_tick(const GameWorld& world, std::uint64_t tick) {
+    sync_entities(world);
+    manager_.update(tick);
+}
+
+void CullingPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
+                           std::vector<std::uint32_t>& out) {
+    out.clear();
+    if (const auto* d = manager_.decisions(viewer.client_id)) {
+        for (const auto& r : d->replicated) {
+            out.push_back(r.id);
+        }
+    }
+}
+
+void CullingPolicy::add_viewer(std::uint32_t client_id, std::uint32_t entity_id) {
+    auto desc = client_desc_;
+    desc.viewer = entity_id;
+    manager_.add_client(client_id, desc);
+}
+
+void CullingPolicy::remove_viewer(std::uint32_t client_id) {
+    manager_.remove_client(client_id);
+}
+
+} // namespace dsoc::server

@@ -1,0 +1,127 @@
+#include "dsoc/sim/wander_bot.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+
+namespace dsoc::sim {
+namespace {
+
+std::uint64_t next_random(std::uint64_t& state) {
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+float random_unit(std::uint64_t& state) {
+    return static_cast<float>(next_random(state) >> 40) * (1.0f / 16777216.0f);
+}
+
+float horizontal_distance(glm::vec3 a, glm::vec3 b) {
+    return std::hypot(a.x - b.x, a.y - b.y);
+}
+
+void pick_goal(WanderBot& bot, const WanderConfig& config,
+               std::span<const maps::SpawnPoint> spawns) {
+    const bool use_spawn =
+        bot.remembered.empty() || random_unit(bot.random_state) < config.spawn_goal_chance;
+    if (use_spawn && !spawns.empty()) {
+        bot.goal = spawns[next_random(bot.random_state) % spawns.size()].origin;
+    } else if (!bot.remembered.empty()) {
+        bot.goal = bot.remembered[next_random(bot.random_state) % bot.remembered.size()];
+    }
+    bot.best_goal_distance = horizontal_distance(bot.state.position, bot.goal);
+    bot.since_progress = 0.0f;
+}
+
+} // namespace
+
+std::vector<WanderBot> spawn_wander_bots(const CollisionWorld& world, const MoveConfig& move,
+                                         std::span<const maps::SpawnPoint> spawns,
+                                         std::size_t count, std::uint64_t seed) {
+    std::vector<WanderBot> bots(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        WanderBot& bot = bots[i];
+        bot.random_state = seed * 0x100000001B3ull + i;
+        const maps::SpawnPoint& spawn = spawns[(i + seed) % spawns.size()];
+        bot.state = spawn_state(world, move, spawn.origin);
+        bot.goal = bot.state.position;
+        bot.remembered.push_back(bot.state.position);
+        bot.since_remember = 0.0f;
+    }
+    return bots;
+}
+
+MoveInput wander_think(WanderBot& bot, const WanderConfig& config, const MoveConfig& move,
+                       std::span<const maps::SpawnPoint> spawns, float dt) {
+    bot.since_remember += dt;
+    if (bot.since_remember >= config.remember_interval && bot.state.on_ground) {
+        bot.since_remember = 0.0f;
+        if (bot.remembered.size() < config.max_remembered) {
+            bot.remembered.push_back(bot.state.position);
+        } else {
+            bot.remembered[bot.remember_next] = bot.state.position;
+            bot.remember_next = (bot.remember_next + 1) % config.max_remembered;
+        }
+    }
+    const float distance = horizontal_distance(bot.state.position, bot.goal);
+    if (distance < config.goal_radius) {
+        ++bot.goals_reached;
+        pick_goal(bot, config, spawns);
+    } else {
+        bot.since_progress += dt;
+        if (distance < bot.best_goal_distance - config.progress_distance) {
+            bot.best_goal_distance = distance;
+            bot.since_progress = 0.0f;
+        } else if (bot.since_progress > config.stuck_seconds) {
+            ++bot.goals_abandoned;
+            pick_goal(bot, config, spawns);
+        }
+    }
+    MoveInput input;
+    glm::vec3 to_goal = bot.goal - bot.state.position;
+    to_goal.z = 0.0f;
+    const float length = glm::length(to_goal);
+    if (length > 1e-3f) {
+        input.wish_direction = to_goal / length;
+    }
+    const float speed = std::hypot(bot.state.velocity.x, bot.state.velocity.y);
+    if (speed < config.blocked_speed_fraction * move.max_speed && length > 1e-3f) {
+        bot.blocked_time += dt;
+    } else {
+        bot.blocked_time = 0.0f;
+    }
+    // Blocked for a moment: jump (and sometimes sidestep) to get over or around it.
+    if (bot.blocked_time > 0.25f && bot.state.on_ground) {
+        input.jump = true;
+        if (random_unit(bot.random_state) < 0.5f) {
+            const float side = random_unit(bot.random_state) < 0.5f ? 1.0f : -1.0f;
+            input.wish_direction =
+                glm::vec3(-input.wish_direction.y * side, input.wish_direction.x * side, 0.0f);
+        }
+        bot.blocked_time = 0.0f;
+    }
+    return input;
+}
+
+void wander_step(WanderBot& bot, const CollisionWorld& world, const WanderConfig& config,
+                 const MoveConfig& move, std::span<const maps::SpawnPoint> spawns,
+                 std::span<const maps::Hazard> hazards, float dt) {
+    const MoveInput input = wander_think(bot, config, move, spawns, dt);
+    player_move(world, move, input, dt, bot.state);
+    bot.respawned = false;
+    const visibility::Aabb box{bot.state.position + move.mins, bot.state.position + move.maxs};
+    for (const maps::Hazard& hazard : hazards) {
+        if (hazard.bounds.overlaps(box) && !spawns.empty()) {
+            ++bot.deaths;
+            bot.respawned = true;
+            bot.state = spawn_state(world, move,
+                                    spawns[next_random(bot.random_state) % spawns.size()].origin);
+            pick_goal(bot, config, spawns);
+            break;
+        }
+    }
+}
+
+} // namespace dsoc::sim
