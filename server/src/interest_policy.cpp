@@ -46,9 +46,15 @@ std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const Ga
         dsoc.tbvs_enabled = false;
         dsoc.reuse_buffers = false;
     }
+    visibility::RegionCullerConfig culler;
+    culler.pyramid = config.culler != "shaft";
+    culler.shaft = config.culler != "pyramid";
+    if (!culler.pyramid) {
+        dsoc.region_reuse_margin = 0.0f; // nothing to reuse: keep the region tight
+    }
     auto scene = visibility::OccluderScene::build(world.map().occluders);
     return std::make_unique<CullingPolicy>(config.policy, dsoc, world,
-                                           visibility::occluder_region_visibility(scene),
+                                           visibility::occluder_region_visibility(scene, culler),
                                            lookahead_ticks(config));
 }
 

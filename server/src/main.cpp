@@ -33,6 +33,8 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--tbv-strategy", config.tbv_strategy, "dsoc TBVs: adaptive | explicit | fuzzy")
         ->capture_default_str();
+    app.add_option("--culler", config.culler, "Occlusion culler stages: shaft | pyramid | both")
+        ->capture_default_str();
     app.add_option("--latency-allowance-ms", config.latency_allowance_ms,
                    "Client movement the server covers: RTT + interpolation delay [ms]")
         ->capture_default_str();

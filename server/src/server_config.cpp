@@ -29,6 +29,8 @@ std::vector<std::string> validate(const ServerConfig& c) {
     check(p,
           c.tbv_strategy == "adaptive" || c.tbv_strategy == "explicit" || c.tbv_strategy == "fuzzy",
           "tbv_strategy", "must be one of adaptive, explicit, fuzzy; got '" + c.tbv_strategy + "'");
+    check(p, c.culler == "shaft" || c.culler == "pyramid" || c.culler == "both", "culler",
+          "must be one of shaft, pyramid, both; got '" + c.culler + "'");
     check(p, c.latency_allowance_ms >= 0 && c.latency_allowance_ms <= 2000, "latency_allowance_ms",
           "must be 0..2000 ms, got " + std::to_string(c.latency_allowance_ms));
     check(p, c.trace_every >= 1, "trace_every", "must be >= 1");

@@ -22,6 +22,10 @@ constexpr std::size_t kMergeCandidates = 8;
 constexpr std::uint64_t kFullTestInterval = 4;
 /// Candidate TBV durations tried per hide (each half the previous).
 constexpr int kMaxTbvAttempts = 3;
+/// After every candidate TBV was visible, the entity is only box-tested for this many
+/// ticks before TBVs are tried again (entities at the edge of visibility would
+/// otherwise pay for failed TBV tests every tick). [Units: ticks]
+constexpr std::uint64_t kTbvRetryTicks = 8;
 
 bool valid_box(const Aabb& b) {
     return std::isfinite(b.min.x) && std::isfinite(b.min.y) && std::isfinite(b.min.z) &&
@@ -70,6 +74,8 @@ struct InterestManager::ClientSlot {
     struct Pair {
         PairState state = PairState::unknown;
         std::uint32_t group = kNoGroup;
+        /// No TBV is tried before this tick (back-off after a rejected TBV).
+        std::uint64_t next_tbv_tick = 0;
     };
     struct Expiry {
         std::uint64_t tick;
@@ -459,7 +465,7 @@ Aabb InterestManager::tbv_box(const EntitySlot& e, int duration) const {
 void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
     auto& pair = c.pairs[slot];
     auto& count = tbv_counts_[slot];
-    if (!config_.tbvs_enabled ||
+    if (!config_.tbvs_enabled || tick_ < pair.next_tbv_tick ||
         count.load(std::memory_order_relaxed) >= config_.max_tbvs_per_object) {
         pair.state = PairState::hidden_expired;
         return;
@@ -481,6 +487,7 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
     }
     if (duration < 1) {
         pair.state = PairState::hidden_expired;
+        pair.next_tbv_tick = tick_ + kTbvRetryTicks;
         ++c.stats.tbvs_rejected;
         return;
     }

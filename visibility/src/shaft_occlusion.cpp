@@ -144,14 +144,13 @@ Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box,
     Aabb shaft = region;
     shaft.extend(box);
     grid_->query(shaft, scratch);
-    const Aabb near_region = region.expanded(1.0f);
     const glm::vec3 from = region.center();
     const glm::vec3 to = box.center();
     int full_tests = 0;
+    // Occluders that touch or cut into the region count too: the corner argument
+    // holds for any convex solid (an eye inside a wall is no eye, and its segments
+    // do pass through the wall's interior).
     for (const OccluderId id : scratch.found) {
-        if (world_->occluder(id).bounds().overlaps(near_region)) {
-            continue; // an occluder touching the eyes proves nothing here
-        }
         const auto planes = world_->solid_planes(id);
         // Necessary condition, one segment: the occluder must block centre to centre.
         if (!segment_blocked_by(from, to, planes)) {

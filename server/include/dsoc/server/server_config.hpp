@@ -26,6 +26,9 @@ struct ServerConfig {
     /// TBV strategy of the dsoc policy: "adaptive", "explicit" or "fuzzy" (not
     /// conservative: for evaluation only).
     std::string tbv_strategy = "adaptive";
+    /// Stages of the occlusion culler: "shaft" (exact single-occluder test, no
+    /// per-region build), "pyramid" (extended-projection z-pyramid) or "both".
+    std::string culler = "shaft";
     /// Time the server must cover a client's own movement for: round trip plus the
     /// client's interpolation delay. Rounded up to whole ticks. [Units: ms] [Limit: 0..2000]
     int latency_allowance_ms = 150;

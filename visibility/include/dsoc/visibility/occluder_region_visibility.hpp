@@ -26,39 +26,52 @@ struct OccluderScene {
     build(const std::vector<ConvexPolyhedron>& occluders);
 };
 
-/// Two stages, both conservative: the extended-projection z-pyramid (fast, fuses
-/// occluders per texel), then for boxes it could not prove hidden, the exact
-/// single-occluder shaft test (slower, no fusion, no parallax loss). One instance per
-/// client: test_box() uses per-instance scratch, so one thread at a time per instance.
+/// Which stages a region culler runs; both are conservative.
+struct RegionCullerConfig {
+    /// The extended-projection z-pyramid: a build per region (about 0.3-2 ms), then
+    /// ~0.2 us per box; fuses occluders per texel; loses much to parallax when the
+    /// region is wide compared with the occluders' distance.
+    bool pyramid = true;
+    /// The exact single-occluder shaft test: no build, ~2-5 us per box that reaches it.
+    bool shaft = true;
+    RegionOcclusionBufferConfig buffer;
+};
+
+/// Region culler over an occluder scene: the z-pyramid first (when enabled), then the
+/// shaft test for the boxes it could not prove hidden. One instance per client:
+/// test_box() uses per-instance scratch, so one thread at a time per instance.
 class OccluderRegionVisibility final : public RegionVisibility {
 public:
     OccluderRegionVisibility(std::shared_ptr<const OccluderScene> scene,
-                             const RegionOcclusionBufferConfig& config, bool shaft_stage = true)
-        : scene_(std::move(scene)), buffer_(config), shaft_stage_(shaft_stage) {}
+                             const RegionCullerConfig& config = {})
+        : scene_(std::move(scene)), config_(config), buffer_(config.buffer) {}
 
     void build(const Aabb& region) override {
         region_ = region;
-        buffer_.build(region, scene_->world, scene_->bsp);
+        if (config_.pyramid) {
+            buffer_.build(region, scene_->world, scene_->bsp);
+        }
     }
     [[nodiscard]] Visibility test_box(const Aabb& box) const override {
-        if (buffer_.test_box(box) == Visibility::occluded) {
+        if (config_.pyramid && buffer_.test_box(box) == Visibility::occluded) {
             return Visibility::occluded;
         }
-        if (!shaft_stage_ || scene_->grid == nullptr) {
+        if (!config_.shaft || scene_->grid == nullptr) {
             return Visibility::visible;
         }
         return ShaftOcclusion(scene_->world, *scene_->grid).test(region_, box, scratch_);
     }
-    /// The z-pyramid stage alone.
+    /// The z-pyramid alone; without it, no test at all (`visible`, which is always
+    /// allowed): an entity visible last tick stays replicated until its next full test.
     [[nodiscard]] Visibility test_box_quick(const Aabb& box) const override {
-        return buffer_.test_box(box);
+        return config_.pyramid ? buffer_.test_box(box) : Visibility::visible;
     }
     [[nodiscard]] const RegionOcclusionBuffer& buffer() const { return buffer_; }
 
 private:
     std::shared_ptr<const OccluderScene> scene_;
+    RegionCullerConfig config_;
     RegionOcclusionBuffer buffer_;
-    bool shaft_stage_;
     Aabb region_;
     mutable OccluderGrid::Scratch scratch_;
 };
@@ -66,10 +79,9 @@ private:
 /// A factory for InterestManager: one OccluderRegionVisibility per client over `scene`.
 [[nodiscard]] inline RegionVisibilityFactory
 occluder_region_visibility(std::shared_ptr<const OccluderScene> scene,
-                           const RegionOcclusionBufferConfig& config = {},
-                           bool shaft_stage = true) {
-    return [scene = std::move(scene), config, shaft_stage] {
-        return std::make_unique<OccluderRegionVisibility>(scene, config, shaft_stage);
+                           const RegionCullerConfig& config = {}) {
+    return [scene = std::move(scene), config] {
+        return std::make_unique<OccluderRegionVisibility>(scene, config);
     };
 }
 

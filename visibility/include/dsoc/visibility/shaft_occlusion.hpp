@@ -54,7 +54,8 @@ private:
 
 /// Shaft stage over a world: `occluded` when some single occluder blocks every
 /// segment from `region` to `box` (exact per occluder, see above); `visible`
-/// otherwise (may be a false positive). Occluders that touch the region are skipped.
+/// otherwise (may be a false positive). Occluders that cut into the region take part:
+/// the argument needs only convexity.
 class ShaftOcclusion {
 public:
     explicit ShaftOcclusion(const OccluderWorld& world, const OccluderGrid& grid)
@@ -65,7 +66,7 @@ public:
 
     /// Occluders given the full 64-segment test per query at most (those that block
     /// the centre-to-centre segment); past it the answer is `visible`.
-    static constexpr int kMaxFullTests = 8;
+    static constexpr int kMaxFullTests = 16;
 
 private:
     const OccluderWorld* world_;
