@@ -42,16 +42,15 @@ std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const Ga
     dsoc.tick_rate = config.tick_rate;
     [[maybe_unused]] const bool known =
         visibility::parse_tbv_strategy(config.tbv_strategy, dsoc.strategy);
-    if (config.policy == "occlusion") {
+    if (config.policy == "occlusion") { // every entity's current box, every tick
         dsoc.tbvs_enabled = false;
         dsoc.reuse_buffers = false;
+        dsoc.full_test_interval = 1;
     }
     visibility::RegionCullerConfig culler;
     culler.pyramid = config.culler != "shaft";
     culler.shaft = config.culler != "pyramid";
-    if (!culler.pyramid) {
-        dsoc.region_reuse_margin = 0.0f; // nothing to reuse: keep the region tight
-    }
+    dsoc.region_reuse_margin = config.region_reuse_margin;
     auto scene = visibility::OccluderScene::build(world.map().occluders);
     return std::make_unique<CullingPolicy>(config.policy, dsoc, world,
                                            visibility::occluder_region_visibility(scene, culler),

@@ -31,6 +31,10 @@ std::vector<std::string> validate(const ServerConfig& c) {
           "tbv_strategy", "must be one of adaptive, explicit, fuzzy; got '" + c.tbv_strategy + "'");
     check(p, c.culler == "shaft" || c.culler == "pyramid" || c.culler == "both", "culler",
           "must be one of shaft, pyramid, both; got '" + c.culler + "'");
+    check(p,
+          std::isfinite(c.region_reuse_margin) && c.region_reuse_margin >= 0.0f &&
+              c.region_reuse_margin <= 512.0f,
+          "region_reuse_margin", "must be 0..512 units");
     check(p, c.latency_allowance_ms >= 0 && c.latency_allowance_ms <= 2000, "latency_allowance_ms",
           "must be 0..2000 ms, got " + std::to_string(c.latency_allowance_ms));
     check(p, c.trace_every >= 1, "trace_every", "must be >= 1");

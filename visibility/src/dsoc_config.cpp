@@ -63,6 +63,8 @@ std::vector<std::string> validate(const DSOCConfig& c) {
           "must be a finite number >= 0");
     check(std::isfinite(c.region_reuse_margin) && c.region_reuse_margin >= 0.0f,
           "region_reuse_margin", "must be a finite number >= 0");
+    check(c.full_test_interval >= 1 && c.full_test_interval <= 64, "full_test_interval",
+          "must be 1..64 ticks");
     check(std::isfinite(c.lod_near_distance) && c.lod_near_distance > 0.0f, "lod_near_distance",
           "must be a finite number > 0");
     check(std::isfinite(c.lod_far_distance) && c.lod_far_distance >= c.lod_near_distance,

@@ -17,9 +17,6 @@ constexpr std::uint32_t kNoGroup = 0xffffffffu;
 constexpr float kTeleportTolerance = 0.05f;
 /// Groups created this tick that a new TBV may join (bounds the merge scan).
 constexpr std::size_t kMergeCandidates = 8;
-/// A visible entity gets the culler's full test every this many ticks, the quick one
-/// otherwise (both conservative; the full one proves more). [Units: ticks]
-constexpr std::uint64_t kFullTestInterval = 4;
 /// Candidate TBV durations tried per hide (each half the previous).
 constexpr int kMaxTbvAttempts = 3;
 /// After every candidate TBV was visible, the entity is only box-tested for this many
@@ -419,9 +416,10 @@ void InterestManager::update_client(std::size_t index) {
         }
         ++c.stats.box_tests;
         // Temporal coherence: an entity visible last tick most likely still is; give
-        // it the full (slower) test only every kFullTestInterval ticks, staggered.
+        // it the full (slower) test only every full_test_interval ticks, staggered.
         const bool quick =
-            pair.state == PairState::visible && (tick_ + slot) % kFullTestInterval != 0;
+            pair.state == PairState::visible &&
+            (tick_ + slot) % static_cast<std::uint64_t>(config_.full_test_interval) != 0;
         const Visibility v =
             quick ? c.visibility->test_box_quick(e.box) : c.visibility->test_box(e.box);
         if (v == Visibility::visible) {

@@ -29,6 +29,10 @@ struct ServerConfig {
     /// Stages of the occlusion culler: "shaft" (exact single-occluder test, no
     /// per-region build), "pyramid" (extended-projection z-pyramid) or "both".
     std::string culler = "shaft";
+    /// The dsoc policy reuses a client's culler region while the client's reachable
+    /// eye region stays inside it grown by this margin: larger margins re-test hidden
+    /// entities' TBVs less often but cull less. [Units: world units] [Limit: 0..512]
+    float region_reuse_margin = 16.0f;
     /// Time the server must cover a client's own movement for: round trip plus the
     /// client's interpolation delay. Rounded up to whole ticks. [Units: ms] [Limit: 0..2000]
     int latency_allowance_ms = 150;

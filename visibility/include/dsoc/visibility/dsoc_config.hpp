@@ -70,6 +70,10 @@ struct DSOCConfig {
     bool tbvs_enabled = true;
     /// false: rebuild every client's culler every tick (no region reuse). [Units: flag]
     bool reuse_buffers = true;
+    /// Temporal coherence: an entity visible last tick gets the culler's full test only
+    /// every this many ticks (staggered) and its quick test otherwise; 1 = full test
+    /// every tick. Both tests are conservative. [Units: ticks] [Limit: 1..64]
+    int full_test_interval = 4;
 
     /// Run ValidateDSOCState after every update() and throw std::logic_error naming
     /// the first broken invariant (debug and test runs; costs O(clients x entities)).
