@@ -1,18 +1,10 @@
 #include "dsoc/server/culling_policy.hpp"
 
+#include "dsoc/sim/motion_limits.hpp"
+
 #include <algorithm>
 
 namespace dsoc::server {
-
-visibility::MotionLimits walking_limits(const sim::MoveConfig& move) {
-    visibility::MotionLimits m;
-    m.horizontal_speed = move.max_speed;
-    m.up_speed = move.jump_velocity + move.climb_rate;
-    m.down_speed = move.max_fall_speed;
-    m.gravity = move.gravity;
-    m.vertical_slack = move.step_height;
-    return m;
-}
 
 CullingPolicy::CullingPolicy(std::string_view name, const visibility::DSOCConfig& config,
                              const GameWorld& world,
@@ -26,7 +18,7 @@ CullingPolicy::CullingPolicy(std::string_view name, const visibility::DSOCConfig
                }) {
     const auto& move = world.move_config();
     entity_desc_.half_extents = (move.maxs - move.mins) * 0.5f;
-    entity_desc_.motion = walking_limits(move);
+    entity_desc_.motion = sim::walking_limits(move);
     client_desc_.eye_motion = entity_desc_.motion;
     client_desc_.lookahead_ticks = lookahead_ticks;
     // The manager's eye is the box centre plus this offset.

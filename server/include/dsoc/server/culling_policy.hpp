@@ -42,7 +42,4 @@ private:
     std::vector<std::uint32_t> scratch_;
 };
 
-/// Motion limits of a walking entity under `move` (see sim::motion_bound()).
-[[nodiscard]] visibility::MotionLimits walking_limits(const sim::MoveConfig& move);
-
 } // namespace dsoc::server

@@ -1,0 +1,68 @@
+#pragma once
+// One dsoc-eval run: the scenario's world simulated once, every policy deciding on
+// the identical frames, the ray oracle judging a sample of ticks for all of them,
+// bytes counted by encoding each client's real Snapshot.
+
+#include "dsoc/eval/metrics.hpp"
+#include "dsoc/eval/scenario.hpp"
+
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace dsoc::eval {
+
+struct EvalOptions {
+    Scenario scenario;
+    /// Policy names (all_policy_names() when empty), in report order.
+    std::vector<std::string> policies;
+    /// Worker threads for per-client work and the oracle. [Limit: >= 1]
+    int threads = 2;
+    /// Oracle samples per box face side (grid x grid per face). [Limit: >= 2]
+    int sample_grid = 5;
+    /// Replication trace file ("" = none), written every trace_every ticks for
+    /// trace_policy ("" = "dsoc" when it runs, else the first policy).
+    std::string trace_path;
+    int trace_every = 1;
+    std::string trace_policy;
+    /// Concrete violations kept per policy for the report.
+    std::size_t max_examples = 10;
+};
+
+struct EvalResult {
+    Scenario scenario;
+    std::string map_source;
+    std::size_t occluders = 0;
+    std::size_t oracle_triangles = 0;
+    std::size_t entities = 0;
+    int lookahead_ticks = 0;
+    int ticks = 0;
+    int threads = 1;
+    int sample_grid = 5;
+    std::vector<PolicyMetrics> policies;
+
+    std::uint64_t oracle_ticks = 0;        ///< ticks the oracle judged
+    std::uint64_t oracle_client_ticks = 0; ///< client-ticks it judged
+    int oracle_client_stride = 1;          ///< it judged every this-many-th client
+    /// Ticks where both t and t-1 were judged: the ideal's bytes are exact there.
+    std::uint64_t measured_ticks = 0;
+    std::uint64_t ideal_bytes = 0;         ///< on measured ticks, all clients
+    std::uint64_t ideal_updates = 0;       ///< enters + updates on measured ticks
+    std::uint64_t ideal_visible_pairs = 0; ///< visible-within-allowance pairs on judged ticks
+
+    std::string trace_path;
+    std::string trace_policy;
+    std::uint64_t trace_ticks = 0;
+
+    double wall_seconds = 0.0;
+    double world_seconds = 0.0;
+    double oracle_seconds = 0.0;
+    std::vector<double> policy_seconds; ///< wall time per policy (decisions + encoding)
+};
+
+/// Runs the evaluation; `progress` (may be null) gets a status line about once a
+/// second. Throws std::runtime_error on a bad map, policy name or trace path.
+[[nodiscard]] EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress);
+
+} // namespace dsoc::eval

@@ -1,0 +1,83 @@
+#pragma once
+// The interest policies dsoc-eval compares, all fed the identical world frames:
+//   broadcast      every entity
+//   distance       entities whose box comes within a radius of the eye (ring culling)
+//   occlusion      the from-region z-pyramid rebuilt every tick, every box tested
+//                  every tick (InterestManager with no TBVs and no buffer reuse)
+//   dsoc           InterestManager, adaptive TBVs (the default strategy)
+//   dsoc-explicit  InterestManager, fixed-duration TBVs
+//   dsoc-fuzzy     InterestManager, predicted (NOT conservative) TBVs
+//   raycast        per-pair Embree rays from the eye and from the eye extrapolated by
+//                  its velocity x latency (SMAC-style) to the target box's 8 corners
+//                  and centre; not conservative (docs/evaluation.md)
+//   occlusion-k0   diagnostic, only when named: occlusion from the present eye alone
+//
+// Threading: begin_tick() is serial; select() may then run concurrently for
+// distinct clients.
+
+#include "dsoc/eval/ray_oracle.hpp"
+#include "dsoc/eval/scenario.hpp"
+#include "dsoc/eval/world_sim.hpp"
+#include "dsoc/visibility/occluder_region_visibility.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace dsoc::eval {
+
+struct PolicyEnv {
+    const maps::Map* map = nullptr;
+    const Scenario* scenario = nullptr;
+    const WorldSim* world = nullptr;
+    std::shared_ptr<const visibility::OccluderScene> scene;
+    const RayOracle* rays = nullptr;
+    /// The latency allowance the culling policies promise. [Units: ticks]
+    int lookahead_ticks = 5;
+};
+
+/// Counters of the InterestManager-based policies, summed over clients.
+struct TbvSummary {
+    bool available = false;
+    std::uint64_t buffer_builds = 0;
+    std::uint64_t box_tests = 0;
+    std::uint64_t tbv_tests = 0;
+    std::uint64_t tbvs_created = 0;
+    std::uint64_t tbvs_merged = 0;
+    std::uint64_t tbvs_rejected = 0;
+    std::uint64_t tbv_hits = 0;
+    std::uint64_t tbvs_expired = 0;
+    std::uint64_t evictions = 0;
+    std::uint64_t teleports = 0;
+};
+
+class Policy {
+public:
+    virtual ~Policy() = default;
+    [[nodiscard]] virtual std::string_view name() const = 0;
+    /// Ticks of the viewer's own movement the policy promises to cover (trace header).
+    [[nodiscard]] virtual int lookahead_ticks() const { return 0; }
+    /// Serial part of a tick: the world is now `frame`.
+    virtual void begin_tick(const WorldFrame& /*frame*/) {}
+    /// Client `client`'s interest set in `out` (cleared first): increasing entity ids,
+    /// its own entity left out. Concurrent for distinct clients after begin_tick().
+    virtual void select(std::size_t client, const WorldFrame& frame,
+                        std::vector<std::uint32_t>& out) = 0;
+    [[nodiscard]] virtual TbvSummary tbv_summary() const { return {}; }
+    /// Live TBV groups summed over clients (0 for policies without TBVs).
+    [[nodiscard]] virtual std::uint64_t live_tbvs() const { return 0; }
+};
+
+/// Every policy name, in report order.
+[[nodiscard]] const std::vector<std::string>& all_policy_names();
+/// Policies run only when named: "occlusion-k0", the occlusion policy with a
+/// lookahead of 0 (a point region: the present eye), to see what the latency
+/// allowance costs. Not conservative for moving viewers.
+[[nodiscard]] const std::vector<std::string>& diagnostic_policy_names();
+
+/// The policy `name` over `env` (which must outlive it); nullptr for an unknown name.
+[[nodiscard]] std::unique_ptr<Policy> make_policy(std::string_view name, const PolicyEnv& env);
+
+} // namespace dsoc::eval

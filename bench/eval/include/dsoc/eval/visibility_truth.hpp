@@ -1,0 +1,44 @@
+#pragma once
+// Ground truth for one tick from the ray oracle: for every (client, entity) pair,
+// whether the entity's box at tick t is visible from the client's eye at t (the
+// present eye), and whether it is visible from any of the eyes the client really has
+// at t .. t + lookahead (the latency allowance of replication-trace.md). Eyes from a
+// respawn of the viewer on are left out: a teleport is outside the movement rules the
+// allowance covers (the spec's K guarantee assumes clients move within them).
+
+#include "dsoc/eval/ray_oracle.hpp"
+#include "dsoc/eval/world_sim.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace dsoc::eval {
+
+class VisibilityTruth {
+public:
+    static constexpr std::uint8_t kPresent = 1;   ///< visible from the eye at t
+    static constexpr std::uint8_t kLookahead = 2; ///< visible from some eye at t .. t + K
+
+    /// `grid`: samples per box face side (>= 2).
+    VisibilityTruth(const RayOracle& rays, int grid) : rays_(&rays), grid_(grid) {}
+
+    /// Judges the tick world.current() with eyes world.ahead(0 .. lookahead), for the
+    /// clients c with c % client_stride == 0 (the others' flags are 0). Runs on
+    /// `threads` threads.
+    void judge(const WorldSim& world, int lookahead, int threads, int client_stride = 1);
+
+    /// Flags of (client, entity) after judge(); the client's own entity is 0.
+    [[nodiscard]] std::uint8_t at(std::size_t client, std::size_t entity) const {
+        return flags_[client * entities_ + entity];
+    }
+    /// Entities visible within the allowance, increasing: the oracle's ideal set.
+    void ideal_set(std::size_t client, std::vector<std::uint32_t>& out) const;
+
+private:
+    const RayOracle* rays_;
+    int grid_;
+    std::size_t entities_ = 0;
+    std::vector<std::uint8_t> flags_;
+};
+
+} // namespace dsoc::eval

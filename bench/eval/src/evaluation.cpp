@@ -1,0 +1,312 @@
+#include "dsoc/eval/evaluation.hpp"
+
+#include "dsoc/eval/parallel.hpp"
+#include "dsoc/eval/ray_oracle.hpp"
+#include "dsoc/eval/replication.hpp"
+#include "dsoc/eval/visibility_truth.hpp"
+#include "dsoc/eval/world_sim.hpp"
+#include "dsoc/trace/trace_writer.hpp"
+
+#include <chrono>
+#include <ctime>
+#include <memory>
+#include <ostream>
+#include <stdexcept>
+
+namespace dsoc::eval {
+
+namespace {
+
+double thread_cpu_us() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) * 1e6 + static_cast<double>(ts.tv_nsec) * 1e-3;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+struct PolicyRun {
+    std::unique_ptr<Policy> policy;
+    std::vector<ClientReplication> replication;
+    std::vector<std::vector<std::uint32_t>> sets; ///< this tick's interest set per client
+    std::vector<SnapshotCost> costs;
+    std::vector<float> cpu;
+    PolicyMetrics metrics;
+};
+
+struct WorkerScratch {
+    protocol::pb::Envelope envelope;
+    std::vector<std::uint8_t> buffer;
+};
+
+/// Compares one client's interest set with the oracle's flags.
+void judge_client(const VisibilityTruth& truth, std::size_t client, std::size_t entities,
+                  const std::vector<std::uint32_t>& set, std::uint64_t tick,
+                  std::size_t max_examples, PolicyMetrics& m) {
+    std::size_t k = 0;
+    for (std::size_t e = 0; e < entities; ++e) {
+        if (e == client) {
+            continue;
+        }
+        while (k < set.size() && set[k] < e) {
+            ++k;
+        }
+        const bool replicated = k < set.size() && set[k] == e;
+        const std::uint8_t f = truth.at(client, e);
+        if (replicated) {
+            ++m.checked_replicated;
+            if ((f & VisibilityTruth::kLookahead) == 0) {
+                ++m.exposed;
+            }
+            continue;
+        }
+        if ((f & VisibilityTruth::kPresent) != 0) {
+            ++m.popin_present;
+        }
+        if ((f & VisibilityTruth::kLookahead) != 0) {
+            ++m.popin_lookahead;
+            if (m.examples.size() < max_examples) {
+                m.examples.push_back({tick, static_cast<std::uint32_t>(client),
+                                      static_cast<std::uint32_t>(e),
+                                      (f & VisibilityTruth::kPresent) != 0});
+            }
+        }
+    }
+}
+
+} // namespace
+
+EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
+    const auto start = std::chrono::steady_clock::now();
+    const Scenario& sc = options.scenario;
+    if (const auto problems = validate(sc); !problems.empty()) {
+        throw std::runtime_error("scenario " + sc.name + ": " + problems.front());
+    }
+    EvalResult result;
+    result.scenario = sc;
+    result.threads = std::max(1, options.threads);
+    result.sample_grid = std::max(2, options.sample_grid);
+    const int lookahead = sc.lookahead_ticks();
+    result.lookahead_ticks = lookahead;
+    const int total_ticks = sc.total_ticks();
+    result.ticks = total_ticks;
+
+    const maps::Map map = load_scenario_map(sc);
+    result.map_source = map.source;
+    result.occluders = map.occluders.size();
+    const RayOracle rays(map.occluders);
+    result.oracle_triangles = rays.triangle_count();
+    WorldSim world(map, sc, lookahead);
+    const std::size_t viewers = world.viewer_count();
+    const std::size_t entities = world.entity_count();
+    result.entities = entities;
+
+    PolicyEnv env;
+    env.map = &map;
+    env.scenario = &sc;
+    env.world = &world;
+    env.rays = &rays;
+    env.lookahead_ticks = lookahead;
+
+    std::vector<std::string> names = options.policies;
+    if (names.empty()) {
+        names = sc.policies;
+    }
+    if (names.empty()) {
+        names = all_policy_names();
+    }
+    std::vector<PolicyRun> runs;
+    for (const auto& name : names) {
+        const bool culling = name == "occlusion" || name.rfind("dsoc", 0) == 0;
+        if (culling && !env.scene) {
+            env.scene = visibility::OccluderScene::build(map.occluders);
+        }
+        PolicyRun run;
+        run.policy = make_policy(name, env);
+        if (!run.policy) {
+            throw std::runtime_error("unknown policy '" + name + "'");
+        }
+        run.replication.assign(viewers, ClientReplication(viewers));
+        run.sets.resize(viewers);
+        run.costs.resize(viewers);
+        run.cpu.resize(viewers);
+        run.metrics.name = name;
+        run.metrics.lookahead_ticks = run.policy->lookahead_ticks();
+        run.metrics.cpu_us.reserve(viewers * static_cast<std::size_t>(total_ticks));
+        runs.push_back(std::move(run));
+    }
+    result.policy_seconds.assign(runs.size(), 0.0);
+
+    // The trace.
+    std::size_t trace_run = runs.size();
+    trace::TraceWriter trace_writer;
+    if (!options.trace_path.empty()) {
+        const std::string wanted = !options.trace_policy.empty() ? options.trace_policy : "dsoc";
+        for (std::size_t i = 0; i < runs.size(); ++i) {
+            if (runs[i].metrics.name == wanted) {
+                trace_run = i;
+            }
+        }
+        if (trace_run == runs.size()) {
+            if (!options.trace_policy.empty()) {
+                throw std::runtime_error("--trace-policy " + wanted +
+                                         " is not among the policies run");
+            }
+            trace_run = 0;
+        }
+        trace::TraceHeader header;
+        header.map = map.name;
+        header.tick_rate = sc.tick_rate;
+        header.policy = runs[trace_run].metrics.name;
+        header.lookahead_ticks = runs[trace_run].metrics.lookahead_ticks;
+        for (std::size_t i = 0; i < map.occluders.size(); ++i) {
+            trace::TraceOccluder o;
+            o.id = static_cast<std::uint32_t>(i);
+            o.planes = map.occluders[i].planes();
+            header.occluders.push_back(std::move(o));
+        }
+        std::string error;
+        if (!trace_writer.open(options.trace_path, header, error)) {
+            throw std::runtime_error("--trace: " + error);
+        }
+        result.trace_path = options.trace_path;
+        result.trace_policy = header.policy;
+    }
+
+    std::vector<WorkerScratch> scratch(static_cast<std::size_t>(result.threads));
+    std::vector<ClientReplication> ideal(viewers, ClientReplication(viewers));
+    std::vector<std::uint32_t> ideal_set;
+    VisibilityTruth truth(rays, result.sample_grid);
+    const int every = sc.oracle_every;
+    const auto stride = static_cast<std::size_t>(sc.oracle_client_stride());
+    const std::size_t judged_clients = (viewers + stride - 1) / stride;
+    result.oracle_client_stride = static_cast<int>(stride);
+    auto last_progress = std::chrono::steady_clock::now();
+
+    for (int t = 0; t < total_ticks; ++t) {
+        const WorldFrame& frame = world.current();
+        const auto tick = static_cast<std::uint64_t>(t);
+        // The oracle judges every `every`-th tick and the tick before it (so the
+        // ideal's enter/update split on the measured tick is exact).
+        const bool measured = t % every == 0 && t >= 1;
+        const bool judged = t % every == 0 || (t + 1) % every == 0;
+
+        for (std::size_t p = 0; p < runs.size(); ++p) {
+            PolicyRun& run = runs[p];
+            const auto policy_start = std::chrono::steady_clock::now();
+            const double serial_start = thread_cpu_us();
+            run.policy->begin_tick(frame);
+            const double serial_share =
+                (thread_cpu_us() - serial_start) / static_cast<double>(viewers);
+            parallel_for(viewers, result.threads, [&](std::size_t c, int worker) {
+                const double t0 = thread_cpu_us();
+                run.policy->select(c, frame, run.sets[c]);
+                run.cpu[c] = static_cast<float>(thread_cpu_us() - t0 + serial_share);
+                WorkerScratch& s = scratch[static_cast<std::size_t>(worker)];
+                run.costs[c] =
+                    run.replication[c].send(frame, run.sets[c], tick, s.envelope, s.buffer);
+            });
+            PolicyMetrics& m = run.metrics;
+            for (std::size_t c = 0; c < viewers; ++c) {
+                const SnapshotCost& cost = run.costs[c];
+                ++m.client_ticks;
+                m.enters += cost.enters;
+                m.updates += cost.updates;
+                m.leaves += cost.leaves;
+                m.bytes += cost.bytes;
+                m.replicated_pairs += run.sets[c].size();
+                m.cpu_us.push_back(run.cpu[c]);
+                if (measured && c % stride == 0) {
+                    m.measured_bytes += cost.bytes;
+                }
+            }
+            result.policy_seconds[p] += seconds_since(policy_start);
+        }
+
+        if (judged) {
+            const auto oracle_start = std::chrono::steady_clock::now();
+            truth.judge(world, lookahead, result.threads, static_cast<int>(stride));
+            ++result.oracle_ticks;
+            result.oracle_client_ticks += judged_clients;
+            if (measured) {
+                ++result.measured_ticks;
+            }
+            for (auto& run : runs) {
+                run.metrics.checked_client_ticks += judged_clients;
+                for (std::size_t c = 0; c < viewers; c += stride) {
+                    judge_client(truth, c, entities, run.sets[c], tick, options.max_examples,
+                                 run.metrics);
+                }
+                run.metrics.live_tbv_sum += run.policy->live_tbvs();
+                ++run.metrics.live_tbv_samples;
+            }
+            WorkerScratch& s = scratch[0];
+            for (std::size_t c = 0; c < viewers; c += stride) {
+                truth.ideal_set(c, ideal_set);
+                result.ideal_visible_pairs += ideal_set.size();
+                const SnapshotCost cost =
+                    ideal[c].send(frame, ideal_set, tick, s.envelope, s.buffer);
+                if (measured) {
+                    result.ideal_bytes += cost.bytes;
+                    result.ideal_updates += cost.enters + cost.updates;
+                }
+            }
+            result.oracle_seconds += seconds_since(oracle_start);
+        }
+
+        if (trace_writer.is_open() && t % std::max(1, options.trace_every) == 0) {
+            trace::TraceTick line;
+            line.t = tick;
+            line.entities.reserve(entities);
+            for (std::size_t e = 0; e < entities; ++e) {
+                line.entities.push_back({static_cast<std::uint32_t>(e), frame.entities[e].box});
+            }
+            for (std::size_t c = 0; c < viewers; ++c) {
+                trace::TraceClient client;
+                client.id = static_cast<std::uint32_t>(c);
+                client.entity = static_cast<std::uint32_t>(c);
+                client.eye = world.eye(frame, c);
+                client.replicated = runs[trace_run].sets[c];
+                line.clients.push_back(std::move(client));
+            }
+            if (!trace_writer.write_tick(line)) {
+                throw std::runtime_error("--trace: writing tick " + std::to_string(t) + " failed");
+            }
+        }
+
+        const auto world_start = std::chrono::steady_clock::now();
+        world.advance();
+        result.world_seconds += seconds_since(world_start);
+
+        if (progress != nullptr &&
+            (std::chrono::steady_clock::now() - last_progress > std::chrono::seconds(1) ||
+             t + 1 == total_ticks)) {
+            last_progress = std::chrono::steady_clock::now();
+            const double elapsed = seconds_since(start);
+            const double left = elapsed / (t + 1) * (total_ticks - t - 1);
+            *progress << "\rdsoc-eval " << sc.name << ": tick " << (t + 1) << "/" << total_ticks
+                      << ", " << static_cast<int>(elapsed) << " s elapsed, ~"
+                      << static_cast<int>(left) << " s left, oracle " << result.oracle_client_ticks
+                      << " client-ticks   " << std::flush;
+        }
+    }
+    if (progress != nullptr) {
+        *progress << "\n";
+    }
+    if (trace_writer.is_open()) {
+        result.trace_ticks = trace_writer.ticks_written();
+        if (!trace_writer.close()) {
+            throw std::runtime_error("--trace: closing failed");
+        }
+    }
+    for (auto& run : runs) {
+        run.metrics.tbv = run.policy->tbv_summary();
+        result.policies.push_back(std::move(run.metrics));
+    }
+    result.wall_seconds = seconds_since(start);
+    return result;
+}
+
+} // namespace dsoc::eval

@@ -1,0 +1,255 @@
+#include "dsoc/eval/policies.hpp"
+
+#include "dsoc/sim/motion_limits.hpp"
+#include "dsoc/sim/reach_clipper.hpp"
+#include "dsoc/visibility/interest_manager.hpp"
+#include "dsoc/visibility/occluder_region_visibility.hpp"
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+#include <array>
+#include <stdexcept>
+
+namespace dsoc::eval {
+
+namespace {
+
+class BroadcastPolicy final : public Policy {
+public:
+    [[nodiscard]] std::string_view name() const override { return "broadcast"; }
+    void select(std::size_t client, const WorldFrame& frame,
+                std::vector<std::uint32_t>& out) override {
+        out.clear();
+        for (std::uint32_t id = 0; id < frame.entities.size(); ++id) {
+            if (id != client) {
+                out.push_back(id);
+            }
+        }
+    }
+};
+
+class DistancePolicy final : public Policy {
+public:
+    DistancePolicy(const WorldSim& world, float radius) : world_(&world), radius_(radius) {}
+    [[nodiscard]] std::string_view name() const override { return "distance"; }
+    void select(std::size_t client, const WorldFrame& frame,
+                std::vector<std::uint32_t>& out) override {
+        out.clear();
+        const glm::vec3 eye = world_->eye(frame, client);
+        const float r2 = radius_ * radius_;
+        for (std::uint32_t id = 0; id < frame.entities.size(); ++id) {
+            if (id != client && visibility::distance_squared(frame.entities[id].box, eye) <= r2) {
+                out.push_back(id);
+            }
+        }
+    }
+
+private:
+    const WorldSim* world_;
+    float radius_;
+};
+
+/// The server's culler: the exact shaft stage without a per-region z-pyramid build
+/// (see ServerConfig::culler).
+visibility::RegionCullerConfig culler_config() {
+    visibility::RegionCullerConfig c;
+    c.pyramid = false;
+    c.shaft = true;
+    return c;
+}
+
+class CullingPolicy final : public Policy {
+public:
+    CullingPolicy(std::string name, const visibility::DSOCConfig& config, const PolicyEnv& env)
+        : name_(std::move(name)), lookahead_(env.lookahead_ticks),
+          clipper_(std::make_shared<const sim::ReachClipper>(env.map->collision_brushes,
+                                                             env.world->move())),
+          manager_(config, env.map->bounds.expanded(64.0f),
+                   visibility::occluder_region_visibility(env.scene, culler_config()),
+                   [clipper = clipper_](glm::vec3 eye, const visibility::Aabb& region) {
+                       return clipper->clip(eye, region);
+                   }) {
+        const sim::MoveConfig& move = env.world->move();
+        entity_desc_.half_extents = (move.maxs - move.mins) * 0.5f;
+        entity_desc_.motion = sim::walking_limits(move);
+        client_desc_.eye_motion = entity_desc_.motion;
+        client_desc_.lookahead_ticks = env.lookahead_ticks;
+        // The manager's eye is the box centre plus this offset (= origin + eye_height).
+        client_desc_.eye_offset =
+            glm::vec3(0.0f, 0.0f, move.eye_height - (move.mins.z + move.maxs.z) * 0.5f);
+        viewers_ = env.world->viewer_count();
+    }
+
+    [[nodiscard]] std::string_view name() const override { return name_; }
+    [[nodiscard]] int lookahead_ticks() const override { return lookahead_; }
+
+    void begin_tick(const WorldFrame& frame) override {
+        if (!started_) {
+            for (std::uint32_t id = 0; id < frame.entities.size(); ++id) {
+                if (!manager_.add_entity(id, entity_desc_, frame.entities[id].box)) {
+                    throw std::runtime_error("InterestManager refused entity " +
+                                             std::to_string(id));
+                }
+            }
+            for (std::uint32_t c = 0; c < viewers_; ++c) {
+                auto desc = client_desc_;
+                desc.viewer = c;
+                if (!manager_.add_client(c, desc)) {
+                    throw std::runtime_error("InterestManager refused client " + std::to_string(c));
+                }
+            }
+            started_ = true;
+        }
+        for (std::uint32_t id = 0; id < frame.entities.size(); ++id) {
+            manager_.set_entity_box(id, frame.entities[id].box, frame.entities[id].velocity);
+        }
+        manager_.begin_update(frame.tick);
+    }
+
+    void select(std::size_t client, const WorldFrame& /*frame*/,
+                std::vector<std::uint32_t>& out) override {
+        // Clients were added in order, so index i is client i.
+        manager_.update_client(client);
+        out.clear();
+        if (const auto* d = manager_.decisions(static_cast<visibility::ClientId>(client))) {
+            for (const auto& r : d->replicated) {
+                if (r.id != client) {
+                    out.push_back(r.id);
+                }
+            }
+        }
+    }
+
+    [[nodiscard]] TbvSummary tbv_summary() const override {
+        TbvSummary t;
+        t.available = true;
+        for (std::uint32_t c = 0; c < viewers_; ++c) {
+            const auto* s = manager_.stats(c);
+            if (s == nullptr) {
+                continue;
+            }
+            t.buffer_builds += s->buffer_builds;
+            t.box_tests += s->box_tests;
+            t.tbv_tests += s->tbv_tests;
+            t.tbvs_created += s->tbvs_created;
+            t.tbvs_merged += s->tbvs_merged;
+            t.tbvs_rejected += s->tbvs_rejected;
+            t.tbv_hits += s->tbv_hits;
+            t.tbvs_expired += s->tbvs_expired;
+            t.evictions += s->evictions;
+            t.teleports += s->teleports;
+        }
+        return t;
+    }
+
+    [[nodiscard]] std::uint64_t live_tbvs() const override {
+        std::uint64_t n = 0;
+        for (std::uint32_t c = 0; c < viewers_; ++c) {
+            n += manager_.tbv_count(c);
+        }
+        return n;
+    }
+
+private:
+    std::string name_;
+    int lookahead_;
+    std::shared_ptr<const sim::ReachClipper> clipper_;
+    visibility::InterestManager manager_;
+    visibility::EntityDesc entity_desc_;
+    visibility::ClientDesc client_desc_;
+    std::size_t viewers_ = 0;
+    bool started_ = false;
+};
+
+class RaycastPolicy final : public Policy {
+public:
+    RaycastPolicy(const PolicyEnv& env)
+        : world_(env.world), rays_(env.rays),
+          latency_s_(static_cast<float>(env.scenario->rtt_ms + env.scenario->interpolation_ms) /
+                     1000.0f) {}
+    [[nodiscard]] std::string_view name() const override { return "raycast"; }
+
+    void select(std::size_t client, const WorldFrame& frame,
+                std::vector<std::uint32_t>& out) override {
+        out.clear();
+        const glm::vec3 eye = world_->eye(frame, client);
+        const glm::vec3 ahead = eye + frame.entities[client].velocity * latency_s_;
+        std::array<glm::vec3, 9> points;
+        for (std::uint32_t id = 0; id < frame.entities.size(); ++id) {
+            if (id == client) {
+                continue;
+            }
+            const visibility::Aabb& box = frame.entities[id].box;
+            if (box.contains(eye)) {
+                out.push_back(id);
+                continue;
+            }
+            points[0] = box.center();
+            for (int c = 0; c < 8; ++c) {
+                points[static_cast<std::size_t>(c) + 1] =
+                    glm::vec3((c & 1) ? box.max.x : box.min.x, (c & 2) ? box.max.y : box.min.y,
+                              (c & 4) ? box.max.z : box.min.z);
+            }
+            if (rays_->any_visible(eye, points) || rays_->any_visible(ahead, points)) {
+                out.push_back(id);
+            }
+        }
+    }
+
+private:
+    const WorldSim* world_;
+    const RayOracle* rays_;
+    float latency_s_;
+};
+
+} // namespace
+
+const std::vector<std::string>& diagnostic_policy_names() {
+    static const std::vector<std::string> names = {"occlusion-k0"};
+    return names;
+}
+
+const std::vector<std::string>& all_policy_names() {
+    static const std::vector<std::string> names = {
+        "broadcast", "distance", "occlusion", "dsoc", "dsoc-explicit", "dsoc-fuzzy", "raycast"};
+    return names;
+}
+
+std::unique_ptr<Policy> make_policy(std::string_view name, const PolicyEnv& env) {
+    if (name == "broadcast") {
+        return std::make_unique<BroadcastPolicy>();
+    }
+    if (name == "distance") {
+        return std::make_unique<DistancePolicy>(*env.world, env.scenario->distance_radius);
+    }
+    if (name == "raycast") {
+        return std::make_unique<RaycastPolicy>(env);
+    }
+    visibility::DSOCConfig config;
+    config.tick_rate = env.scenario->tick_rate;
+    PolicyEnv point_env = env;
+    if (name == "occlusion" || name == "occlusion-k0") { // every box, every tick
+        config.tbvs_enabled = false;
+        config.reuse_buffers = false;
+        config.full_test_interval = 1;
+        if (name == "occlusion-k0") {
+            point_env.lookahead_ticks = 0; // diagnostic: the present eye only
+            return std::make_unique<CullingPolicy>(std::string(name), config, point_env);
+        }
+    } else if (name == "dsoc") {
+        config.strategy = visibility::TbvStrategy::adaptive;
+    } else if (name == "dsoc-explicit") {
+        config.strategy = visibility::TbvStrategy::explicit_duration;
+    } else if (name == "dsoc-fuzzy") {
+        config.strategy = visibility::TbvStrategy::fuzzy;
+    } else {
+        return nullptr;
+    }
+    if (const auto problems = visibility::validate(config); !problems.empty()) {
+        throw std::runtime_error("DSOCConfig for " + std::string(name) + ": " + problems.front());
+    }
+    return std::make_unique<CullingPolicy>(std::string(name), config, env);
+}
+
+} // namespace dsoc::eval

@@ -1,0 +1,56 @@
+#include "dsoc/eval/visibility_truth.hpp"
+
+#include "dsoc/eval/parallel.hpp"
+
+#include <algorithm>
+
+namespace dsoc::eval {
+
+void VisibilityTruth::judge(const WorldSim& world, int lookahead, int threads, int client_stride) {
+    const auto stride = static_cast<std::size_t>(std::max(1, client_stride));
+    const WorldFrame& now = world.current();
+    entities_ = now.entities.size();
+    const std::size_t viewers = world.viewer_count();
+    flags_.assign(viewers * entities_, 0);
+    parallel_for((viewers + stride - 1) / stride, threads, [&](std::size_t j, int /*worker*/) {
+        const std::size_t c = j * stride;
+        std::vector<glm::vec3> my_eyes;
+        my_eyes.push_back(world.eye(world.ahead(0), c));
+        for (int k = 1; k <= lookahead; ++k) {
+            // A respawn teleports the viewer: no movement rule covers the eyes after it.
+            if (world.ahead(k).entities[c].respawned) {
+                break;
+            }
+            my_eyes.push_back(world.eye(world.ahead(k), c));
+        }
+        std::uint8_t* row = flags_.data() + c * entities_;
+        for (std::size_t e = 0; e < entities_; ++e) {
+            if (e == c) {
+                continue;
+            }
+            const visibility::Aabb& box = now.entities[e].box;
+            if (rays_->box_visible(my_eyes[0], box, grid_)) {
+                row[e] = kPresent | kLookahead;
+                continue;
+            }
+            for (std::size_t k = 1; k < my_eyes.size(); ++k) {
+                if (rays_->box_visible(my_eyes[k], box, grid_)) {
+                    row[e] = kLookahead;
+                    break;
+                }
+            }
+        }
+    });
+}
+
+void VisibilityTruth::ideal_set(std::size_t client, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    const std::uint8_t* row = flags_.data() + client * entities_;
+    for (std::size_t e = 0; e < entities_; ++e) {
+        if ((row[e] & kLookahead) != 0) {
+            out.push_back(static_cast<std::uint32_t>(e));
+        }
+    }
+}
+
+} // namespace dsoc::eval

@@ -1,0 +1,78 @@
+#include "dsoc/eval/world_sim.hpp"
+
+#include "dsoc/maps/generators.hpp"
+#include "dsoc/maps/map_source.hpp"
+#include "dsoc/maps/map_spec.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace dsoc::eval {
+
+maps::Map load_scenario_map(const Scenario& scenario) {
+    if (scenario.map == "gen:city" && scenario.city_blocks > 0) {
+        maps::CityParams params;
+        params.blocks_x = scenario.city_blocks;
+        params.blocks_y = scenario.city_blocks;
+        params.seed = scenario.seed;
+        return maps::build_map(maps::generate_city(params),
+                               "generator:city:" + std::to_string(scenario.city_blocks));
+    }
+    auto loaded = maps::load_map(scenario.map, maps::MapSearch::from_environment());
+    if (!loaded) {
+        throw std::runtime_error(loaded.error().message());
+    }
+    return std::move(loaded).value();
+}
+
+WorldSim::WorldSim(const maps::Map& map, const Scenario& scenario, int lookahead)
+    : map_(&map), collision_(map.collision_brushes),
+      viewers_(static_cast<std::size_t>(scenario.viewers)),
+      dt_(1.0f / static_cast<float>(scenario.tick_rate)) {
+    if (map.spawn_points.empty()) {
+        throw std::runtime_error("map " + map.name + " has no spawn points");
+    }
+    const std::size_t count =
+        static_cast<std::size_t>(scenario.viewers) + static_cast<std::size_t>(scenario.bots);
+    bots_ = sim::spawn_wander_bots(collision_, move_, map.spawn_points, count, scenario.seed);
+    frames_.push_back(snapshot(next_tick_++, nullptr));
+    for (int k = 0; k < lookahead; ++k) {
+        step();
+        frames_.push_back(snapshot(next_tick_++, &frames_.back()));
+    }
+}
+
+void WorldSim::step() {
+    for (auto& bot : bots_) {
+        sim::wander_step(bot, collision_, wander_, move_, map_->spawn_points, map_->hazards, dt_);
+    }
+}
+
+void WorldSim::advance() {
+    step();
+    frames_.push_back(snapshot(next_tick_++, &frames_.back()));
+    frames_.pop_front();
+}
+
+WorldFrame WorldSim::snapshot(std::uint64_t tick, const WorldFrame* previous) const {
+    WorldFrame f;
+    f.tick = tick;
+    f.entities.resize(bots_.size());
+    for (std::size_t i = 0; i < bots_.size(); ++i) {
+        const auto& s = bots_[i].state;
+        EntityFrame& e = f.entities[i];
+        e.position = s.position;
+        e.velocity = s.velocity;
+        e.box = {s.position + move_.mins, s.position + move_.maxs};
+        e.respawned = bots_[i].respawned;
+        const float speed2 = s.velocity.x * s.velocity.x + s.velocity.y * s.velocity.y;
+        if (speed2 > 1.0f) {
+            e.yaw_deg = std::atan2(s.velocity.y, s.velocity.x) * 57.2957795f;
+        } else if (previous != nullptr) {
+            e.yaw_deg = previous->entities[i].yaw_deg;
+        }
+    }
+    return f;
+}
+
+} // namespace dsoc::eval
