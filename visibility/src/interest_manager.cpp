@@ -360,17 +360,7 @@ void InterestManager::update_client(std::size_t index) {
 
     // 2. Expired TBV groups: their entities must be tested again.
     while (!c.expiries.empty() && c.expiries.top().tick < tick_) {
-        const auto top = c.expiries.top();
-        c.expiries.pop();
-        TbvGroup& g = c.groups[top.group];
-        if (!g.alive || g.generation != top.generation) {
-            continue;
-        }
-        for (const std::uint32_t slot : g.members) {
-            c.pairs[slot].state = PairState::hidden_expired;
-            ++c.stats.tbvs_expired;
-        }
-        free_group(c, top.group);
+        c.stats.tbvs_expired += expire_earliest_group(c);
     }
 
     // 3. Teleports void the TBVs of the entity that jumped.
@@ -531,24 +521,31 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
     ++c.stats.tbvs_created;
 }
 
+std::size_t InterestManager::expire_earliest_group(ClientSlot& c) {
+    const auto top = c.expiries.top();
+    c.expiries.pop();
+    TbvGroup& g = c.groups[top.group];
+    if (!g.alive || g.generation != top.generation) {
+        return 0; // stale heap entry: the group was freed or reused since
+    }
+    for (const std::uint32_t slot : g.members) {
+        c.pairs[slot].state = PairState::hidden_expired;
+    }
+    const std::size_t members = g.members.size();
+    free_group(c, top.group);
+    return members;
+}
+
 std::uint32_t InterestManager::allocate_group(ClientSlot& c) {
     if (c.free_groups.empty() &&
         c.groups.size() >= static_cast<std::size_t>(config_.max_tbvs_per_client)) {
         // Memory pressure: evict the group that expires first; its entities are
         // re-tested every tick from now on, never forgotten.
         while (!c.expiries.empty()) {
-            const auto top = c.expiries.top();
-            c.expiries.pop();
-            TbvGroup& g = c.groups[top.group];
-            if (!g.alive || g.generation != top.generation) {
-                continue;
+            if (expire_earliest_group(c) > 0) {
+                ++c.stats.evictions;
+                break;
             }
-            for (const std::uint32_t slot : g.members) {
-                c.pairs[slot].state = PairState::hidden_expired;
-            }
-            ++c.stats.evictions;
-            free_group(c, top.group);
-            break;
         }
     }
     std::uint32_t group;

@@ -166,6 +166,9 @@ private:
     void release_group_member(ClientSlot& c, std::uint32_t slot);
     void free_group(ClientSlot& c, std::uint32_t group);
     std::uint32_t allocate_group(ClientSlot& c);
+    /// Pops the heap's earliest entry; a live group's entities become hidden_expired
+    /// and the group is freed. Returns how many entities it held (0: stale entry).
+    std::size_t expire_earliest_group(ClientSlot& c);
     /// The reachable eye region of `c` now; `eye` receives the present eye.
     [[nodiscard]] Aabb eye_region_for(const ClientSlot& c, glm::vec3& eye) const;
     /// `box` intersected with the world bounds (entities never leave them).
