@@ -138,6 +138,7 @@ Result<Map> map_from_q3_bsp(const q3::Q3Bsp& bsp, std::string name) {
         map.hazards.push_back({box, "trigger_hurt dmg " + std::to_string(damage)});
     }
     detail::finish_map(map);
+    map.pvs = std::make_shared<const Pvs>(bsp);
     return map;
 }
 

@@ -1,5 +1,6 @@
 #include "dsoc/server/interest_policy.hpp"
 
+#include "dsoc/maps/pvs_region_visibility.hpp"
 #include "dsoc/server/culling_policy.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
 
@@ -52,8 +53,11 @@ std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const Ga
     culler.shaft = config.culler != "pyramid";
     dsoc.region_reuse_margin = config.region_reuse_margin;
     auto scene = visibility::OccluderScene::build(world.map().occluders);
-    return std::make_unique<CullingPolicy>(config.policy, dsoc, world,
-                                           visibility::occluder_region_visibility(scene, culler),
+    auto make_culler = visibility::occluder_region_visibility(scene, culler);
+    if (config.pvs_stage) { // the map's PVS over the reachable clusters first
+        make_culler = maps::with_pvs_stage(world.map().pvs, std::move(make_culler));
+    }
+    return std::make_unique<CullingPolicy>(config.policy, dsoc, world, std::move(make_culler),
                                            lookahead_ticks(config));
 }
 

@@ -35,6 +35,9 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--culler", config.culler, "Occlusion culler stages: shaft | pyramid | both")
         ->capture_default_str();
+    app.add_option("--pvs-stage", config.pvs_stage,
+                   "Reject with the map's PVS before the culler (true/false)")
+        ->capture_default_str();
     app.add_option("--region-margin", config.region_reuse_margin,
                    "dsoc: reuse a client's culler region within this margin [units]")
         ->capture_default_str();

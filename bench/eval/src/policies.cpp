@@ -1,5 +1,6 @@
 #include "dsoc/eval/policies.hpp"
 
+#include "dsoc/maps/pvs_region_visibility.hpp"
 #include "dsoc/sim/motion_limits.hpp"
 #include "dsoc/sim/reach_clipper.hpp"
 #include "dsoc/visibility/interest_manager.hpp"
@@ -50,6 +51,38 @@ private:
     float radius_;
 };
 
+/// What the Quake 3 server does: an entity is sent when its box touches a leaf whose
+/// cluster is in the PVS of the viewer's eye cluster (areaportals left out).
+class PvsPolicy final : public Policy {
+public:
+    PvsPolicy(const WorldSim& world, std::shared_ptr<const maps::Pvs> pvs)
+        : world_(&world), pvs_(std::move(pvs)) {}
+    [[nodiscard]] std::string_view name() const override { return "pvs"; }
+    void select(std::size_t client, const WorldFrame& frame,
+                std::vector<std::uint32_t>& out) override {
+        out.clear();
+        // select() runs for several clients at once: scratch is per call.
+        std::vector<std::int32_t> clusters;
+        std::vector<std::int32_t> scratch;
+        std::vector<std::uint8_t> rows;
+        const glm::vec3 eye = world_->eye(frame, client);
+        const bool known = pvs_ != nullptr && pvs_->has_visibility() &&
+                           pvs_->clusters_of(visibility::Aabb{eye, eye}, clusters);
+        if (known) {
+            pvs_->union_of_rows(clusters, rows);
+        }
+        for (std::uint32_t id = 0; id < frame.entities.size(); ++id) {
+            if (id != client && (!known || pvs_->may_see(rows, frame.entities[id].box, scratch))) {
+                out.push_back(id);
+            }
+        }
+    }
+
+private:
+    const WorldSim* world_;
+    std::shared_ptr<const maps::Pvs> pvs_;
+};
+
 /// The server's culler: the exact shaft stage without a per-region z-pyramid build
 /// (see ServerConfig::culler).
 visibility::RegionCullerConfig culler_config() {
@@ -66,7 +99,8 @@ public:
           clipper_(std::make_shared<const sim::ReachClipper>(env.map->collision_brushes,
                                                              env.world->move())),
           manager_(config, env.map->bounds.expanded(64.0f),
-                   visibility::occluder_region_visibility(env.scene, culler_config()),
+                   maps::with_pvs_stage(env.map->pvs, visibility::occluder_region_visibility(
+                                                          env.scene, culler_config())),
                    [clipper = clipper_](glm::vec3 eye, const visibility::Aabb& region) {
                        return clipper->clip(eye, region);
                    }) {
@@ -211,8 +245,9 @@ const std::vector<std::string>& diagnostic_policy_names() {
 }
 
 const std::vector<std::string>& all_policy_names() {
-    static const std::vector<std::string> names = {
-        "broadcast", "distance", "occlusion", "dsoc", "dsoc-explicit", "dsoc-fuzzy", "raycast"};
+    static const std::vector<std::string> names = {"broadcast",  "distance", "pvs",
+                                                   "occlusion",  "dsoc",     "dsoc-explicit",
+                                                   "dsoc-fuzzy", "raycast"};
     return names;
 }
 
@@ -225,6 +260,9 @@ std::unique_ptr<Policy> make_policy(std::string_view name, const PolicyEnv& env)
     }
     if (name == "raycast") {
         return std::make_unique<RaycastPolicy>(env);
+    }
+    if (name == "pvs") {
+        return std::make_unique<PvsPolicy>(*env.world, env.map->pvs);
     }
     visibility::DSOCConfig config;
     config.tick_rate = env.scenario->tick_rate;

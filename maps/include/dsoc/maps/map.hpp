@@ -2,6 +2,7 @@
 // A loaded map, whatever it came from (Quake 3 BSP, our text format, a generator):
 // what blocks sight, what blocks movement, and where players start.
 
+#include "dsoc/maps/pvs.hpp"
 #include "dsoc/visibility/convex_polyhedron.hpp"
 #include "dsoc/visibility/geometry.hpp"
 
@@ -9,6 +10,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -87,6 +89,9 @@ struct Map {
     /// Union of the collision brushes' bounds (empty when there are none).
     visibility::Aabb bounds;
     MapStats stats;
+    /// The compiler's potentially visible set, for Quake 3 maps (null for text and
+    /// generated maps).
+    std::shared_ptr<const Pvs> pvs;
 };
 
 /// Adds the axial bevel planes a CollisionBrush needs (those of `bounds` whose

@@ -29,6 +29,9 @@ struct ServerConfig {
     /// Stages of the occlusion culler: "shaft" (exact single-occluder test, no
     /// per-region build), "pyramid" (extended-projection z-pyramid) or "both".
     std::string culler = "shaft";
+    /// dsoc and occlusion: reject first what the map's PVS (Quake 3 maps with vis data)
+    /// proves hidden from every cluster of the client's eye region.
+    bool pvs_stage = true;
     /// The dsoc policy reuses a client's culler region while the client's reachable
     /// eye region stays inside it grown by this margin: larger margins re-test hidden
     /// entities' TBVs less often but cull less. [Units: world units] [Limit: 0..512]

@@ -1,0 +1,62 @@
+#pragma once
+// The map compiler's potentially visible set, kept with a loaded map in compact form
+// (the BSP node tree, leaf clusters and cluster-to-cluster bits; no other lumps), with
+// the queries an interest policy needs: the clusters a box touches, and whether some
+// cluster of one set may see some cluster of a box.
+//
+// Conservative meaning (as far as the compiler's vis is): if any point of box B can
+// be seen from any point of region R, then some cluster of B is in the PVS of some
+// cluster of R. Clusters are those of the non-solid leaves a box overlaps; a box that
+// overlaps no such leaf (in solid, or outside the map), a map without vis data
+// (oa_ctf2), or a leaf without a cluster all answer "may see".
+// Threading: immutable after construction; all queries are const and thread-safe.
+
+#include "dsoc/maps/q3_bsp.hpp"
+#include "dsoc/visibility/geometry.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace dsoc::maps {
+
+class Pvs {
+public:
+    /// Copies the nodes, planes, leaf clusters and vis bits of `bsp`.
+    explicit Pvs(const q3::Q3Bsp& bsp);
+
+    /// True when the map has vis data; without it every query answers "may see".
+    [[nodiscard]] bool has_visibility() const { return num_clusters_ > 0; }
+    [[nodiscard]] int cluster_count() const { return num_clusters_; }
+
+    /// Appends the clusters of the non-solid leaves `box` overlaps (each once) to `out`
+    /// (cleared first). Returns false when the box overlaps no clustered leaf.
+    bool clusters_of(const visibility::Aabb& box, std::vector<std::int32_t>& out) const;
+
+    /// The union of the PVS rows of `clusters`, as a bitset of cluster_count() bits
+    /// (one byte per 8 clusters), into `out`.
+    void union_of_rows(const std::vector<std::int32_t>& clusters,
+                       std::vector<std::uint8_t>& out) const;
+
+    /// True unless the PVS proves `box` invisible from every cluster whose bit is set in
+    /// `visible_clusters` (a union_of_rows() result). `scratch` is reused storage.
+    [[nodiscard]] bool may_see(const std::vector<std::uint8_t>& visible_clusters,
+                               const visibility::Aabb& box,
+                               std::vector<std::int32_t>& scratch) const;
+
+    /// Whether cluster `from` may see cluster `to` (true for -1 or out of range).
+    [[nodiscard]] bool cluster_visible(int from, int to) const;
+
+private:
+    struct Node {
+        glm::vec3 normal;
+        float dist;
+        std::int32_t children[2];
+    };
+    std::vector<Node> nodes_;
+    std::vector<std::int32_t> leaf_cluster_;
+    std::int32_t num_clusters_ = 0;
+    std::int32_t bytes_per_cluster_ = 0;
+    std::vector<std::uint8_t> bits_;
+};
+
+} // namespace dsoc::maps

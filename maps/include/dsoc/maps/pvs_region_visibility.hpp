@@ -1,0 +1,64 @@
+#pragma once
+// The map's PVS as the first stage of a region culler (shared/notes/latency-safety.md
+// §3): the union of the PVS rows of every cluster the client's eye region touches is
+// conservative for the whole region, so a box none of whose clusters is in it is
+// hidden from every eye of the region. Cheap and coarse; boxes it passes go to the
+// next stage.
+
+#include "dsoc/maps/pvs.hpp"
+#include "dsoc/visibility/region_visibility.hpp"
+
+#include <memory>
+#include <vector>
+
+namespace dsoc::maps {
+
+class PvsRegionVisibility final : public visibility::RegionVisibility {
+public:
+    /// `next` answers the boxes the PVS passes; `pvs` must outlive this.
+    PvsRegionVisibility(std::shared_ptr<const Pvs> pvs,
+                        std::unique_ptr<visibility::RegionVisibility> next)
+        : pvs_(std::move(pvs)), next_(std::move(next)) {}
+
+    void build(const visibility::Aabb& region) override {
+        active_ = pvs_->has_visibility() && pvs_->clusters_of(region, scratch_);
+        if (active_) {
+            pvs_->union_of_rows(scratch_, visible_clusters_);
+        }
+        next_->build(region);
+    }
+    [[nodiscard]] visibility::Visibility test_box(const visibility::Aabb& box) const override {
+        if (active_ && !pvs_->may_see(visible_clusters_, box, scratch_)) {
+            return visibility::Visibility::occluded;
+        }
+        return next_->test_box(box);
+    }
+    [[nodiscard]] visibility::Visibility
+    test_box_quick(const visibility::Aabb& box) const override {
+        if (active_ && !pvs_->may_see(visible_clusters_, box, scratch_)) {
+            return visibility::Visibility::occluded;
+        }
+        return next_->test_box_quick(box);
+    }
+
+private:
+    std::shared_ptr<const Pvs> pvs_;
+    std::unique_ptr<visibility::RegionVisibility> next_;
+    bool active_ = false;
+    std::vector<std::uint8_t> visible_clusters_;
+    mutable std::vector<std::int32_t> scratch_;
+};
+
+/// Wraps every culler `make_next` makes with the PVS stage; returns `make_next` itself
+/// when `pvs` is null or the map has no vis data.
+[[nodiscard]] inline visibility::RegionVisibilityFactory
+with_pvs_stage(std::shared_ptr<const Pvs> pvs, visibility::RegionVisibilityFactory make_next) {
+    if (pvs == nullptr || !pvs->has_visibility()) {
+        return make_next;
+    }
+    return [pvs = std::move(pvs), make_next = std::move(make_next)] {
+        return std::make_unique<PvsRegionVisibility>(pvs, make_next());
+    };
+}
+
+} // namespace dsoc::maps

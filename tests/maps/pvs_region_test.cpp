@@ -1,0 +1,89 @@
+// The PVS stage never rejects a box that an eye of the region sees (brute-force rays),
+// on real maps with wandering bots; and it does reject something.
+
+#include "dsoc/maps/map_source.hpp"
+#include "dsoc/maps/pvs_region_visibility.hpp"
+#include "dsoc/sim/wander_bot.hpp"
+#include "dsoc/visibility/reference_visibility.hpp"
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+namespace dsoc::maps {
+namespace {
+
+/// A culler that never proves anything: isolates the PVS stage.
+class NothingHidden final : public visibility::RegionVisibility {
+public:
+    void build(const visibility::Aabb&) override {}
+    [[nodiscard]] visibility::Visibility test_box(const visibility::Aabb&) const override {
+        return visibility::Visibility::visible;
+    }
+};
+
+class PvsStageOnMaps : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(PvsStageOnMaps, NeverRejectsWhatAnEyeOfTheRegionSees) {
+    DSOC_REQUIRE_OPENARENA();
+    auto loaded = load_map(GetParam(), MapSearch::from_environment());
+    ASSERT_TRUE(loaded) << loaded.error().message();
+    const Map& map = loaded.value();
+    ASSERT_NE(map.pvs, nullptr);
+    ASSERT_TRUE(map.pvs->has_visibility());
+    visibility::OccluderWorld world;
+    for (const auto& o : map.occluders) {
+        world.add(o);
+    }
+    const visibility::ReferenceVisibility ref(world);
+    const sim::MoveConfig move;
+    const sim::CollisionWorld collision(map.collision_brushes);
+    auto bots = sim::spawn_wander_bots(collision, move, map.spawn_points, 60, 9);
+    const sim::WanderConfig wander;
+    for (int t = 0; t < 150; ++t) {
+        for (auto& b : bots) {
+            sim::wander_step(b, collision, wander, move, map.spawn_points, map.hazards, 1.0f / 30);
+        }
+    }
+    PvsRegionVisibility stage(map.pvs, std::make_unique<NothingHidden>());
+    int rejected = 0;
+    int checked = 0;
+    for (std::size_t v = 0; v < 20; ++v) {
+        const glm::vec3 eye = bots[v].state.position + glm::vec3(0, 0, move.eye_height);
+        const visibility::Aabb region{eye - glm::vec3(53, 53, 29), eye + glm::vec3(53, 53, 116)};
+        stage.build(region);
+        for (std::size_t b = 20; b < bots.size(); ++b) {
+            const visibility::Aabb box{bots[b].state.position + move.mins,
+                                       bots[b].state.position + move.maxs};
+            ++checked;
+            if (stage.test_box(box) != visibility::Visibility::occluded) {
+                continue;
+            }
+            ++rejected;
+            for (int k = 0; k < 27; ++k) {
+                const glm::vec3 f(k % 3, (k / 3) % 3, k / 9);
+                const glm::vec3 e = region.min + region.size() * f * 0.5f;
+                ASSERT_EQ(ref.test_box(e, box, 3), visibility::Visibility::occluded)
+                    << GetParam() << ": viewer " << v << " bot " << b << " seen from eye " << k;
+            }
+        }
+    }
+    EXPECT_GT(rejected, 0) << "the PVS stage should reject something on " << GetParam();
+    std::printf("%s: PVS stage rejected %d of %d boxes for the whole eye region\n", GetParam(),
+                rejected, checked);
+}
+
+INSTANTIATE_TEST_SUITE_P(Maps, PvsStageOnMaps, ::testing::Values("oa_dm4", "q3dm6ish", "oa_dm1"));
+
+TEST(Pvs, MapsWithoutVisDataPassEverything) {
+    DSOC_REQUIRE_OPENARENA();
+    auto loaded = load_map("oa_ctf2", MapSearch::from_environment());
+    ASSERT_TRUE(loaded) << loaded.error().message();
+    ASSERT_NE(loaded.value().pvs, nullptr);
+    EXPECT_FALSE(loaded.value().pvs->has_visibility());
+    PvsRegionVisibility stage(loaded.value().pvs, std::make_unique<NothingHidden>());
+    stage.build({glm::vec3(0), glm::vec3(10)});
+    EXPECT_EQ(stage.test_box({glm::vec3(1000), glm::vec3(1030)}), visibility::Visibility::visible);
+}
+
+} // namespace
+} // namespace dsoc::maps
