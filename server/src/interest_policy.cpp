@@ -32,12 +32,30 @@ void DistancePolicy::select(const GameWorld& world, const Viewer& viewer,
     }
 }
 
+void PvsPolicy::select(const GameWorld& world, const Viewer& viewer,
+                       std::vector<std::uint32_t>& out) {
+    out.clear();
+    const bool known = pvs_ != nullptr && pvs_->has_visibility() &&
+                       pvs_->clusters_of(visibility::Aabb{viewer.eye, viewer.eye}, clusters_);
+    if (known) {
+        pvs_->union_of_rows(clusters_, rows_);
+    }
+    for (const Entity& e : world.entities()) {
+        if (!known || pvs_->may_see(rows_, world.box_of(e), scratch_)) {
+            out.push_back(e.id);
+        }
+    }
+}
+
 std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const GameWorld& world) {
     if (config.policy == "broadcast") {
         return std::make_unique<BroadcastPolicy>();
     }
     if (config.policy == "distance") {
         return std::make_unique<DistancePolicy>(config.distance_radius);
+    }
+    if (config.policy == "pvs") {
+        return std::make_unique<PvsPolicy>(world.map().pvs);
     }
     visibility::DSOCConfig dsoc;
     dsoc.tick_rate = config.tick_rate;

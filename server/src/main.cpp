@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
                    "Map: name (e.g. oa_dm4), path to .bsp/text map, or gen:city / gen:rooms")
         ->capture_default_str();
     app.add_option("--policy", config.policy,
-                   "Interest policy: dsoc | occlusion | distance | broadcast")
+                   "Interest policy: dsoc | occlusion | pvs | distance | broadcast")
         ->capture_default_str();
     app.add_option("--tbv-strategy", config.tbv_strategy, "dsoc TBVs: adaptive | explicit | fuzzy")
         ->capture_default_str();

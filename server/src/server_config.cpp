@@ -24,8 +24,9 @@ std::vector<std::string> validate(const ServerConfig& c) {
           "must be 0..100000, got " + std::to_string(c.bots));
     check(p,
           c.policy == "broadcast" || c.policy == "distance" || c.policy == "occlusion" ||
-              c.policy == "dsoc",
-          "policy", "must be one of dsoc, occlusion, distance, broadcast; got '" + c.policy + "'");
+              c.policy == "dsoc" || c.policy == "pvs",
+          "policy",
+          "must be one of dsoc, occlusion, pvs, distance, broadcast; got '" + c.policy + "'");
     check(p,
           c.tbv_strategy == "adaptive" || c.tbv_strategy == "explicit" || c.tbv_strategy == "fuzzy",
           "tbv_strategy", "must be one of adaptive, explicit, fuzzy; got '" + c.tbv_strategy + "'");

@@ -1,6 +1,8 @@
 #include "dsoc/server/interest_policy.hpp"
 #include "support/test_maps.hpp"
 
+#include "dsoc/maps/map_source.hpp"
+
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -46,6 +48,31 @@ TEST(InterestPolicy, DistanceKeepsExactlyTheEntitiesWithinRadius) {
     // The policy must actually cull something in this world, and keep something.
     EXPECT_LT(out.size(), world.entities().size());
     EXPECT_GT(out.size(), 0u);
+}
+
+TEST(InterestPolicy, PvsKeepsTheViewersClusterAndCullsOthers) {
+    auto loaded = maps::load_map("oa_dm4", maps::MapSearch::from_environment());
+    if (!loaded) {
+        GTEST_SKIP() << "oa_dm4 not available (scripts/setup installs openarena-081-maps): "
+                     << loaded.error().message();
+    }
+    auto map = std::make_shared<const maps::Map>(std::move(loaded).value());
+    GameWorld world(bots(200), map);
+    for (int i = 0; i < 90; ++i) {
+        world.step(1.0f / 30.0f);
+    }
+    PvsPolicy policy(map->pvs);
+    std::size_t total = 0;
+    for (int v = 0; v < 20; ++v) {
+        const Entity& viewer = world.entities()[static_cast<std::size_t>(v)];
+        std::vector<std::uint32_t> out;
+        policy.select(world, Viewer{1, viewer.id, world.eye_of(viewer)}, out);
+        EXPECT_TRUE(std::binary_search(out.begin(), out.end(), viewer.id)) << "own cluster";
+        total += out.size();
+    }
+    // The map's vis data culls a good share on oa_dm4 (latency-safety.md: ~45% pass).
+    EXPECT_LT(total, 20u * world.entities().size() * 8 / 10);
+    EXPECT_GT(total, 20u * world.entities().size() / 10);
 }
 
 TEST(GameWorld, EntitiesNeverExceedMaxSpeedHorizontally) {

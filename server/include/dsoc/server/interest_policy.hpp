@@ -57,6 +57,23 @@ private:
     float radius_;
 };
 
+/// What the Quake 3 server does: an entity is sent when its box touches a leaf whose
+/// cluster is in the map's PVS row of the viewer's eye cluster (areaportals left out).
+/// Everything passes on maps without vis data and for eyes in solid.
+class PvsPolicy final : public InterestPolicy {
+public:
+    explicit PvsPolicy(std::shared_ptr<const maps::Pvs> pvs) : pvs_(std::move(pvs)) {}
+    [[nodiscard]] std::string_view name() const override { return "pvs"; }
+    void select(const GameWorld& world, const Viewer& viewer,
+                std::vector<std::uint32_t>& out) override;
+
+private:
+    std::shared_ptr<const maps::Pvs> pvs_;
+    std::vector<std::int32_t> clusters_;
+    std::vector<std::int32_t> scratch_;
+    std::vector<std::uint8_t> rows_;
+};
+
 /// The policy named by config.policy, for `world`; config must have passed validate().
 std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const GameWorld& world);
 

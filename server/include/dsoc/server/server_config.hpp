@@ -21,6 +21,7 @@ struct ServerConfig {
     std::string map = "oa_dm4";
     /// Interest policy: "dsoc" (occlusion culling with TBVs, latency-safe),
     /// "occlusion" (the same culler, every entity tested every tick, no TBVs),
+    /// "pvs" (the map's PVS from the eye's cluster, as the Quake 3 server does),
     /// "distance" (radius) or "broadcast" (everything).
     std::string policy = "dsoc";
     /// TBV strategy of the dsoc policy: "adaptive", "explicit" or "fuzzy" (not
