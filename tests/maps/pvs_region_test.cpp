@@ -7,7 +7,13 @@
 #include "dsoc/visibility/reference_visibility.hpp"
 #include "test_support.hpp"
 
+#include "dsoc/maps/q3_map.hpp"
+#include "dsoc/maps/q3_pvs.hpp"
+
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
 
 namespace dsoc::maps {
 namespace {
@@ -73,6 +79,42 @@ TEST_P(PvsStageOnMaps, NeverRejectsWhatAnEyeOfTheRegionSees) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Maps, PvsStageOnMaps, ::testing::Values("oa_dm4", "q3dm6ish", "oa_dm1"));
+
+TEST(Pvs, BoxClustersContainThePointClustersInside) {
+    DSOC_REQUIRE_OPENARENA();
+    auto bsp = find_q3_bsp("oa_dm4", MapSearch::from_environment());
+    ASSERT_TRUE(bsp) << bsp.error().message();
+    const Pvs pvs(bsp.value());
+    auto loaded = map_from_q3_bsp(bsp.value(), "oa_dm4");
+    ASSERT_TRUE(loaded);
+    const visibility::Aabb bounds = loaded.value().bounds;
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    std::vector<std::int32_t> clusters;
+    int boxes_with_clusters = 0;
+    for (int i = 0; i < 2000; ++i) {
+        const glm::vec3 c = bounds.min + bounds.size() * glm::vec3(u(rng), u(rng), u(rng));
+        const glm::vec3 h(8.0f + 60.0f * u(rng), 8.0f + 60.0f * u(rng), 8.0f + 60.0f * u(rng));
+        const visibility::Aabb box{c - h, c + h};
+        pvs.clusters_of(box, clusters);
+        boxes_with_clusters += clusters.empty() ? 0 : 1;
+        for (int k = 0; k < 27; ++k) {
+            const glm::vec3 f(k % 3, (k / 3) % 3, k / 9);
+            const glm::vec3 p = box.min + box.size() * f * 0.5f;
+            const int cluster = q3::cluster_at(bsp.value(), p);
+            if (cluster >= 0) {
+                ASSERT_TRUE(std::binary_search(clusters.begin(), clusters.end(), cluster))
+                    << "point cluster " << cluster << " missing from the box's clusters";
+            }
+        }
+        // A point's own cluster sees itself.
+        const int centre = q3::cluster_at(bsp.value(), c);
+        if (centre >= 0) {
+            EXPECT_TRUE(pvs.cluster_visible(centre, centre));
+        }
+    }
+    EXPECT_GT(boxes_with_clusters, 500);
+}
 
 TEST(Pvs, MapsWithoutVisDataPassEverything) {
     DSOC_REQUIRE_OPENARENA();
