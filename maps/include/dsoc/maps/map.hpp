@@ -69,11 +69,11 @@ struct MapStats {
     std::size_t collision_candidates = 0; ///< world brushes that block players
     std::size_t collision_brushes = 0;    ///< of those, with usable geometry
     std::size_t translucent_skipped = 0; ///< solid but translucent (glass): collide, do not occlude
-    std::size_t nodraw_skipped = 0;   ///< solid, every side nodraw (caulk): collide, do not occlude
+    std::size_t nodraw_skipped = 0; ///< solid, every side nodraw (caulk): collide, do not occlude
     std::size_t see_through_skipped = 0; ///< solid, drawn with a see-through looking shader
                                          ///< (grate, fence, window...): collide, do not occlude
-    std::size_t patches_left_out = 0; ///< curved patch surfaces not turned into occluders
-    DegenerateCounts degenerate;      ///< collision candidates with unusable geometry
+    std::size_t patches_left_out = 0;    ///< curved patch surfaces not turned into occluders
+    DegenerateCounts degenerate;         ///< collision candidates with unusable geometry
 };
 
 struct Map {
