@@ -97,7 +97,7 @@ bool RayOracle::any_visible(glm::vec3 eye, std::span<const glm::vec3> points) co
     rtcInitIntersectContext(&context);
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT; // one origin, nearby directions
     RTCRay16 rays;
-    int valid[kPacket];
+    alignas(64) int valid[kPacket]; // Embree requires the mask 64-byte aligned
     for (std::size_t first = 0; first < points.size(); first += kPacket) {
         const std::size_t n = std::min<std::size_t>(kPacket, points.size() - first);
         for (int k = 0; k < kPacket; ++k) {
