@@ -29,6 +29,8 @@
 
 #include "dsoc/visibility/region_occlusion_buffer.hpp"
 
+#include "z_pyramid_query.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -497,48 +499,9 @@ float RegionOcclusionBuffer::depth(int face, int level, int x, int y) const {
     return level_data(face, level)[static_cast<std::size_t>(y) * size + x];
 }
 
-bool RegionOcclusionBuffer::texel_occluded(int face, int level, int tx, int ty, const Rect& r,
-                                           float z) const {
-    const int size = resolution_ >> level;
-    if (level_data(face, level)[static_cast<std::size_t>(ty) * size + tx] < z) {
-        return true;
-    }
-    if (level == 0) {
-        return false;
-    }
-    // Children of this texel that overlap the rectangle (in level-0 texels).
-    const int shift = level - 1;
-    for (int cy = 2 * ty; cy <= 2 * ty + 1; ++cy) {
-        if ((cy << shift) > r.y1 || (((cy + 1) << shift) - 1) < r.y0) {
-            continue;
-        }
-        for (int cx = 2 * tx; cx <= 2 * tx + 1; ++cx) {
-            if ((cx << shift) > r.x1 || (((cx + 1) << shift) - 1) < r.x0) {
-                continue;
-            }
-            if (!texel_occluded(face, level - 1, cx, cy, r, z)) {
-                return false;
-            }
-        }
-    }
-    return true;
-}
-
 bool RegionOcclusionBuffer::rect_occluded(int face, const Rect& r, float z) const {
-    // Greene's test: start at the level where the rectangle spans at most 2x2 texels.
-    int level = 0;
-    while (level + 1 < levels_ &&
-           (((r.x1 >> level) - (r.x0 >> level)) > 1 || ((r.y1 >> level) - (r.y0 >> level)) > 1)) {
-        ++level;
-    }
-    for (int ty = r.y0 >> level; ty <= (r.y1 >> level); ++ty) {
-        for (int tx = r.x0 >> level; tx <= (r.x1 >> level); ++tx) {
-            if (!texel_occluded(face, level, tx, ty, r, z)) {
-                return false;
-            }
-        }
-    }
-    return true;
+    return detail::rect_occluded([&](int level) { return level_data(face, level); }, resolution_,
+                                 levels_, detail::TexelRect{r.x0, r.y0, r.x1, r.y1}, z);
 }
 
 Visibility RegionOcclusionBuffer::test_box(const Aabb& box) const {

@@ -111,8 +111,6 @@ private:
     /// while building, before the pyramid exists).
     [[nodiscard]] bool level0_hides(int face, const Rect& r, float z) const;
     [[nodiscard]] bool rect_occluded(int face, const Rect& r, float z) const;
-    [[nodiscard]] bool texel_occluded(int face, int level, int tx, int ty, const Rect& r,
-                                      float z) const;
     void rasterize_face(int face, const Rect& rect, std::span<const Plane> planes, const float* num,
                         std::size_t plane_count);
     [[nodiscard]] float* level_data(int face, int level) {

@@ -114,8 +114,6 @@ private:
         int x0, y0, x1, y1;
     };
     [[nodiscard]] bool rect_occluded(int face, const Rect& r, float z) const;
-    [[nodiscard]] bool texel_occluded(int face, int level, int tx, int ty, const Rect& r,
-                                      float z) const;
     /// Smallest forward offset (along a face's axis) from an eye of the region to a
     /// point `distance` away from it on a ray that leaves by that face.
     [[nodiscard]] float min_forward_distance(float distance) const;
