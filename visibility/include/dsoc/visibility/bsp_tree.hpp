@@ -14,6 +14,7 @@
 
 namespace dsoc::visibility {
 
+/// One node of BspTree::nodes(); indexes are into that vector.
 struct BspNode {
     /// Inner nodes: child 0 lies on the negative side (signed_distance <= 0) as far
     /// as the split is exact (see `separated`). Leaves: unused.

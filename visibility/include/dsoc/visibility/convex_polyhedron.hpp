@@ -40,6 +40,9 @@ struct PolyhedronResult {
     [[nodiscard]] bool ok() const { return error == PolyhedronError::none; }
 };
 
+/// A value type: owns its planes, vertices and faces; immutable once made (by
+/// from_planes() or from_aabb()), so const members may run concurrently. Used as an
+/// occluder it must be opaque everywhere inside: culling trusts all of its interior.
 class ConvexPolyhedron {
 public:
     ConvexPolyhedron() = default;

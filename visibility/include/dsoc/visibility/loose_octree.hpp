@@ -31,6 +31,7 @@ struct LooseOctreeConfig {
     std::uint32_t max_items = 4096;
 };
 
+/// One pooled node of a LooseOctree (read access for traversals and tests).
 struct OctreeNode {
     Aabb loose_bounds; ///< 2x the cell
     std::array<std::int32_t, 8> children{-1, -1, -1, -1, -1, -1, -1, -1};

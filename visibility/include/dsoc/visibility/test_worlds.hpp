@@ -8,6 +8,8 @@
 
 namespace dsoc::visibility {
 
+/// A generated world for tests and benchmarks; not meant for a game server (use
+/// dsoc::maps to load real maps).
 struct TestWorld {
     OccluderWorld world;
     /// Where eyes and test boxes are meant to be placed (walkable space plus some
