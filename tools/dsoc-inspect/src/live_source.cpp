@@ -1,0 +1,167 @@
+#include "dsoc/inspect/live_source.hpp"
+
+#include "dsoc/server/culling_policy.hpp"
+#include "dsoc/server/server_config.hpp"
+
+#include <stdexcept>
+
+namespace dsoc::inspect {
+
+namespace {
+
+server::ServerConfig server_config(const LiveOptions& o) {
+    server::ServerConfig c;
+    c.policy = o.policy;
+    c.bots = o.bots;
+    c.tick_rate = o.tick_rate;
+    c.latency_allowance_ms = o.latency_allowance_ms;
+    c.culler = o.culler;
+    c.seed = o.seed;
+    return c;
+}
+
+visibility::RegionCullerConfig culler_config(const std::string& culler) {
+    visibility::RegionCullerConfig c; // as server::make_policy reads ServerConfig::culler
+    c.pyramid = culler != "shaft";
+    c.shaft = culler != "pyramid";
+    return c;
+}
+
+/// The element type of InterestPolicy::select()'s answer (entity ids, or entries
+/// with an id), read off its signature.
+template <class Member>
+struct SelectAnswer;
+template <class Policy, class Entry>
+struct SelectAnswer<void (Policy::*)(const server::GameWorld&, const server::Viewer&,
+                                     std::vector<Entry>&)> {
+    using type = std::vector<Entry>;
+};
+using SelectOut = SelectAnswer<decltype(&server::InterestPolicy::select)>::type;
+
+} // namespace
+
+std::vector<std::string> validate(const LiveOptions& o) {
+    std::vector<std::string> problems;
+    if (o.policy != "dsoc" && o.policy != "occlusion") {
+        problems.push_back("policy '" + o.policy +
+                           "': the inspector shows the culling policies, dsoc or occlusion");
+    }
+    // The fields server::make_policy and GameWorld read, with ServerConfig's limits
+    // (server::validate() would also judge the socket settings we do not use).
+    if (o.bots < 1 || o.bots > 100000) {
+        problems.push_back("bots " + std::to_string(o.bots) + ": must be 1..100000");
+    }
+    if (o.tick_rate < 1 || o.tick_rate > 240) {
+        problems.push_back("tick rate " + std::to_string(o.tick_rate) + ": must be 1..240 Hz");
+    }
+    if (o.latency_allowance_ms < 0 || o.latency_allowance_ms > 2000) {
+        problems.push_back("latency allowance " + std::to_string(o.latency_allowance_ms) +
+                           ": must be 0..2000 ms");
+    }
+    if (o.culler != "shaft" && o.culler != "pyramid" && o.culler != "both") {
+        problems.push_back("culler '" + o.culler + "': must be shaft, pyramid or both");
+    }
+    if (o.viewer_entity < 1 || o.bots < 1 || o.viewer_entity > static_cast<std::uint32_t>(o.bots)) {
+        problems.push_back("client " + std::to_string(o.viewer_entity) +
+                           ": the client views from a bot, 1.." + std::to_string(o.bots));
+    }
+    return problems;
+}
+
+LiveSimulation::LiveSimulation(std::shared_ptr<const maps::Map> map, const LiveOptions& options)
+    : map_(std::move(map)), options_(options) {
+    if (const auto problems = validate(options); !problems.empty()) {
+        std::string all;
+        for (const auto& p : problems) {
+            all += (all.empty() ? "" : "; ") + p;
+        }
+        throw std::invalid_argument(all);
+    }
+    if (map_ == nullptr || map_->spawn_points.empty()) {
+        throw std::invalid_argument("map: the live simulation needs a map with spawn points");
+    }
+    const server::ServerConfig config = server_config(options);
+    world_ = std::make_unique<server::GameWorld>(config, map_);
+    policy_ = server::make_policy(config, *world_);
+    culling_ = dynamic_cast<const server::CullingPolicy*>(policy_.get());
+    if (culling_ == nullptr) {
+        throw std::logic_error("server::make_policy did not return a CullingPolicy for " +
+                               options.policy);
+    }
+    policy_->add_viewer(kClientId, options.viewer_entity);
+    scene_ = visibility::OccluderScene::build(map_->occluders);
+    // As server::make_policy: the map's PVS stage in front of the occluder culler.
+    classifier_ =
+        std::make_unique<ReplicatedClassifier>(scene_, map_->pvs, culler_config(options.culler));
+}
+
+LiveSimulation::~LiveSimulation() = default;
+
+void LiveSimulation::advance() {
+    world_->step(1.0f / static_cast<float>(options_.tick_rate));
+    ++tick_;
+    policy_->begin_tick(*world_, tick_);
+    // The policy decides for a viewer in begin_tick() or in select(), depending on how
+    // the server spreads per-client work; ask, as the server does, so both hold.
+    if (const server::Entity* self = world_->find(options_.viewer_entity)) {
+        server::Viewer viewer;
+        viewer.client_id = kClientId;
+        viewer.entity_id = options_.viewer_entity;
+        viewer.eye = world_->eye_of(*self);
+        SelectOut answer;
+        policy_->select(*world_, viewer, answer);
+    }
+}
+
+ClientView LiveSimulation::view() {
+    const visibility::InterestManager& manager = culling_->manager();
+    ClientView v;
+    v.tick = tick_;
+    v.client = kClientId;
+    v.viewer_entity = options_.viewer_entity;
+    const server::Entity* self = world_->find(options_.viewer_entity);
+    if (self != nullptr) {
+        v.eye = world_->eye_of(*self);
+        v.viewer_box = world_->box_of(*self);
+    }
+    v.eye_region = manager.eye_region(kClientId);
+    classifier_->prepare(v.eye, v.eye_region);
+    std::vector<bool> replicated;
+    if (const auto* d = manager.decisions(kClientId)) {
+        for (const auto& r : d->replicated) {
+            if (r.id >= replicated.size()) {
+                replicated.resize(r.id + 1, false);
+            }
+            replicated[r.id] = true;
+        }
+    }
+    for (const server::Entity& e : world_->entities()) {
+        if (e.id == options_.viewer_entity) {
+            continue;
+        }
+        EntityView ev;
+        ev.id = e.id;
+        ev.box = world_->box_of(e);
+        if (e.id < replicated.size() && replicated[e.id]) {
+            ev.state = classifier_->classify(ev.box);
+        } else {
+            switch (manager.state(kClientId, e.id)) {
+            case visibility::PairState::hidden_with_tbv:
+                ev.state = EntityState::hidden_tbv;
+                ev.tbv = manager.tbv_of(kClientId, e.id);
+                break;
+            case visibility::PairState::hidden_expired:
+                ev.state = EntityState::hidden_expired;
+                break;
+            case visibility::PairState::visible: // not in the set: cannot happen
+            case visibility::PairState::unknown:
+                ev.state = EntityState::not_replicated;
+                break;
+            }
+        }
+        v.entities.push_back(ev);
+    }
+    return v;
+}
+
+} // namespace dsoc::inspect
