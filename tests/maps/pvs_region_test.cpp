@@ -61,6 +61,14 @@ TEST_P(PvsStageOnMaps, NeverRejectsWhatAnEyeOfTheRegionSees) {
             const visibility::Aabb box{bots[b].state.position + move.mins,
                                        bots[b].state.position + move.maxs};
             ++checked;
+            // A prepared box (its clusters computed once) gets the same answers, and
+            // the coarse test alone is the PVS stage.
+            visibility::PreparedBox prepared;
+            stage.prepare(box, prepared);
+            ASSERT_TRUE(prepared.prepared);
+            ASSERT_EQ(stage.test_prepared(prepared), stage.test_box(box));
+            ASSERT_EQ(stage.test_prepared_quick(prepared), stage.test_box_quick(box));
+            ASSERT_EQ(stage.test_prepared_coarse(prepared), stage.test_box(box));
             if (stage.test_box(box) != visibility::Visibility::occluded) {
                 continue;
             }

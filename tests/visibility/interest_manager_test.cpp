@@ -1,11 +1,15 @@
 // The DSOC state machine, one test per rule of the guide, on a hand-made world with
-// an exact culler: an infinite wall filling -8 <= x <= 8.
+// an exact culler: an infinite wall filling -8 <= x <= 8. Every rule runs twice: with a
+// plain culler, and with one that has a prepared stage (the role the map's PVS plays on
+// real maps), whose TBVs are shared by all clients and re-proven by their keys.
 
 #include "dsoc/visibility/interest_manager.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <string>
+#include <vector>
 
 namespace dsoc::visibility {
 namespace {
@@ -26,9 +30,62 @@ public:
     }
     static constexpr float kWall = 8.0f;
 
-private:
+protected:
     Aabb region_;
     int* builds_;
+};
+
+/// The same world with a prepared stage like a PVS: three cells (0: x < -8, 1: the wall,
+/// 2: x > 8), each seeing its neighbours. A box is hidden when none of its cells is seen
+/// from a cell of the region, which for this world is the exact answer again.
+class CellVisibility final : public RegionVisibility {
+public:
+    explicit CellVisibility(int* builds) : wall_(builds) {}
+    void build(const Aabb& region) override {
+        wall_.build(region);
+        seen_ = 0;
+        for (const std::int32_t cell : cells(region)) {
+            seen_ |= cell == 0 ? 0b011 : cell == 2 ? 0b110 : 0b111;
+        }
+    }
+    [[nodiscard]] Visibility test_box(const Aabb& box) const override { return wall_.test_box(box); }
+    [[nodiscard]] bool has_prepared_stage() const override { return true; }
+    void prepare(const Aabb& box, PreparedBox& out) const override {
+        out.box = box;
+        out.keys = cells(box);
+        out.prepared = true;
+    }
+    [[nodiscard]] Visibility test_prepared(const PreparedBox& p) const override {
+        return test_prepared_coarse(p) == Visibility::occluded ? Visibility::occluded
+                                                                : wall_.test_box(p.box);
+    }
+    [[nodiscard]] Visibility test_prepared_coarse(const PreparedBox& p) const override {
+        ++coarse_tests;
+        for (const std::int32_t cell : p.keys) {
+            if ((seen_ >> cell) & 1) {
+                return Visibility::visible;
+            }
+        }
+        return Visibility::occluded;
+    }
+    mutable int coarse_tests = 0;
+
+private:
+    static std::vector<std::int32_t> cells(const Aabb& b) {
+        std::vector<std::int32_t> out;
+        if (b.min.x < -WallVisibility::kWall) {
+            out.push_back(0);
+        }
+        if (b.max.x > -WallVisibility::kWall && b.min.x < WallVisibility::kWall) {
+            out.push_back(1);
+        }
+        if (b.max.x > WallVisibility::kWall) {
+            out.push_back(2);
+        }
+        return out;
+    }
+    WallVisibility wall_;
+    unsigned seen_ = 0;
 };
 
 constexpr glm::vec3 kHalf{15.0f, 15.0f, 28.0f};
@@ -37,7 +94,8 @@ Aabb box_at(glm::vec3 c) {
     return Aabb::from_center_half_extents(c, kHalf);
 }
 
-class DsocStateMachine : public ::testing::Test {
+/// Parameter: the culler has a prepared stage (CellVisibility) or not (WallVisibility).
+class DsocStateMachine : public ::testing::TestWithParam<bool> {
 protected:
     DSOCConfig config() const {
         DSOCConfig c;
@@ -51,7 +109,12 @@ protected:
         EXPECT_TRUE(validate(c).empty());
         return std::make_unique<InterestManager>(
             c, Aabb{glm::vec3(-4096.0f), glm::vec3(4096.0f)},
-            [this] { return std::make_unique<WallVisibility>(&builds_); });
+            [this]() -> std::unique_ptr<RegionVisibility> {
+                if (GetParam()) {
+                    return std::make_unique<CellVisibility>(&builds_);
+                }
+                return std::make_unique<WallVisibility>(&builds_);
+            });
     }
     /// A viewer entity (id 1) at `eye_x` and a client (id 100) looking from it.
     void add_viewer(InterestManager& m, float eye_x, int lookahead = 3) {
@@ -73,7 +136,7 @@ protected:
     int builds_ = 0;
 };
 
-TEST_F(DsocStateMachine, ClientJoinCreatesTbvsForEveryHiddenEntityAtOnce) {
+TEST_P(DsocStateMachine, ClientJoinCreatesTbvsForEveryHiddenEntityAtOnce) {
     auto m = make(config());
     add_viewer(*m, -500.0f);
     for (EntityId id = 2; id < 12; ++id) { // 5 on the viewer's side, 5 behind the wall
@@ -99,7 +162,7 @@ TEST_F(DsocStateMachine, ClientJoinCreatesTbvsForEveryHiddenEntityAtOnce) {
     EXPECT_EQ(m->stats(100)->tbvs_created, 5u);
 }
 
-TEST_F(DsocStateMachine, HiddenTbvCostsNothingWhileTheRegionHolds) {
+TEST_P(DsocStateMachine, HiddenTbvCostsNothingWhileTheRegionHolds) {
     auto m = make(config());
     add_viewer(*m, -500.0f);
     ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
@@ -114,7 +177,7 @@ TEST_F(DsocStateMachine, HiddenTbvCostsNothingWhileTheRegionHolds) {
     EXPECT_EQ(m->stats(100)->buffer_builds, 1u);
 }
 
-TEST_F(DsocStateMachine, ExpiredTbvIsRetestedAndRenewed) {
+TEST_P(DsocStateMachine, ExpiredTbvIsRetestedAndRenewed) {
     auto m = make(config());
     add_viewer(*m, -500.0f);
     ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
@@ -127,7 +190,7 @@ TEST_F(DsocStateMachine, ExpiredTbvIsRetestedAndRenewed) {
     EXPECT_EQ(m->state(100, 2), PairState::hidden_with_tbv);
 }
 
-TEST_F(DsocStateMachine, VisibleTbvTriggersARealTestOfTheCurrentBox) {
+TEST_P(DsocStateMachine, VisibleTbvTriggersARealTestOfTheCurrentBox) {
     auto m = make(config());
     add_viewer(*m, -500.0f, 0);
     ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
@@ -145,7 +208,7 @@ TEST_F(DsocStateMachine, VisibleTbvTriggersARealTestOfTheCurrentBox) {
     EXPECT_EQ(m->stats(100)->buffer_builds, 2u);
 }
 
-TEST_F(DsocStateMachine, TeleportVoidsTheTbv) {
+TEST_P(DsocStateMachine, TeleportVoidsTheTbv) {
     auto m = make(config());
     add_viewer(*m, -500.0f);
     ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
@@ -159,7 +222,7 @@ TEST_F(DsocStateMachine, TeleportVoidsTheTbv) {
     EXPECT_TRUE(replicated(*m, 2));
 }
 
-TEST_F(DsocStateMachine, NearbyTbvsMergeIntoOneGroup) {
+TEST_P(DsocStateMachine, NearbyTbvsMergeIntoOneGroup) {
     auto c = config();
     c.tbv_merge_distance = 100.0f;
     auto m = make(c);
@@ -174,7 +237,7 @@ TEST_F(DsocStateMachine, NearbyTbvsMergeIntoOneGroup) {
     EXPECT_TRUE(m->tbv_of(100, 3).contains(box_at({400, 0, 0})));
 }
 
-TEST_F(DsocStateMachine, EvictionUnderMemoryPressureNeverForgetsAnEntity) {
+TEST_P(DsocStateMachine, EvictionUnderMemoryPressureNeverForgetsAnEntity) {
     auto c = config();
     c.max_tbvs_per_client = 2;
     auto m = make(c);
@@ -196,7 +259,7 @@ TEST_F(DsocStateMachine, EvictionUnderMemoryPressureNeverForgetsAnEntity) {
     EXPECT_GE(m->stats(100)->evictions, 3u);
 }
 
-TEST_F(DsocStateMachine, LatencyRegionCoversTheViewersOwnMovement) {
+TEST_P(DsocStateMachine, LatencyRegionCoversTheViewersOwnMovement) {
     // The viewer stands 40 units from the wall. Its reach over 5 ticks at 320 u/s is
     // 53 units: it could step past the wall's face, so entities behind must be sent.
     for (const int lookahead : {0, 5}) {
@@ -216,7 +279,7 @@ TEST_F(DsocStateMachine, LatencyRegionCoversTheViewersOwnMovement) {
     }
 }
 
-TEST_F(DsocStateMachine, RemovedEntityLeavesAndRemovedClientReleasesItsTbvs) {
+TEST_P(DsocStateMachine, RemovedEntityLeavesAndRemovedClientReleasesItsTbvs) {
     auto m = make(config());
     add_viewer(*m, -500.0f);
     ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({-300, 0, 0})));
@@ -233,7 +296,7 @@ TEST_F(DsocStateMachine, RemovedEntityLeavesAndRemovedClientReleasesItsTbvs) {
     EXPECT_EQ(m->decisions(100), nullptr);
 }
 
-TEST_F(DsocStateMachine, AdaptiveGivesAStillEntityTheLongestTbv) {
+TEST_P(DsocStateMachine, AdaptiveGivesAStillEntityTheLongestTbv) {
     auto c = config();
     c.strategy = TbvStrategy::adaptive;
     c.min_adaptive_duration = 4;
@@ -246,6 +309,43 @@ TEST_F(DsocStateMachine, AdaptiveGivesAStillEntityTheLongestTbv) {
     // 40 ticks at 320 u/s: 426.7 units of growth on each side.
     EXPECT_NEAR(m->tbv_of(100, 2).size().x, 30.0f + 2.0f * 320.0f * 40.0f / 30.0f, 0.5f);
 }
+
+TEST_P(DsocStateMachine, TbvIsTheEntitysOwnAndSharedByEveryClient) {
+    // Two clients behind the wall from entity 2, the second joining 3 ticks later: with
+    // a prepared stage both hold the very same TBV (made once, at tick 1, for the
+    // entity); without one each client makes its own at its own tick.
+    auto m = make(config());
+    add_viewer(*m, -500.0f);
+    ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
+    step(*m, 1);
+    ClientDesc late;
+    late.viewer = 1;
+    late.lookahead_ticks = 3;
+    for (std::uint64_t t = 2; t <= 3; ++t) {
+        m->set_entity_box(2, box_at({400.0f + 5.0f * static_cast<float>(t), 0, 0}));
+        step(*m, t);
+    }
+    ASSERT_TRUE(m->add_client(101, late));
+    m->set_entity_box(2, box_at({420, 0, 0}));
+    step(*m, 4);
+    ASSERT_EQ(m->state(100, 2), PairState::hidden_with_tbv);
+    ASSERT_EQ(m->state(101, 2), PairState::hidden_with_tbv);
+    const Aabb first = m->tbv_of(100, 2);
+    const Aabb second = m->tbv_of(101, 2);
+    EXPECT_TRUE(second.contains(box_at({420, 0, 0})));
+    if (GetParam()) {
+        EXPECT_EQ(first.min, second.min);
+        EXPECT_EQ(first.max, second.max);
+    } else {
+        EXPECT_NE(first.min.x, second.min.x); // made around x = 400 and x = 420
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Culler, DsocStateMachine, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& param) {
+                             return param.param ? std::string("PreparedStage")
+                                               : std::string("Plain");
+                         });
 
 TEST(Tbv, AdaptiveDurationFollowsTheGuidesFormula) {
     DSOCConfig c;

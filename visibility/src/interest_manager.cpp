@@ -1,6 +1,7 @@
 #include "dsoc/visibility/interest_manager.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <deque>
@@ -17,12 +18,24 @@ constexpr std::uint32_t kNoGroup = 0xffffffffu;
 constexpr float kTeleportTolerance = 0.05f;
 /// Groups created this tick that a new TBV may join (bounds the merge scan).
 constexpr std::size_t kMergeCandidates = 8;
+/// A TBV may join a group that expires up to this many ticks before it does (and is
+/// then cut short to the group's expiry). [Units: ticks]
+constexpr std::uint64_t kMergeExpirySlack = 4;
 /// Candidate TBV durations tried per hide (each half the previous).
 constexpr int kMaxTbvAttempts = 3;
 /// After every candidate TBV was visible, the entity is only box-tested for this many
 /// ticks before TBVs are tried again (entities at the edge of visibility would
 /// otherwise pay for failed TBV tests every tick). [Units: ticks]
 constexpr std::uint64_t kTbvRetryTicks = 8;
+
+/// `into` becomes the union of `into` and `more`, both sorted and free of duplicates.
+void merge_keys(std::vector<std::int32_t>& into, const std::vector<std::int32_t>& more) {
+    const std::size_t old_size = into.size();
+    into.insert(into.end(), more.begin(), more.end());
+    std::inplace_merge(into.begin(), into.begin() + static_cast<std::ptrdiff_t>(old_size),
+                       into.end());
+    into.erase(std::unique(into.begin(), into.end()), into.end());
+}
 
 bool valid_box(const Aabb& b) {
     return std::isfinite(b.min.x) && std::isfinite(b.min.y) && std::isfinite(b.min.z) &&
@@ -57,10 +70,22 @@ struct InterestManager::EntitySlot {
     float speed_per_tick = 0.0f;     ///< horizontal, from the last two updates
     float down_velocity = -1.0f;     ///< current downward speed, < 0 when unknown
     MovementHistory history;
+    PreparedBox prepared; ///< `box` prepared for the culler, once per tick for all clients
+    /// With a prepared stage: candidate TBVs made at tick `candidates_tick` (durations
+    /// d, d/2, d/4; 0 ends the list), prepared once and shared by every client that hides
+    /// the entity before they expire. A TBV depends on the entity alone; only whether it
+    /// is hidden depends on the client.
+    std::array<PreparedBox, kMaxTbvAttempts> tbv_candidates;
+    std::array<int, kMaxTbvAttempts> tbv_durations{};
+    std::uint64_t candidates_tick = 0;
+    bool has_candidates = false;
 };
 
 struct InterestManager::TbvGroup {
     Aabb box;
+    /// With a prepared stage: the union of the members' TBV keys. The group is hidden
+    /// while the cheap stage proves every member TBV hidden (see hide()).
+    PreparedBox prepared;
     std::uint64_t expiry = 0; ///< last tick the group is valid
     std::uint32_t generation = 0;
     bool alive = false;
@@ -101,6 +126,7 @@ struct InterestManager::ClientSlot {
     std::priority_queue<Expiry, std::vector<Expiry>, std::greater<>> expiries;
     std::vector<std::uint32_t> new_groups;
     std::vector<std::uint32_t> scratch;
+    PreparedBox candidate; // hide()'s TBV candidate, reused
     std::vector<EntityId> previous; // replicated ids of the last update, increasing
     ClientDecisions decisions;
     ClientStats stats;
@@ -109,7 +135,12 @@ struct InterestManager::ClientSlot {
 InterestManager::InterestManager(const DSOCConfig& config, const Aabb& world_bounds,
                                  RegionVisibilityFactory make_visibility, EyeRegionClipper clipper)
     : config_(config), world_bounds_(world_bounds), make_visibility_(std::move(make_visibility)),
-      clipper_(std::move(clipper)), tick_seconds_(1.0f / static_cast<float>(config.tick_rate)) {}
+      clipper_(std::move(clipper)), tick_seconds_(1.0f / static_cast<float>(config.tick_rate)) {
+    if (make_visibility_) {
+        preparer_ = make_visibility_();
+        coarse_tbvs_ = preparer_ != nullptr && preparer_->has_prepared_stage();
+    }
+}
 
 InterestManager::~InterestManager() = default;
 
@@ -306,6 +337,29 @@ void InterestManager::begin_update(std::uint64_t tick) {
         e.history.push(to);
         e.box_at_last_update = e.box;
         e.seen_by_update = true;
+        if (preparer_) {
+            preparer_->prepare(e.box, e.prepared);
+        } else {
+            e.prepared.box = e.box;
+        }
+        // Refresh the shared candidates when half the longest has run out (or it jumped).
+        if (coarse_tbvs_ && config_.tbvs_enabled &&
+            (!e.has_candidates || e.teleported_at == tick ||
+             tick >= e.candidates_tick + static_cast<std::uint64_t>(e.tbv_durations[0] / 2))) {
+            e.has_candidates = true;
+            e.candidates_tick = tick;
+            int duration = tbv_duration(e);
+            for (std::size_t k = 0; k < e.tbv_candidates.size(); ++k, duration /= 2) {
+                e.tbv_durations[k] = duration;
+                if (duration >= 1) {
+                    PreparedBox& candidate = e.tbv_candidates[k];
+                    preparer_->prepare(tbv_box(e, duration), candidate);
+                    std::sort(candidate.keys.begin(), candidate.keys.end()); // for merge_keys
+                    candidate.keys.erase(std::unique(candidate.keys.begin(), candidate.keys.end()),
+                                         candidate.keys.end());
+                }
+            }
+        }
     }
 }
 
@@ -378,8 +432,19 @@ void InterestManager::update_client(std::size_t index) {
     //    triggers a real test of its entities' current boxes (below).
     if (rebuilt && c.live_groups > 0) {
         c.scratch.clear();
-        c.tree.traverse_front_to_back(c.region.center(), *c.visibility,
-                                      [&](ItemId group) { c.scratch.push_back(group); });
+        if (coarse_tbvs_) {
+            // Each group carries its keys: re-proving it costs a few bit tests, cheaper
+            // than any octree traversal.
+            for (std::uint32_t g = 0; g < c.groups.size(); ++g) {
+                if (c.groups[g].alive &&
+                    c.visibility->test_prepared_coarse(c.groups[g].prepared) != Visibility::occluded) {
+                    c.scratch.push_back(g);
+                }
+            }
+        } else {
+            c.tree.traverse_front_to_back(c.region.center(), *c.visibility,
+                                          [&](ItemId group) { c.scratch.push_back(group); });
+        }
         for (const std::uint32_t group : c.scratch) {
             ++c.stats.tbv_hits;
             for (const std::uint32_t slot : c.groups[group].members) {
@@ -410,8 +475,12 @@ void InterestManager::update_client(std::size_t index) {
         const bool quick =
             pair.state == PairState::visible &&
             (tick_ + slot) % static_cast<std::uint64_t>(config_.full_test_interval) != 0;
+        // e.prepared is current unless the box was set after begin_update().
+        const bool fresh = e.prepared.box.min == e.box.min && e.prepared.box.max == e.box.max;
         const Visibility v =
-            quick ? c.visibility->test_box_quick(e.box) : c.visibility->test_box(e.box);
+            fresh ? (quick ? c.visibility->test_prepared_quick(e.prepared)
+                           : c.visibility->test_prepared(e.prepared))
+                  : (quick ? c.visibility->test_box_quick(e.box) : c.visibility->test_box(e.box));
         if (v == Visibility::visible) {
             pair.state = PairState::visible;
         } else {
@@ -459,29 +528,55 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
         return;
     }
     const EntitySlot& e = entities_[slot];
-    // The longest TBV that is itself hidden: halve the duration until it is.
-    Aabb box;
-    int duration = tbv_duration(e);
-    for (int attempt = 0; duration >= 1; duration /= 2, ++attempt) {
-        if (attempt == kMaxTbvAttempts) {
-            duration = 0;
-            break;
+    // The longest TBV that is itself hidden: halve the duration until it is. With a
+    // prepared stage (the map's PVS) a TBV is proven by that stage alone, so that
+    // re-proving it after each rebuild costs a few bit tests (step 4 of update_client).
+    const PreparedBox* found = nullptr;
+    int duration = 0;
+    std::uint64_t expiry = 0;
+    if (coarse_tbvs_) {
+        for (std::size_t k = 0; k < e.tbv_candidates.size() && e.tbv_durations[k] >= 1; ++k) {
+            const std::uint64_t last = e.candidates_tick + static_cast<std::uint64_t>(e.tbv_durations[k]);
+            if (!e.has_candidates || last <= tick_) {
+                break; // this and the shorter ones have run out
+            }
+            ++c.stats.tbv_tests;
+            if (c.visibility->test_prepared_coarse(e.tbv_candidates[k]) == Visibility::occluded) {
+                found = &e.tbv_candidates[k];
+                expiry = last;
+                break;
+            }
         }
-        box = tbv_box(e, duration);
-        ++c.stats.tbv_tests;
-        if (c.visibility->test_box(box) == Visibility::occluded) {
-            break;
+    } else {
+        duration = tbv_duration(e);
+        for (int attempt = 0; attempt < kMaxTbvAttempts && duration >= 1; ++attempt, duration /= 2) {
+            c.candidate.box = tbv_box(e, duration);
+            c.candidate.prepared = false;
+            ++c.stats.tbv_tests;
+            if (c.visibility->test_box(c.candidate.box) == Visibility::occluded) {
+                found = &c.candidate;
+                expiry = tick_ + static_cast<std::uint64_t>(duration);
+                break;
+            }
         }
     }
-    if (duration < 1) {
+    if (found == nullptr) {
         pair.state = PairState::hidden_expired;
         pair.next_tbv_tick = tick_ + kTbvRetryTicks;
         ++c.stats.tbvs_rejected;
         return;
     }
-    const std::uint64_t expiry = tick_ + static_cast<std::uint64_t>(duration);
-
-    // Group with a TBV made this tick nearby, when the grown group is still hidden.
+    const PreparedBox& candidate = *found;
+    const Aabb box = candidate.box;
+    if (expiry <= tick_) {
+        pair.state = PairState::hidden_expired;
+        pair.next_tbv_tick = tick_ + kTbvRetryTicks;
+        ++c.stats.tbvs_rejected;
+        return;
+    }
+    // Group with a TBV made this tick nearby that expires no later than this one (the
+    // group keeps its expiry, so every member's TBV still holds it until then), when
+    // the grown group is still hidden.
     std::uint32_t group = kNoGroup;
     if (config_.tbv_merge_distance > 0.0f) {
         const float r2 = config_.tbv_merge_distance * config_.tbv_merge_distance;
@@ -490,25 +585,36 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
         for (std::size_t i = c.new_groups.size(); i-- > first;) {
             TbvGroup& g = c.groups[c.new_groups[i]];
             const glm::vec3 d = g.box.center() - box.center();
-            if (g.expiry != expiry || glm::dot(d, d) > r2) {
+            if (g.expiry > expiry || g.expiry + kMergeExpirySlack < expiry || glm::dot(d, d) > r2 ||
+                (coarse_tbvs_ && (!candidate.prepared || !g.prepared.prepared))) {
                 continue;
             }
             Aabb merged = g.box;
             merged.extend(box);
-            ++c.stats.tbv_tests;
-            if (c.visibility->test_box(merged) == Visibility::occluded) {
-                group = c.new_groups[i];
-                g.box = merged;
-                c.tree.move(group, merged);
-                ++c.stats.tbvs_merged;
-                break;
+            if (coarse_tbvs_) {
+                // The group is hidden exactly while every member TBV is: its keys are
+                // the union of theirs, no test needed.
+                merge_keys(g.prepared.keys, candidate.keys);
+                g.prepared.box = merged;
+            } else {
+                ++c.stats.tbv_tests;
+                if (c.visibility->test_box(merged) != Visibility::occluded) {
+                    continue;
+                }
+                g.prepared.box = merged;
             }
+            group = c.new_groups[i];
+            g.box = merged;
+            c.tree.move(group, merged);
+            ++c.stats.tbvs_merged;
+            break;
         }
     }
     if (group == kNoGroup) {
         group = allocate_group(c);
         TbvGroup& g = c.groups[group];
         g.box = box;
+        g.prepared = candidate;
         g.expiry = expiry;
         c.tree.insert(group, box);
         c.expiries.push({expiry, group, g.generation});

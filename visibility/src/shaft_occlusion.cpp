@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 namespace dsoc::visibility {
 
@@ -17,6 +18,32 @@ std::array<glm::vec3, 8> corners(const Aabb& b) {
             (i & 1) ? b.max.x : b.min.x, (i & 2) ? b.max.y : b.min.y, (i & 4) ? b.max.z : b.min.z);
     }
     return c;
+}
+
+/// Slab test: does the segment from + t * dir, t in [0, 1], touch the closed box?
+/// `inv` is 1 / dir per axis (infinite for a zero component, handled below).
+bool segment_hits_box(glm::vec3 from, glm::vec3 dir, glm::vec3 inv, const Aabb& box) {
+    float t0 = 0.0f;
+    float t1 = 1.0f;
+    for (int a = 0; a < 3; ++a) {
+        if (dir[a] == 0.0f) {
+            if (from[a] < box.min[a] || from[a] > box.max[a]) {
+                return false;
+            }
+            continue;
+        }
+        float ta = (box.min[a] - from[a]) * inv[a];
+        float tb = (box.max[a] - from[a]) * inv[a];
+        if (ta > tb) {
+            std::swap(ta, tb);
+        }
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t0 > t1) {
+            return false;
+        }
+    }
+    return true;
 }
 
 } // namespace
@@ -136,21 +163,114 @@ void OccluderGrid::query(const Aabb& box, Scratch& scratch) const {
     }
 }
 
+void OccluderGrid::query_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch) const {
+    scratch.found.clear();
+    if (bounds_.is_empty()) {
+        return;
+    }
+    if (scratch.stamp.size() != world_->size()) {
+        scratch.stamp.assign(world_->size(), 0);
+        scratch.epoch = 0;
+    }
+    if (++scratch.epoch == 0) {
+        std::fill(scratch.stamp.begin(), scratch.stamp.end(), 0);
+        scratch.epoch = 1;
+    }
+    // Clip the segment to the grid (slabs), in the segment's parameter t in [0, 1].
+    const glm::vec3 dir = to - from;
+    float t0 = 0.0f;
+    float t1 = 1.0f;
+    for (int a = 0; a < 3; ++a) {
+        if (std::abs(dir[a]) < 1e-12f) {
+            if (from[a] < bounds_.min[a] || from[a] > bounds_.max[a]) {
+                return;
+            }
+            continue;
+        }
+        float ta = (bounds_.min[a] - from[a]) / dir[a];
+        float tb = (bounds_.max[a] - from[a]) / dir[a];
+        if (ta > tb) {
+            std::swap(ta, tb);
+        }
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t0 > t1) {
+            return;
+        }
+    }
+    const glm::vec3 start = from + dir * t0;
+    int cell[3];
+    int step[3];
+    float t_max[3];
+    float t_delta[3];
+    for (int a = 0; a < 3; ++a) {
+        cell[a] = std::clamp(static_cast<int>(std::floor((start[a] - bounds_.min[a]) / cell_size_)),
+                             0, dims_[a] - 1);
+        if (dir[a] > 0.0f) {
+            step[a] = 1;
+            const float border = bounds_.min[a] + static_cast<float>(cell[a] + 1) * cell_size_;
+            t_max[a] = (border - from[a]) / dir[a];
+            t_delta[a] = cell_size_ / dir[a];
+        } else if (dir[a] < 0.0f) {
+            step[a] = -1;
+            const float border = bounds_.min[a] + static_cast<float>(cell[a]) * cell_size_;
+            t_max[a] = (border - from[a]) / dir[a];
+            t_delta[a] = -cell_size_ / dir[a];
+        } else {
+            step[a] = 0;
+            t_max[a] = std::numeric_limits<float>::infinity();
+            t_delta[a] = std::numeric_limits<float>::infinity();
+        }
+    }
+    // Every cell is visited at most once per axis step: dims sum bounds the walk.
+    for (int guard = dims_[0] + dims_[1] + dims_[2] + 3; guard > 0; --guard) {
+        const std::size_t index =
+            static_cast<std::size_t>((cell[2] * dims_[1] + cell[1]) * dims_[0] + cell[0]);
+        for (std::uint32_t i = cell_start_[index]; i < cell_start_[index + 1]; ++i) {
+            const OccluderId id = cell_items_[i];
+            if (scratch.stamp[id] != scratch.epoch) {
+                scratch.stamp[id] = scratch.epoch;
+                scratch.found.push_back(id);
+            }
+        }
+        int axis = 0;
+        if (t_max[1] < t_max[axis]) {
+            axis = 1;
+        }
+        if (t_max[2] < t_max[axis]) {
+            axis = 2;
+        }
+        if (t_max[axis] > t1) {
+            return;
+        }
+        cell[axis] += step[axis];
+        if (cell[axis] < 0 || cell[axis] >= dims_[axis]) {
+            return;
+        }
+        t_max[axis] += t_delta[axis];
+    }
+}
+
 Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box,
                                 OccluderGrid::Scratch& scratch) const {
     if (region.is_empty() || box.is_empty() || region.overlaps(box)) {
         return Visibility::visible;
     }
-    Aabb shaft = region;
-    shaft.extend(box);
-    grid_->query(shaft, scratch);
     const glm::vec3 from = region.center();
     const glm::vec3 to = box.center();
+    // Only an occluder that blocks the centre-to-centre segment can pass the first
+    // check below, and such an occluder lies in a cell that segment crosses.
+    grid_->query_segment(from, to, scratch);
     int full_tests = 0;
     // Occluders that touch or cut into the region count too: the corner argument
     // holds for any convex solid (an eye inside a wall is no eye, and its segments
     // do pass through the wall's interior).
+    const glm::vec3 dir = to - from;
+    const glm::vec3 inv(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
     for (const OccluderId id : scratch.found) {
+        if (!segment_hits_box(from, dir, inv, world_->occluder(id).bounds())) {
+            continue; // misses the occluder's bounds, so it cannot block the segment
+        }
         const auto planes = world_->solid_planes(id);
         // Necessary condition, one segment: the occluder must block centre to centre.
         if (!segment_blocked_by(from, to, planes)) {

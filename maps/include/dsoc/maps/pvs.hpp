@@ -43,6 +43,11 @@ public:
                                const visibility::Aabb& box,
                                std::vector<std::int32_t>& scratch) const;
 
+    /// may_see() for a box whose clusters_of() (true) gave `clusters`: true unless none of
+    /// them is set in `visible_clusters`.
+    [[nodiscard]] bool may_see_clusters(const std::vector<std::uint8_t>& visible_clusters,
+                                        const std::vector<std::int32_t>& clusters) const;
+
     /// Whether cluster `from` may see cluster `to` (true for -1 or out of range).
     [[nodiscard]] bool cluster_visible(int from, int to) const;
 

@@ -41,6 +41,43 @@ public:
         return next_->test_box_quick(box);
     }
 
+    // Prepared boxes carry their clusters, so the PVS stage costs a few bit tests.
+    [[nodiscard]] bool has_prepared_stage() const override { return pvs_->has_visibility(); }
+    void prepare(const visibility::Aabb& box, visibility::PreparedBox& out) const override {
+        out.box = box;
+        out.prepared = pvs_->has_visibility() && pvs_->clusters_of(box, out.keys);
+    }
+    [[nodiscard]] visibility::Visibility
+    test_prepared(const visibility::PreparedBox& p) const override {
+        if (!p.prepared) {
+            return test_box(p.box);
+        }
+        if (active_ && !pvs_->may_see_clusters(visible_clusters_, p.keys)) {
+            return visibility::Visibility::occluded;
+        }
+        return next_->test_box(p.box);
+    }
+    [[nodiscard]] visibility::Visibility
+    test_prepared_quick(const visibility::PreparedBox& p) const override {
+        if (!p.prepared) {
+            return test_box_quick(p.box);
+        }
+        if (active_ && !pvs_->may_see_clusters(visible_clusters_, p.keys)) {
+            return visibility::Visibility::occluded;
+        }
+        return next_->test_box_quick(p.box);
+    }
+    /// The PVS alone: `visible` whenever the PVS passes the box (the next stage is skipped).
+    [[nodiscard]] visibility::Visibility
+    test_prepared_coarse(const visibility::PreparedBox& p) const override {
+        if (!p.prepared || !active_) {
+            return test_prepared(p);
+        }
+        return pvs_->may_see_clusters(visible_clusters_, p.keys)
+                   ? visibility::Visibility::visible
+                   : visibility::Visibility::occluded;
+    }
+
 private:
     std::shared_ptr<const Pvs> pvs_;
     std::unique_ptr<visibility::RegionVisibility> next_;

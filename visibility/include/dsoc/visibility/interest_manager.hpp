@@ -179,6 +179,10 @@ private:
     Aabb world_bounds_;
     RegionVisibilityFactory make_visibility_;
     EyeRegionClipper clipper_;
+    /// Prepares every entity's box once per tick for all clients (begin_update()).
+    std::unique_ptr<RegionVisibility> preparer_;
+    /// The culler has a cheap prepared stage: TBVs are proven and re-proven by it alone.
+    bool coarse_tbvs_ = false;
     float tick_seconds_;
     std::uint64_t tick_ = 0;
     std::vector<EntitySlot> entities_;

@@ -5,10 +5,21 @@
 #include "dsoc/visibility/box_visibility.hpp"
 #include "dsoc/visibility/geometry.hpp"
 
+#include <cstdint>
 #include <functional>
 #include <memory>
+#include <vector>
 
 namespace dsoc::visibility {
+
+/// Region-independent facts a culler may precompute for a box once and then reuse for
+/// every region it is built for, by every client: e.g. which clusters of the map's PVS
+/// the box touches. Filled by RegionVisibility::prepare(); opaque to everyone else.
+struct PreparedBox {
+    Aabb box;
+    std::vector<std::int32_t> keys;
+    bool prepared = false; ///< keys are meaningful; false: tests fall back to `box` alone
+};
 
 class RegionVisibility {
 public:
@@ -22,6 +33,30 @@ public:
     /// prove less; used for entities that were visible last tick, most of which still
     /// are. Defaults to test_box().
     [[nodiscard]] virtual Visibility test_box_quick(const Aabb& box) const { return test_box(box); }
+
+    /// True when prepare() precomputes something, so that test_prepared*() are cheaper
+    /// than test_box() and test_prepared_coarse() is the culler's cheap first stage.
+    [[nodiscard]] virtual bool has_prepared_stage() const { return false; }
+    /// Fills `out` for `box`. Needs no build(): the answer does not depend on the region,
+    /// so one culler may prepare boxes for every client. Const and thread-safe.
+    virtual void prepare(const Aabb& box, PreparedBox& out) const {
+        out.box = box;
+        out.keys.clear();
+        out.prepared = false;
+    }
+    /// test_box(p.box) and test_box_quick(p.box), helped by p's keys: the same answers.
+    [[nodiscard]] virtual Visibility test_prepared(const PreparedBox& p) const {
+        return test_box(p.box);
+    }
+    [[nodiscard]] virtual Visibility test_prepared_quick(const PreparedBox& p) const {
+        return test_box_quick(p.box);
+    }
+    /// The cheap first stage alone (for long-lived TBVs, re-proven after every rebuild):
+    /// `occluded` only when that stage proves it, so it proves less than test_prepared().
+    /// Without a prepared stage this is test_prepared().
+    [[nodiscard]] virtual Visibility test_prepared_coarse(const PreparedBox& p) const {
+        return test_prepared(p);
+    }
 };
 
 /// Makes one RegionVisibility per client (each client owns its buffer).

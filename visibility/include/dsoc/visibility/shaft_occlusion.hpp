@@ -43,6 +43,11 @@ public:
     /// Occluders whose bounds overlap `box`, each once, into scratch.found.
     void query(const Aabb& box, Scratch& scratch) const;
 
+    /// Occluders in the cells the segment `from`-`to` passes through (a 3D DDA walk),
+    /// each once, into scratch.found: every occluder that intersects the segment is
+    /// among them (up to float rounding at cell borders, which can only drop one).
+    void query_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch) const;
+
 private:
     const OccluderWorld* world_;
     Aabb bounds_;
