@@ -1,0 +1,50 @@
+#pragma once
+// The one list of ServerConfig's fields by their TOML name. The config file loader,
+// --print-config and the tests walk it, so a new setting is one line here.
+
+#include "dsoc/server/server_config.hpp"
+
+namespace dsoc::server {
+
+/// Calls `visit(name, field)` for every field of `config`, in the order of
+/// server_config.hpp. `Config` is ServerConfig or const ServerConfig.
+template <class Config, class Visitor>
+void visit_config_fields(Config& config, Visitor&& visit) {
+    visit("bind_address", config.bind_address);
+    visit("port", config.port);
+    visit("tick_rate", config.tick_rate);
+    visit("bots", config.bots);
+    visit("map", config.map);
+    visit("policy", config.policy);
+    visit("tbv_strategy", config.tbv_strategy);
+    visit("culler", config.culler);
+    visit("pvs_stage", config.pvs_stage);
+    visit("region_reuse_margin", config.region_reuse_margin);
+    visit("latency_allowance_ms", config.latency_allowance_ms);
+    visit("trace_file", config.trace_file);
+    visit("trace_every", config.trace_every);
+    visit("distance_radius", config.distance_radius);
+    visit("threads", config.threads);
+    visit("position_quantum_near", config.position_quantum_near);
+    visit("position_quantum_mid", config.position_quantum_mid);
+    visit("position_quantum_far", config.position_quantum_far);
+    visit("angle_steps", config.angle_steps);
+    visit("network_lod", config.network_lod);
+    visit("max_clients", config.max_clients);
+    visit("max_frame_bytes", config.max_frame_bytes);
+    visit("max_send_queue_bytes", config.max_send_queue_bytes);
+    visit("handshake_timeout_ms", config.handshake_timeout_ms);
+    visit("slow_client_timeout_ms", config.slow_client_timeout_ms);
+    visit("socket_send_buffer_bytes", config.socket_send_buffer_bytes);
+    visit("max_inputs_per_second", config.max_inputs_per_second);
+    visit("insecure", config.insecure);
+    visit("token_key_file", config.token_key_file);
+    visit("metrics_port", config.metrics_port);
+    visit("metrics_bind_address", config.metrics_bind_address);
+    visit("log_level", config.log_level);
+    visit("max_speed", config.max_speed);
+    visit("seed", config.seed);
+    visit("duration_s", config.duration_s);
+}
+
+} // namespace dsoc::server

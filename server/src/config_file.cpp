@@ -1,0 +1,152 @@
+#include "dsoc/server/config_file.hpp"
+
+#include "dsoc/server/config_fields.hpp"
+
+#include <toml++/toml.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <type_traits>
+
+namespace dsoc::server {
+
+namespace {
+
+std::string where(std::string_view source, const toml::source_region& region) {
+    return std::string(source) + ":" + std::to_string(region.begin.line) + ":" +
+           std::to_string(region.begin.column);
+}
+
+const char* type_name(toml::node_type type) {
+    switch (type) {
+    case toml::node_type::string:
+        return "a string";
+    case toml::node_type::integer:
+        return "an integer";
+    case toml::node_type::floating_point:
+        return "a number";
+    case toml::node_type::boolean:
+        return "a boolean";
+    case toml::node_type::table:
+        return "a table";
+    case toml::node_type::array:
+        return "an array";
+    default:
+        return "a date or time";
+    }
+}
+
+/// Reads `node` into `field`; returns why not, or an empty string.
+template <class T>
+std::string read_value(const toml::node& node, T& field) {
+    if constexpr (std::is_same_v<T, std::string>) {
+        if (const auto* s = node.as_string()) {
+            field = s->get();
+            return {};
+        }
+        return std::string("expected a string, got ") + type_name(node.type());
+    } else if constexpr (std::is_same_v<T, bool>) {
+        if (const auto* b = node.as_boolean()) {
+            field = b->get();
+            return {};
+        }
+        return std::string("expected true or false, got ") + type_name(node.type());
+    } else if constexpr (std::is_floating_point_v<T>) {
+        if (const auto* f = node.as_floating_point()) {
+            field = static_cast<T>(f->get());
+            return {};
+        }
+        if (const auto* i = node.as_integer()) {
+            field = static_cast<T>(i->get());
+            return {};
+        }
+        return std::string("expected a number, got ") + type_name(node.type());
+    } else {
+        static_assert(std::is_integral_v<T>);
+        const auto* i = node.as_integer();
+        if (i == nullptr) {
+            return std::string("expected an integer, got ") + type_name(node.type());
+        }
+        const std::int64_t v = i->get();
+        const bool fits =
+            std::is_signed_v<T>
+                ? v >= static_cast<std::int64_t>(std::numeric_limits<T>::min()) &&
+                      v <= static_cast<std::int64_t>(std::numeric_limits<T>::max())
+                : v >= 0 && static_cast<std::uint64_t>(v) <=
+                                static_cast<std::uint64_t>(std::numeric_limits<T>::max());
+        if (!fits) {
+            return std::to_string(v) + " does not fit: must be " +
+                   std::to_string(std::numeric_limits<T>::min()) + ".." +
+                   std::to_string(std::numeric_limits<T>::max());
+        }
+        field = static_cast<T>(v);
+        return {};
+    }
+}
+
+} // namespace
+
+std::vector<std::string> apply_config_toml(std::string_view text, std::string_view source,
+                                           ServerConfig& config) {
+    std::vector<std::string> problems;
+    toml::table table;
+    try {
+        table = toml::parse(text, source);
+    } catch (const toml::parse_error& e) {
+        problems.push_back(where(source, e.source()) + ": " + std::string(e.description()));
+        return problems;
+    }
+    std::set<std::string, std::less<>> known;
+    visit_config_fields(config, [&](const char* name, auto& field) {
+        known.insert(name);
+        const toml::node* node = table.get(name);
+        if (node == nullptr) {
+            return;
+        }
+        if (auto why = read_value(*node, field); !why.empty()) {
+            problems.push_back(where(source, node->source()) + ": " + name + ": " + why);
+        }
+    });
+    for (const auto& [key, node] : table) {
+        if (known.find(key.str()) == known.end()) {
+            problems.push_back(where(source, key.source()) + ": " + std::string(key.str()) +
+                               ": unknown setting (see dsoc-server --print-config)");
+        }
+    }
+    return problems;
+}
+
+std::vector<std::string> apply_config_file(const std::string& path, ServerConfig& config) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        return {path + ": cannot read config file: " + std::strerror(errno)};
+    }
+    std::ostringstream text;
+    text << in.rdbuf();
+    return apply_config_toml(text.str(), path, config);
+}
+
+std::string format_config_toml(const ServerConfig& config) {
+    std::ostringstream out;
+    out << "# dsoc-server settings (TOML); every key is optional.\n";
+    visit_config_fields(config, [&](const char* name, const auto& field) {
+        using T = std::decay_t<decltype(field)>;
+        toml::table line; // one key per table keeps the declaration order
+        if constexpr (std::is_same_v<T, std::string> || std::is_same_v<T, bool>) {
+            line.insert(name, field);
+        } else if constexpr (std::is_floating_point_v<T>) {
+            line.insert(name, static_cast<double>(field));
+        } else {
+            // validate() keeps unsigned fields within int64 (TOML's integer range).
+            line.insert(name, static_cast<std::int64_t>(field));
+        }
+        out << line << "\n";
+    });
+    return out.str();
+}
+
+} // namespace dsoc::server

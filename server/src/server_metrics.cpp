@@ -1,0 +1,66 @@
+// Server::render_metrics: the server's state as Prometheus metrics.
+
+#include "dsoc/server/server.hpp"
+
+namespace dsoc::server {
+
+std::string Server::render_metrics() const {
+    // Closed connections are in stats_; live ones are added here.
+    std::uint64_t bytes_sent = stats_.bytes_sent;
+    std::uint64_t bytes_received = stats_.bytes_received;
+    std::uint64_t snapshots_dropped = stats_.snapshots_dropped;
+    std::uint64_t inputs_dropped = stats_.inputs_dropped;
+    std::uint64_t inputs_clamped = stats_.inputs_clamped;
+    std::size_t queued = 0;
+    for (const auto& [id, session] : sessions_) {
+        bytes_sent += session->bytes_sent();
+        bytes_received += session->bytes_received();
+        snapshots_dropped += session->snapshots_dropped();
+        inputs_dropped += session->inputs_dropped();
+        inputs_clamped += session->inputs_clamped();
+        queued += session->queued_bytes();
+    }
+    const auto d = [](auto v) { return static_cast<double>(v); };
+
+    PrometheusText out;
+    out.histogram("dsoc_tick_duration_seconds",
+                  "Work time of each server tick (movement, interest, snapshots).",
+                  stats_.tick_duration);
+    out.histogram("dsoc_culling_duration_seconds",
+                  "Wall time per tick of interest evaluation (culling) and snapshot building "
+                  "for all clients, on the worker pool.",
+                  stats_.culling_duration);
+    out.counter("dsoc_ticks_total", "Ticks run.", d(stats_.ticks));
+    out.counter("dsoc_late_ticks_total", "Ticks that started more than one period late.",
+                d(stats_.late_ticks));
+    out.gauge("dsoc_clients", "Clients in the game (after a valid hello).", d(clients_.size()));
+    out.gauge("dsoc_connections", "Open connections, including those still in the handshake.",
+              d(sessions_.size()));
+    out.gauge("dsoc_entities", "Entities in the world (bots and players).",
+              d(world_.entities().size()));
+    out.gauge("dsoc_tbvs_alive", "Live Temporal Bounding Volume groups over all clients.",
+              d(policy_->tbvs_alive()));
+    out.gauge("dsoc_send_queue_bytes", "Unsent bytes queued for all clients.", d(queued));
+    out.counter("dsoc_clients_accepted_total", "Connections accepted.", d(stats_.clients_accepted));
+    out.counter("dsoc_bytes_sent_total", "Bytes sent to clients, frame headers included.",
+                d(bytes_sent));
+    out.counter("dsoc_bytes_received_total", "Bytes received from clients.", d(bytes_received));
+    out.counter("dsoc_snapshots_sent_total", "Snapshots sent.", d(stats_.snapshots_sent));
+    out.counter("dsoc_entity_updates_sent_total", "Entity enters and updates sent.",
+                d(stats_.entity_updates_sent));
+    out.counter("dsoc_snapshots_dropped_total",
+                "Snapshots not built because the client's previous one was still unsent.",
+                d(snapshots_dropped));
+    out.counter("dsoc_inputs_dropped_total", "Client messages over the per-second cap.",
+                d(inputs_dropped));
+    out.counter("dsoc_inputs_clamped_total", "Inputs with an out-of-range field clamped.",
+                d(inputs_clamped));
+    std::vector<std::pair<MetricLabels, double>> disconnects;
+    for (const auto& [reason, count] : stats_.disconnects) {
+        disconnects.push_back({{{"reason", reason}}, d(count)});
+    }
+    out.counter_family("dsoc_disconnects_total", "Closed connections by reason.", disconnects);
+    return out.text();
+}
+
+} // namespace dsoc::server

@@ -1,0 +1,267 @@
+// Slow, silent, flooding, unauthorized and malformed clients each get a disconnect
+// with a reason, and the well-behaved clients running beside them keep receiving
+// their snapshots at the tick rate throughout.
+
+#include "integration/server_fixture.hpp"
+#include "server/raw_client.hpp"
+
+#include "dsoc/server/connect_token.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include <unistd.h>
+
+namespace dsoc {
+namespace {
+
+namespace pb = protocol::pb;
+using testing::client_hello;
+using testing::GoodClients;
+using testing::RawClient;
+using testing::RunningServer;
+
+constexpr double kGoodSeconds = 2.0;
+
+server::ServerConfig base_config() {
+    server::ServerConfig c;
+    c.bots = 40;
+    c.handshake_timeout_ms = 400;
+    c.max_frame_bytes = 1024;
+    return c;
+}
+
+/// The good clients were served all along: all connected, no protocol error, no
+/// unexpected disconnect, and snapshots arrived at about the tick rate.
+void expect_served(GoodClients& good) {
+    const auto report = good.finish();
+    EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
+    EXPECT_LT(report.snapshot_interarrival_ms.p99, 150.0) << simclient::format_summary(report);
+    const double expected = good.seconds() * 30.0;
+    for (const auto& client : good.run().clients()) {
+        EXPECT_GE(static_cast<double>(client->stats().snapshots), 0.7 * expected);
+    }
+}
+
+void expect_reason(RawClient& client, pb::DisconnectReason reason, const char* text_part) {
+    const auto d = client.read_until_closed();
+    ASSERT_TRUE(d.has_value()) << "no disconnect message; expected "
+                               << protocol::disconnect_reason_name(reason);
+    EXPECT_EQ(protocol::disconnect_reason_name(d->reason()),
+              protocol::disconnect_reason_name(reason))
+        << d->text();
+    EXPECT_NE(d->text().find(text_part), std::string::npos) << d->text();
+}
+
+/// A token key in a temporary file, for servers that check tokens.
+class KeyFile {
+public:
+    KeyFile() : key_(server::generate_token_key()) {
+        path_ = std::filesystem::temp_directory_path() /
+                ("dsoc-test-" + std::to_string(::getpid()) + "-" +
+                 std::to_string(reinterpret_cast<std::uintptr_t>(this)) + ".key");
+        std::ofstream(path_) << server::format_token_key(key_) << "\n";
+    }
+    ~KeyFile() { std::filesystem::remove(path_); }
+    KeyFile(const KeyFile&) = delete;
+    KeyFile& operator=(const KeyFile&) = delete;
+    [[nodiscard]] std::string path() const { return path_.string(); }
+    [[nodiscard]] const server::TokenKey& key() const { return key_; }
+
+private:
+    server::TokenKey key_;
+    std::filesystem::path path_;
+};
+
+TEST(ClientAbuse, SlowReaderHasSnapshotsDroppedStaysBoundedAndIsDisconnected) {
+    auto c = base_config();
+    c.bots = 150;
+    c.policy = "broadcast";            // large snapshots: every bot moves every tick
+    c.socket_send_buffer_bytes = 4096; // small kernel buffers: the backlog shows at once
+    c.slow_client_timeout_ms = 800;
+    RunningServer server(c);
+    GoodClients good(server.port(), kGoodSeconds + 1.0);
+
+    RawClient slow(server.port(), 4096);
+    slow.send_message(client_hello());
+    // It reads nothing while the server would have queued ~60 snapshots for it.
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    const auto d = slow.read_until_closed();
+    expect_served(good);
+    server.stop();
+
+    const auto& stats = server.stats();
+    EXPECT_EQ(stats.disconnects.count("too_slow"), 1u);
+    if (d.has_value()) { // it may also have been closed before it read the reason
+        EXPECT_EQ(protocol::disconnect_reason_name(d->reason()), "too_slow") << d->text();
+    }
+    // Stale snapshots were dropped, not queued: the queue never held more than about
+    // one snapshot (a few KiB here), far below what 1.5 s of snapshots would take.
+    EXPECT_GE(stats.snapshots_dropped, 10u);
+    EXPECT_LE(stats.peak_queued_bytes, 32u * 1024u);
+}
+
+TEST(ClientAbuse, ConnectionsWithoutHelloAreClosedAtTheDeadline) {
+    RunningServer server(base_config());
+    GoodClients good(server.port(), kGoodSeconds);
+    RawClient silent(server.port());
+    RawClient half_header(server.port()); // slowloris: two bytes of a frame header, then nothing
+    const std::array<std::uint8_t, 2> two_bytes{16, 0};
+    half_header.send_bytes(two_bytes);
+    const auto started = std::chrono::steady_clock::now();
+    expect_reason(silent, pb::DISCONNECT_REASON_HANDSHAKE_TIMEOUT, "400 ms");
+    expect_reason(half_header, pb::DISCONNECT_REASON_HANDSHAKE_TIMEOUT, "400 ms");
+    const auto waited = std::chrono::steady_clock::now() - started;
+    EXPECT_GE(waited, std::chrono::milliseconds(350));
+    EXPECT_LT(waited, std::chrono::milliseconds(1500));
+    expect_served(good);
+}
+
+TEST(ClientAbuse, InputFloodIsCappedThenDisconnected) {
+    auto c = base_config();
+    c.max_inputs_per_second = 60;
+    RunningServer server(c);
+    GoodClients good(server.port(), kGoodSeconds);
+    RawClient flood(server.port());
+    flood.send_message(client_hello());
+    std::vector<std::uint8_t> burst;
+    for (int i = 0; i < 2000; ++i) {
+        pb::Envelope input;
+        input.mutable_client_input()->set_tick(static_cast<std::uint64_t>(i));
+        input.mutable_client_input()->set_move_x(1.0f);
+        protocol::encode_frame(input, burst);
+    }
+    flood.send_bytes(burst);
+    expect_reason(flood, pb::DISCONNECT_REASON_INVALID_INPUT, "input flood");
+    expect_served(good);
+    server.stop();
+    // 60 accepted (the burst allowance), then 61 drops make a flood.
+    EXPECT_EQ(server.stats().inputs_dropped, 61u);
+}
+
+TEST(ClientAbuse, NonFiniteInputIsRefusedAndOutOfRangeInputIsClamped) {
+    RunningServer server(base_config());
+    GoodClients good(server.port(), kGoodSeconds);
+
+    RawClient nan_input(server.port());
+    nan_input.send_message(client_hello());
+    pb::Envelope nan;
+    nan.mutable_client_input()->set_view_yaw(std::nanf(""));
+    nan_input.send_message(nan);
+
+    RawClient inf_input(server.port());
+    inf_input.send_message(client_hello());
+    pb::Envelope inf;
+    inf.mutable_client_input()->set_move_y(-HUGE_VALF);
+    inf_input.send_message(inf);
+
+    RawClient wild_input(server.port()); // finite but out of range: clamped, stays
+    wild_input.send_message(client_hello());
+    pb::Envelope wild;
+    wild.mutable_client_input()->set_view_yaw(1.0e9f);
+    wild.mutable_client_input()->set_view_pitch(-500.0f);
+    wild.mutable_client_input()->set_move_x(3.0e38f);
+    wild_input.send_message(wild);
+
+    expect_reason(nan_input, pb::DISCONNECT_REASON_INVALID_INPUT, "view_yaw");
+    expect_reason(inf_input, pb::DISCONNECT_REASON_INVALID_INPUT, "move_y");
+    expect_served(good);
+    server.stop();
+    // The clamped client was only told to go when the server shut down.
+    expect_reason(wild_input, pb::DISCONNECT_REASON_SERVER_SHUTDOWN, "shut");
+    EXPECT_GT(wild_input.snapshots(), 20u);
+    EXPECT_EQ(server.stats().inputs_clamped, 1u);
+}
+
+TEST(ClientAbuse, OversizedFrameIsRefused) {
+    RunningServer server(base_config());
+    GoodClients good(server.port(), kGoodSeconds);
+    RawClient before_hello(server.port()); // announces 1 MiB, the limit is 1 KiB
+    std::array<std::uint8_t, 4> header{};
+    protocol::write_frame_header(header.data(), 1024 * 1024);
+    before_hello.send_bytes(header);
+
+    RawClient after_hello(server.port()); // one byte over the limit, after a good hello
+    after_hello.send_message(client_hello());
+    std::vector<std::uint8_t> frame(4 + 1025, 0);
+    protocol::write_frame_header(frame.data(), 1025);
+    after_hello.send_bytes(frame);
+
+    expect_reason(before_hello, pb::DISCONNECT_REASON_FRAME_TOO_LARGE, "1048576");
+    expect_reason(after_hello, pb::DISCONNECT_REASON_FRAME_TOO_LARGE, "1025");
+    expect_served(good);
+}
+
+class TokenAbuse : public ::testing::Test {
+protected:
+    server::ServerConfig config() const {
+        auto c = base_config();
+        c.token_key_file = key_file_.path();
+        return c;
+    }
+    KeyFile key_file_;
+};
+
+TEST_F(TokenAbuse, BadTokensAreUnauthorized) {
+    RunningServer server(config());
+    GoodClients good(server.port(), kGoodSeconds, key_file_.key());
+
+    RawClient none(server.port());
+    none.send_message(client_hello());
+
+    RawClient other_key(server.port());
+    const auto forged =
+        server::mint_connect_token(server::generate_token_key(), {7, server::unix_now_s() + 60});
+    other_key.send_message(client_hello(forged));
+
+    RawClient tampered(server.port()); // a real token with its client id changed
+    auto changed = server::mint_connect_token(key_file_.key(), {7, server::unix_now_s() + 60});
+    changed[1] ^= 1;
+    tampered.send_message(client_hello(changed));
+
+    RawClient truncated(server.port());
+    const std::vector<std::uint8_t> short_token(10, 1);
+    truncated.send_message(client_hello(short_token));
+
+    // A real token already in use by a good client (ids 1000..1002).
+    RawClient duplicate(server.port());
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    duplicate.send_message(client_hello(
+        server::mint_connect_token(key_file_.key(), {1001, server::unix_now_s() + 60})));
+
+    expect_reason(none, pb::DISCONNECT_REASON_UNAUTHORIZED, "no connect token");
+    expect_reason(other_key, pb::DISCONNECT_REASON_UNAUTHORIZED, "signature");
+    expect_reason(tampered, pb::DISCONNECT_REASON_UNAUTHORIZED, "signature");
+    expect_reason(truncated, pb::DISCONNECT_REASON_UNAUTHORIZED, "10 bytes");
+    expect_reason(duplicate, pb::DISCONNECT_REASON_UNAUTHORIZED, "already connected");
+    EXPECT_FALSE(none.hello_received() || other_key.hello_received() || tampered.hello_received() ||
+                 truncated.hello_received() || duplicate.hello_received());
+    expect_served(good);
+    server.stop();
+    EXPECT_EQ(server.stats().disconnects.at("unauthorized"), 5u);
+}
+
+TEST_F(TokenAbuse, ExpiredTokenIsUnauthorized) {
+    RunningServer server(config());
+    GoodClients good(server.port(), kGoodSeconds, key_file_.key());
+    RawClient expired(server.port());
+    expired.send_message(
+        client_hello(server::mint_connect_token(key_file_.key(), {9, server::unix_now_s() - 30})));
+    expect_reason(expired, pb::DISCONNECT_REASON_UNAUTHORIZED, "expired");
+    EXPECT_FALSE(expired.hello_received());
+
+    RawClient valid(server.port()); // the same client id with a live token is welcome
+    valid.send_message(
+        client_hello(server::mint_connect_token(key_file_.key(), {9, server::unix_now_s() + 30})));
+    expect_served(good);
+    server.stop();
+    expect_reason(valid, pb::DISCONNECT_REASON_SERVER_SHUTDOWN, "shut");
+    EXPECT_TRUE(valid.hello_received());
+}
+
+} // namespace
+} // namespace dsoc

@@ -1,0 +1,119 @@
+#include "dsoc/server/config_fields.hpp"
+#include "dsoc/server/config_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include <type_traits>
+
+namespace dsoc::server {
+namespace {
+
+// Counts the fields of an aggregate: the largest N for which T{a1, ..., aN} compiles.
+struct AnyValue {
+    template <class T>
+    operator T() const; // NOLINT: never defined, only for overload resolution
+};
+template <class T, class... Args>
+constexpr std::size_t aggregate_field_count(Args... args) {
+    if constexpr (requires { T{args..., AnyValue{}}; }) {
+        return aggregate_field_count<T>(args..., AnyValue{});
+    } else {
+        return sizeof...(Args);
+    }
+}
+
+TEST(ConfigFile, TheFieldListCoversEveryServerConfigField) {
+    std::size_t visited = 0;
+    ServerConfig c;
+    visit_config_fields(c, [&](const char*, auto&) { ++visited; });
+    EXPECT_EQ(visited, aggregate_field_count<ServerConfig>())
+        << "a ServerConfig field is missing from visit_config_fields (config_fields.hpp)";
+}
+
+/// Every field changed from its default, so that a round trip proves each one.
+ServerConfig all_changed() {
+    ServerConfig c;
+    visit_config_fields(c, [](const char*, auto& field) {
+        using T = std::decay_t<decltype(field)>;
+        if constexpr (std::is_same_v<T, std::string>) {
+            field += "-x";
+        } else if constexpr (std::is_same_v<T, bool>) {
+            field = !field;
+        } else if constexpr (std::is_floating_point_v<T>) {
+            field = field * T(2) + T(0.25);
+        } else {
+            field = static_cast<T>(field + 3);
+        }
+    });
+    return c;
+}
+
+TEST(ConfigFile, PrintedConfigReadsBackToTheSameValues) {
+    const ServerConfig changed = all_changed();
+    const std::string text = format_config_toml(changed);
+    ServerConfig read;
+    const auto problems = apply_config_toml(text, "printed", read);
+    ASSERT_TRUE(problems.empty()) << problems.front() << "\n" << text;
+    std::size_t compared = 0;
+    visit_config_fields(read, [&](const char* name, const auto& field) {
+        visit_config_fields(changed, [&](const char* other, const auto& expected) {
+            if constexpr (std::is_same_v<decltype(field), decltype(expected)>) {
+                if (std::string_view(name) == other) {
+                    EXPECT_EQ(field, expected) << name;
+                    ++compared;
+                }
+            }
+        });
+    });
+    EXPECT_EQ(compared, aggregate_field_count<ServerConfig>());
+}
+
+TEST(ConfigFile, KeysAbsentFromTheFileKeepTheirValues) {
+    ServerConfig c;
+    c.bots = 7;
+    ASSERT_TRUE(apply_config_toml("tick_rate = 60\npolicy = \"pvs\"\n", "t.toml", c).empty());
+    EXPECT_EQ(c.tick_rate, 60);
+    EXPECT_EQ(c.policy, "pvs");
+    EXPECT_EQ(c.bots, 7);
+}
+
+TEST(ConfigFile, ProblemsNameTheFileLineFieldAndReason) {
+    ServerConfig c;
+    const auto problems = apply_config_toml("tick_rate = \"fast\"\n"
+                                            "tick_rat = 30\n"
+                                            "port = 70000\n"
+                                            "max_speed = 250\n",
+                                            "server.toml", c);
+    ASSERT_EQ(problems.size(), 3u);
+    // In field order (port before tick_rate), then unknown keys.
+    EXPECT_EQ(problems[0], "server.toml:3:8: port: 70000 does not fit: must be 0..65535");
+    EXPECT_EQ(problems[1], "server.toml:1:13: tick_rate: expected an integer, got a string");
+    EXPECT_EQ(problems[2].rfind("server.toml:2:1: tick_rat: unknown setting", 0), 0u)
+        << problems[2];
+    EXPECT_FLOAT_EQ(c.max_speed, 250.0f); // an integer is fine for a float field
+    EXPECT_EQ(c.tick_rate, ServerConfig{}.tick_rate);
+}
+
+TEST(ConfigFile, SyntaxErrorsSayWhere) {
+    ServerConfig c;
+    const auto problems = apply_config_toml("bots = 3\nmap = \"oa_dm4\n", "bad.toml", c);
+    ASSERT_EQ(problems.size(), 1u);
+    EXPECT_EQ(problems[0].rfind("bad.toml:2:", 0), 0u) << problems[0];
+}
+
+TEST(ConfigFile, NegativeValueForAnUnsignedFieldIsRefused) {
+    ServerConfig c;
+    const auto problems = apply_config_toml("seed = -1\n", "s.toml", c);
+    ASSERT_EQ(problems.size(), 1u);
+    EXPECT_NE(problems[0].find("seed: -1 does not fit"), std::string::npos) << problems[0];
+}
+
+TEST(ConfigFile, UnreadableFileNamesThePath) {
+    ServerConfig c;
+    const auto problems = apply_config_file("/nonexistent/dsoc.toml", c);
+    ASSERT_EQ(problems.size(), 1u);
+    EXPECT_NE(problems[0].find("/nonexistent/dsoc.toml"), std::string::npos);
+}
+
+} // namespace
+} // namespace dsoc::server

@@ -1,0 +1,135 @@
+#pragma once
+// Test helpers for hostile-client tests: a raw TCP client that sends whatever the
+// test wants, and a few well-behaved simulated clients running beside it.
+
+#include "dsoc/protocol/codec.hpp"
+#include "dsoc/protocol/framing.hpp"
+#include "dsoc/simclient/load_run.hpp"
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/read.hpp>
+#include <boost/asio/write.hpp>
+
+#include <array>
+#include <optional>
+#include <span>
+#include <thread>
+#include <vector>
+
+namespace dsoc::testing {
+
+/// A blocking raw TCP connection to 127.0.0.1:port.
+class RawClient {
+public:
+    /// `receive_buffer_bytes` > 0 shrinks SO_RCVBUF before connecting (a slow reader
+    /// whose kernel buffer fills quickly).
+    explicit RawClient(std::uint16_t port, int receive_buffer_bytes = 0) : socket_(io_) {
+        socket_.open(boost::asio::ip::tcp::v4());
+        if (receive_buffer_bytes > 0) {
+            socket_.set_option(boost::asio::socket_base::receive_buffer_size(receive_buffer_bytes));
+        }
+        socket_.connect({boost::asio::ip::make_address("127.0.0.1"), port});
+    }
+
+    void send_bytes(std::span<const std::uint8_t> bytes) {
+        boost::asio::write(socket_, boost::asio::buffer(bytes.data(), bytes.size()));
+    }
+
+    void send_message(const protocol::pb::Envelope& message) {
+        std::vector<std::uint8_t> frame;
+        protocol::encode_frame(message, frame);
+        send_bytes(frame);
+    }
+
+    /// Reads until the server closes the connection; returns its Disconnect, if one
+    /// arrived, and counts the snapshots seen on the way.
+    std::optional<protocol::pb::Disconnect> read_until_closed() {
+        protocol::FrameDecoder decoder(16 * 1024 * 1024);
+        std::optional<protocol::pb::Disconnect> disconnect;
+        std::array<std::uint8_t, 4096> buffer{};
+        for (;;) {
+            boost::system::error_code ec;
+            const std::size_t n = socket_.read_some(boost::asio::buffer(buffer), ec);
+            if (ec) {
+                break;
+            }
+            decoder.feed(std::span<const std::uint8_t>(buffer.data(), n));
+            std::span<const std::uint8_t> payload;
+            while (decoder.next(payload) == protocol::FrameDecoder::Status::frame) {
+                protocol::pb::Envelope message;
+                if (protocol::decode_payload(payload, message) != protocol::DecodeError::none) {
+                    continue;
+                }
+                if (message.has_disconnect()) {
+                    disconnect = message.disconnect();
+                } else if (message.has_snapshot()) {
+                    ++snapshots_;
+                } else if (message.has_server_hello()) {
+                    hello_received_ = true;
+                }
+            }
+        }
+        return disconnect;
+    }
+
+    [[nodiscard]] std::uint64_t snapshots() const { return snapshots_; }
+    [[nodiscard]] bool hello_received() const { return hello_received_; }
+
+private:
+    boost::asio::io_context io_;
+    boost::asio::ip::tcp::socket socket_;
+    std::uint64_t snapshots_ = 0;
+    bool hello_received_ = false;
+};
+
+/// A ClientHello of the current protocol, optionally with a connect token.
+inline protocol::pb::Envelope client_hello(std::span<const std::uint8_t> token = {}) {
+    protocol::pb::Envelope m;
+    m.mutable_client_hello()->set_protocol_version(protocol::kProtocolVersion);
+    m.mutable_client_hello()->set_name("raw");
+    if (!token.empty()) {
+        m.mutable_client_hello()->set_connect_token(token.data(), token.size());
+    }
+    return m;
+}
+
+/// A few well-behaved dsoc-simclient clients on their own thread for `seconds`.
+class GoodClients {
+public:
+    GoodClients(std::uint16_t port, double seconds,
+                std::optional<server::TokenKey> key = std::nullopt, int clients = 3) {
+        config_.port = port;
+        config_.clients = clients;
+        config_.duration_s = seconds;
+        config_.ramp_up_s = 0.0;
+        config_.progress = false;
+        config_.token_key = key;
+        config_.client_id_base = 1000;
+        run_ = std::make_unique<simclient::LoadRun>(io_, config_);
+        run_->start();
+        thread_ = std::thread([this] { io_.run(); });
+    }
+    ~GoodClients() { finish(); }
+    GoodClients(const GoodClients&) = delete;
+    GoodClients& operator=(const GoodClients&) = delete;
+
+    /// Waits for the end of the run.
+    simclient::LoadReport finish() {
+        if (thread_.joinable()) {
+            thread_.join();
+        }
+        return run_->report();
+    }
+
+    [[nodiscard]] const simclient::LoadRun& run() const { return *run_; }
+    [[nodiscard]] double seconds() const { return config_.duration_s; }
+
+private:
+    simclient::LoadConfig config_;
+    boost::asio::io_context io_;
+    std::unique_ptr<simclient::LoadRun> run_;
+    std::thread thread_;
+};
+
+} // namespace dsoc::testing
