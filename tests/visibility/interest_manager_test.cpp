@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -346,6 +347,20 @@ INSTANTIATE_TEST_SUITE_P(Culler, DsocStateMachine, ::testing::Bool(),
                              return param.param ? std::string("PreparedStage")
                                                : std::string("Plain");
                          });
+
+TEST(InterestManager, RefusesAnInvalidConfigAndTheReservedEntityId) {
+    DSOCConfig bad;
+    bad.tick_rate = 0;
+    const auto make_wall = [] {
+        static int builds = 0;
+        return std::make_unique<WallVisibility>(&builds);
+    };
+    EXPECT_THROW(InterestManager(bad, Aabb{glm::vec3(-100.0f), glm::vec3(100.0f)}, make_wall),
+                 std::invalid_argument);
+    InterestManager m(DSOCConfig{}, Aabb{glm::vec3(-100.0f), glm::vec3(100.0f)}, make_wall);
+    EXPECT_FALSE(m.add_entity(kNoEntity, EntityDesc{}, box_at({0, 0, 0})));
+    EXPECT_TRUE(m.add_entity(7, EntityDesc{}, box_at({0, 0, 0})));
+}
 
 TEST(Tbv, AdaptiveDurationFollowsTheGuidesFormula) {
     DSOCConfig c;

@@ -136,6 +136,9 @@ InterestManager::InterestManager(const DSOCConfig& config, const Aabb& world_bou
                                  RegionVisibilityFactory make_visibility, EyeRegionClipper clipper)
     : config_(config), world_bounds_(world_bounds), make_visibility_(std::move(make_visibility)),
       clipper_(std::move(clipper)), tick_seconds_(1.0f / static_cast<float>(config.tick_rate)) {
+    if (const auto problems = validate(config_); !problems.empty()) {
+        throw std::invalid_argument("DSOCConfig: " + problems.front());
+    }
     if (make_visibility_) {
         preparer_ = make_visibility_();
         coarse_tbvs_ = preparer_ != nullptr && preparer_->has_prepared_stage();
@@ -147,7 +150,7 @@ InterestManager::~InterestManager() = default;
 // ---- entities --------------------------------------------------------------------
 
 bool InterestManager::add_entity(EntityId id, const EntityDesc& desc, const Aabb& box) {
-    if (entity_slot_.contains(id) || !valid_box(box)) {
+    if (id == kNoEntity || entity_slot_.contains(id) || !valid_box(box)) {
         return false;
     }
     std::uint32_t slot;

@@ -36,7 +36,8 @@ struct DSOCConfig {
     int max_tbvs_per_client = 4096;
 
     // Adaptive expiration (guide: "Implicit Expiration")
-    /// Below this speed an entity counts as stationary. [Units: world units / tick] [Limit: >= 0]
+    /// Below this speed an entity counts as stationary. Per tick, unlike MotionLimits
+    /// (per second). [Units: world units / tick] [Limit: >= 0]
     float velocity_threshold = 0.1f;
     /// [Units: ticks] [Limit: 1..max_adaptive_duration]
     int min_adaptive_duration = 4;
@@ -60,6 +61,7 @@ struct DSOCConfig {
     // Network level of detail, from the conservative distance between the client's
     // eye region and the entity (or its TBV).
     /// Closer than this: update every tick at full precision. [Units: world units]
+    /// [Limit: >= 0]
     float lod_near_distance = 1024.0f;
     /// Beyond lod_near: every 2nd tick; beyond this: every 4th. [Units: world units]
     /// [Limit: >= lod_near_distance]

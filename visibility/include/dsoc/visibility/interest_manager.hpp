@@ -11,6 +11,12 @@
 // every entity moved within its declared MotionLimits and the RegionVisibility is
 // conservative. A jump beyond the limits is detected and voids that entity's TBVs.
 //
+// Ids are the caller's (plain numbers, no generation): an id removed and added again
+// between two updates is the same entity to its clients (no leave/enter); give a new
+// entity a new id if clients must see it replaced. A "bad box" is empty or not finite.
+// Memory: per client, one pair state per entity plus up to max_tbvs_per_client TBV
+// groups; per tick, O(clients x entities) cheap tests at worst.
+//
 // Threading: add/remove/set_* and begin_update() must be serialized. After
 // begin_update(tick), update_client(i) for distinct i may run in parallel (each
 // touches only its own client's state and reads shared entity state); then read
@@ -104,14 +110,18 @@ struct ClientStats {
 class InterestManager {
 public:
     /// `world_bounds`: where entities live (sizes the TBV octrees). `make_visibility`
-    /// makes each client's culler. `config` must have passed validate().
+    /// makes each client's culler (called in add_client(), and once here for a culler
+    /// that prepares boxes for all clients). Throws std::invalid_argument naming the
+    /// first problem when `config` does not pass validate().
     InterestManager(const DSOCConfig& config, const Aabb& world_bounds,
                     RegionVisibilityFactory make_visibility, EyeRegionClipper clipper = {});
     ~InterestManager();
     InterestManager(const InterestManager&) = delete;
     InterestManager& operator=(const InterestManager&) = delete;
 
-    // Entities. Ids are the caller's; false on a duplicate/unknown id or a bad box.
+    // Entities. Ids are the caller's; false on a duplicate/unknown id, kNoEntity or a
+    // bad box. A removed entity is in the `leave` list of every client that had it, at
+    // the next update.
     bool add_entity(EntityId id, const EntityDesc& desc, const Aabb& box);
     bool remove_entity(EntityId id);
     /// The entity's box after this tick's movement, and its velocity when known
@@ -122,22 +132,28 @@ public:
     bool set_entity_box(EntityId id, const Aabb& box,
                         glm::vec3 velocity = glm::vec3(std::numeric_limits<float>::quiet_NaN()));
 
-    // Clients.
+    // Clients. A client's first update decides every entity at once (batch TBV
+    // creation); its viewer entity is always in its own set. A ClientDesc cannot be
+    // changed: remove the client and add it again.
     bool add_client(ClientId id, const ClientDesc& desc);
     bool remove_client(ClientId id);
     /// Spectators only (no viewer entity): where the eye is this tick.
     bool set_client_eye(ClientId id, glm::vec3 eye);
 
-    /// Everything for one tick: begin_update, then every client in turn.
+    /// Everything for one tick: begin_update, then every client in turn. Ticks should
+    /// increase; the time since the last update is the tick difference (1 if not).
     void update(std::uint64_t tick);
-    /// Serial part of a tick (teleport bookkeeping).
+    /// Serial part of a tick: teleport detection, speeds, and the per-entity work shared
+    /// by all clients (each box prepared for the culler; the entity's candidate TBVs).
     void begin_update(std::uint64_t tick);
     /// Per-client part; distinct indexes may run concurrently. index < client_count().
     void update_client(std::size_t index);
 
     [[nodiscard]] std::size_t client_count() const { return clients_.size(); }
     [[nodiscard]] ClientId client_at(std::size_t index) const;
-    /// Decisions of the last update; nullptr for an unknown client.
+    /// Decisions of the last update; nullptr for an unknown client. The pointer (like
+    /// stats()) stays valid until that client is removed; its contents change at each
+    /// update.
     [[nodiscard]] const ClientDecisions* decisions(ClientId id) const;
     [[nodiscard]] const ClientStats* stats(ClientId id) const;
     [[nodiscard]] PairState state(ClientId client, EntityId entity) const;

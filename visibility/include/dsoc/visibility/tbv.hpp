@@ -41,7 +41,7 @@ struct MotionLimits {
 
 /// The farthest a point moving within `limits` can get in `seconds`, per direction:
 /// x and y use horizontal_speed, z up/down the vertical speeds. Used to detect jumps
-/// beyond the bound (teleports).
+/// beyond the bound (teleports). `tolerance` absorbs float noise. [Units: world units]
 [[nodiscard]] bool within_reach(glm::vec3 from, glm::vec3 to, const MotionLimits& limits,
                                 float seconds, float tolerance);
 
