@@ -385,6 +385,23 @@ TEST(DsocConfig, ValidateNamesTheField) {
     EXPECT_TRUE(validate(DSOCConfig{}).empty());
 }
 
+TEST(DsocConfig, SetFieldByNameParsesOrNamesTheProblem) {
+    DSOCConfig c;
+    EXPECT_EQ(set_field(c, "region_reuse_margin", "8.5"), "");
+    EXPECT_EQ(c.region_reuse_margin, 8.5f);
+    EXPECT_EQ(set_field(c, "full_test_interval", "8"), "");
+    EXPECT_EQ(c.full_test_interval, 8);
+    EXPECT_EQ(set_field(c, "tbvs_enabled", "false"), "");
+    EXPECT_FALSE(c.tbvs_enabled);
+    EXPECT_EQ(set_field(c, "strategy", "fuzzy"), "");
+    EXPECT_EQ(c.strategy, TbvStrategy::fuzzy);
+    EXPECT_NE(set_field(c, "full_test_interval", "16x").find("full_test_interval"),
+              std::string::npos);
+    EXPECT_NE(set_field(c, "tbvs_enabled", "maybe"), "");
+    EXPECT_NE(set_field(c, "no_such_field", "1").find("no_such_field"), std::string::npos);
+    EXPECT_EQ(c.full_test_interval, 8); // a failed set leaves the field alone
+}
+
 TEST(Tbv, ReachableBoxContainsEveryReachablePosition) {
     const MotionLimits limits{320.0f, 270.0f, 800.0f};
     const Aabb start = box_at({0, 0, 0});

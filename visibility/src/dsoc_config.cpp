@@ -1,7 +1,11 @@
 #include "dsoc/visibility/dsoc_config.hpp"
 
 #include <algorithm>
+#include <array>
+#include <charconv>
 #include <cmath>
+#include <utility>
+#include <variant>
 
 namespace dsoc::visibility {
 
@@ -70,6 +74,80 @@ std::vector<std::string> validate(const DSOCConfig& c) {
     check(std::isfinite(c.lod_far_distance) && c.lod_far_distance >= c.lod_near_distance,
           "lod_far_distance", "must be >= lod_near_distance");
     return p;
+}
+
+namespace {
+
+template <typename T>
+bool parse_number(std::string_view text, T& out) {
+    T parsed{};
+    const char* end = text.data() + text.size();
+    const auto [ptr, ec] = std::from_chars(text.data(), end, parsed);
+    if (ec != std::errc() || ptr != end) {
+        return false; // `out` untouched
+    }
+    out = parsed;
+    return true;
+}
+
+bool set_field_flag(bool& out, std::string_view text) {
+    if (text == "true" || text == "1") {
+        out = true;
+        return true;
+    }
+    if (text == "false" || text == "0") {
+        out = false;
+        return true;
+    }
+    return false;
+}
+
+} // namespace
+
+std::string set_field(DSOCConfig& c, std::string_view key, std::string_view value) {
+    using Field = std::variant<int DSOCConfig::*, float DSOCConfig::*, bool DSOCConfig::*>;
+    static constexpr std::array<std::pair<std::string_view, Field>, 16> kFields{{
+        {"tick_rate", &DSOCConfig::tick_rate},
+        {"default_tbv_duration", &DSOCConfig::default_tbv_duration},
+        {"tbv_expansion_factor", &DSOCConfig::tbv_expansion_factor},
+        {"max_tbvs_per_object", &DSOCConfig::max_tbvs_per_object},
+        {"max_tbvs_per_client", &DSOCConfig::max_tbvs_per_client},
+        {"velocity_threshold", &DSOCConfig::velocity_threshold},
+        {"min_adaptive_duration", &DSOCConfig::min_adaptive_duration},
+        {"max_adaptive_duration", &DSOCConfig::max_adaptive_duration},
+        {"fuzzy_confidence", &DSOCConfig::fuzzy_confidence},
+        {"tbv_merge_distance", &DSOCConfig::tbv_merge_distance},
+        {"region_reuse_margin", &DSOCConfig::region_reuse_margin},
+        {"lod_near_distance", &DSOCConfig::lod_near_distance},
+        {"lod_far_distance", &DSOCConfig::lod_far_distance},
+        {"tbvs_enabled", &DSOCConfig::tbvs_enabled},
+        {"reuse_buffers", &DSOCConfig::reuse_buffers},
+        {"full_test_interval", &DSOCConfig::full_test_interval},
+    }};
+    const std::string bad = "bad value '" + std::string(value) + "' for " + std::string(key);
+    if (key == "strategy") {
+        return parse_tbv_strategy(std::string(value), c.strategy)
+                   ? ""
+                   : bad + " (explicit, adaptive or fuzzy)";
+    }
+    if (key == "validate_state") {
+        return set_field_flag(c.validate_state, value) ? "" : bad + " (true or false)";
+    }
+    for (const auto& [name, field] : kFields) {
+        if (name != key) {
+            continue;
+        }
+        if (const auto* i = std::get_if<int DSOCConfig::*>(&field)) {
+            return parse_number(value, c.**i) ? "" : bad;
+        }
+        if (const auto* f = std::get_if<float DSOCConfig::*>(&field)) {
+            return parse_number(value, c.**f) ? "" : bad;
+        }
+        return set_field_flag(c.*std::get<bool DSOCConfig::*>(field), value)
+                   ? ""
+                   : bad + " (true or false)";
+    }
+    return "unknown DSOCConfig field '" + std::string(key) + "'";
 }
 
 } // namespace dsoc::visibility

@@ -109,6 +109,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
     env.world = &world;
     env.rays = &rays;
     env.lookahead_ticks = lookahead;
+    env.dsoc_overrides = &options.dsoc_overrides;
 
     std::vector<std::string> names = options.policies;
     if (names.empty()) {

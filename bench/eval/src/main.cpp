@@ -61,6 +61,9 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--trace-policy", options.trace_policy,
                    "policy whose decisions the trace records (default: dsoc, else the first)");
+    app.add_option("--dsoc-set", options.dsoc_overrides,
+                   "DSOCConfig KEY=VALUE for the dsoc policies (repeatable), e.g. "
+                   "region_reuse_margin=8");
     app.add_option("--json", json_path, "write every figure as JSON to this file");
     app.add_flag("--quiet", quiet, "no progress line on stderr");
     CLI11_PARSE(app, argc, argv);

@@ -10,6 +10,8 @@
 #include <glm/geometric.hpp>
 
 #include <array>
+#include <string>
+#include <string_view>
 #include <stdexcept>
 
 namespace dsoc::eval {
@@ -283,6 +285,19 @@ std::unique_ptr<Policy> make_policy(std::string_view name, const PolicyEnv& env)
         config.strategy = visibility::TbvStrategy::fuzzy;
     } else {
         return nullptr;
+    }
+    if (name != "occlusion" && env.dsoc_overrides != nullptr) { // --dsoc-set KEY=VALUE
+        for (const std::string& setting : *env.dsoc_overrides) {
+            const std::size_t eq = setting.find('=');
+            const std::string error =
+                eq == std::string::npos
+                    ? "expected KEY=VALUE"
+                    : visibility::set_field(config, std::string_view(setting).substr(0, eq),
+                                            std::string_view(setting).substr(eq + 1));
+            if (!error.empty()) {
+                throw std::runtime_error("--dsoc-set " + setting + ": " + error);
+            }
+        }
     }
     if (const auto problems = visibility::validate(config); !problems.empty()) {
         throw std::runtime_error("DSOCConfig for " + std::string(name) + ": " + problems.front());

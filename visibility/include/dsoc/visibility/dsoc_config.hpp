@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace dsoc::visibility {
@@ -89,5 +90,12 @@ struct DSOCConfig {
 
 /// Every problem with the settings, each naming the field and why; empty when usable.
 [[nodiscard]] std::vector<std::string> validate(const DSOCConfig& config);
+
+/// Sets the field named `key` (as spelled in DSOCConfig; strategy takes "explicit",
+/// "adaptive" or "fuzzy"; flags take true/false/1/0) from text, for tools and config
+/// files. Returns "" on success, else what is wrong (unknown field, unparsable value).
+/// Does not validate(): call it after the last change.
+[[nodiscard]] std::string set_field(DSOCConfig& config, std::string_view key,
+                                    std::string_view value);
 
 } // namespace dsoc::visibility

@@ -26,6 +26,9 @@ struct EvalOptions {
     std::string trace_path;
     int trace_every = 1;
     std::string trace_policy;
+    /// DSOCConfig settings (KEY=VALUE, visibility::set_field names) applied to the
+    /// dsoc policies (not to occlusion), e.g. region_reuse_margin=8.
+    std::vector<std::string> dsoc_overrides;
     /// Concrete violations kept per policy for the report.
     std::size_t max_examples = 10;
 };

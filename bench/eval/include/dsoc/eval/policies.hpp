@@ -34,6 +34,8 @@ struct PolicyEnv {
     const WorldSim* world = nullptr;
     std::shared_ptr<const visibility::OccluderScene> scene;
     const RayOracle* rays = nullptr;
+    /// DSOCConfig settings (KEY=VALUE) for the dsoc policies, over their defaults.
+    const std::vector<std::string>* dsoc_overrides = nullptr;
     /// The latency allowance the culling policies promise. [Units: ticks]
     int lookahead_ticks = 5;
 };
