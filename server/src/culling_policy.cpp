@@ -52,15 +52,26 @@ void CullingPolicy::sync_entities(const GameWorld& world) {
 
 void CullingPolicy::begin_tick(const GameWorld& world, std::uint64_t tick) {
     sync_entities(world);
-    manager_.update(tick);
+    manager_.begin_update(tick);
+    client_index_.clear();
+    for (std::size_t i = 0; i < manager_.client_count(); ++i) {
+        client_index_[manager_.client_at(i)] = i;
+    }
 }
 
 void CullingPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
-                           std::vector<std::uint32_t>& out) {
+                           std::vector<Interest>& out) {
     out.clear();
+    const auto index = client_index_.find(viewer.client_id);
+    if (index == client_index_.end()) {
+        return; // joined after begin_tick(): first decisions next tick
+    }
+    manager_.update_client(index->second);
     if (const auto* d = manager_.decisions(viewer.client_id)) {
         for (const auto& r : d->replicated) {
-            out.push_back(r.id);
+            // update_interval 1, 2, 4 -> tier 0, 1, 2
+            const std::uint8_t tier = r.update_interval >= 4 ? 2 : (r.update_interval >= 2 ? 1 : 0);
+            out.push_back({r.id, tier});
         }
     }
 }
@@ -73,6 +84,11 @@ void CullingPolicy::add_viewer(std::uint32_t client_id, std::uint32_t entity_id)
 
 void CullingPolicy::remove_viewer(std::uint32_t client_id) {
     manager_.remove_client(client_id);
+    // The manager's indexes moved; keep the others' select() answering this tick.
+    client_index_.clear();
+    for (std::size_t i = 0; i < manager_.client_count(); ++i) {
+        client_index_[manager_.client_at(i)] = i;
+    }
 }
 
 } // namespace dsoc::server

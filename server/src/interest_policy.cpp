@@ -10,15 +10,15 @@
 namespace dsoc::server {
 
 void BroadcastPolicy::select(const GameWorld& world, const Viewer& /*viewer*/,
-                             std::vector<std::uint32_t>& out) {
+                             std::vector<Interest>& out) {
     out.clear();
     for (const Entity& e : world.entities()) {
-        out.push_back(e.id);
+        out.push_back({e.id, 0});
     }
 }
 
 void DistancePolicy::select(const GameWorld& world, const Viewer& viewer,
-                            std::vector<std::uint32_t>& out) {
+                            std::vector<Interest>& out) {
     out.clear();
     const float r2 = radius_ * radius_;
     for (const Entity& e : world.entities()) {
@@ -27,22 +27,25 @@ void DistancePolicy::select(const GameWorld& world, const Viewer& viewer,
         const glm::vec3 nearest = glm::clamp(viewer.eye, box.min, box.max);
         const glm::vec3 d = nearest - viewer.eye;
         if (glm::dot(d, d) <= r2) {
-            out.push_back(e.id);
+            out.push_back({e.id, 0});
         }
     }
 }
 
-void PvsPolicy::select(const GameWorld& world, const Viewer& viewer,
-                       std::vector<std::uint32_t>& out) {
+void PvsPolicy::select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) {
     out.clear();
+    // Per-thread scratch: select() runs concurrently for distinct viewers.
+    thread_local std::vector<std::int32_t> clusters;
+    thread_local std::vector<std::int32_t> scratch;
+    thread_local std::vector<std::uint8_t> rows;
     const bool known = pvs_ != nullptr && pvs_->has_visibility() &&
-                       pvs_->clusters_of(visibility::Aabb{viewer.eye, viewer.eye}, clusters_);
+                       pvs_->clusters_of(visibility::Aabb{viewer.eye, viewer.eye}, clusters);
     if (known) {
-        pvs_->union_of_rows(clusters_, rows_);
+        pvs_->union_of_rows(clusters, rows);
     }
     for (const Entity& e : world.entities()) {
-        if (!known || pvs_->may_see(rows_, world.box_of(e), scratch_)) {
-            out.push_back(e.id);
+        if (!known || pvs_->may_see(rows, world.box_of(e), scratch)) {
+            out.push_back({e.id, 0});
         }
     }
 }

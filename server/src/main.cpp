@@ -50,6 +50,24 @@ int main(int argc, char** argv) {
     app.add_option("--distance-radius", config.distance_radius,
                    "Radius of the distance policy [units]")
         ->capture_default_str();
+    app.add_option("--threads", config.threads,
+                   "Threads for the per-client tick work, the tick thread included; 0: one per "
+                   "core")
+        ->capture_default_str();
+    app.add_option("--position-quantum-near", config.position_quantum_near,
+                   "Snapshot position precision, entities updated every tick [units]")
+        ->capture_default_str();
+    app.add_option("--position-quantum-mid", config.position_quantum_mid,
+                   "Snapshot position precision, entities updated every 2nd tick [units]")
+        ->capture_default_str();
+    app.add_option("--position-quantum-far", config.position_quantum_far,
+                   "Snapshot position precision, entities updated every 4th tick [units]")
+        ->capture_default_str();
+    app.add_option("--angle-steps", config.angle_steps, "Snapshot angle steps per full turn")
+        ->capture_default_str();
+    app.add_option("--network-lod", config.network_lod,
+                   "Coarser, rarer updates for distant entities (dsoc/occlusion) (true/false)")
+        ->capture_default_str();
     app.add_option("--max-clients", config.max_clients, "Connected clients at most")
         ->capture_default_str();
     app.add_option("--max-frame-bytes", config.max_frame_bytes,

@@ -4,27 +4,26 @@ namespace dsoc::server {
 
 namespace {
 
-void fill_state(const GameWorld& world, const Entity& e, protocol::pb::EntityState& s) {
-    s.set_id(e.id);
-    s.set_x(e.move.position.x);
-    s.set_y(e.move.position.y);
-    s.set_z(e.move.position.z);
-    s.set_yaw(e.yaw_deg);
-    s.set_pitch(e.pitch_deg);
-    const glm::vec3 half = world.box_of(e).half_extents();
-    s.set_half_x(half.x);
-    s.set_half_y(half.y);
-    s.set_half_z(half.z);
-    s.set_kind(static_cast<std::uint32_t>(e.kind));
+void add_audit(const Entity& e, protocol::pb::Snapshot& snapshot) {
+    protocol::pb::AuditPose& a = *snapshot.add_audit();
+    a.set_id(e.id);
+    a.set_x(e.move.position.x);
+    a.set_y(e.move.position.y);
+    a.set_z(e.move.position.z);
+    a.set_yaw(e.yaw_deg);
+    a.set_pitch(e.pitch_deg);
 }
 
 } // namespace
 
-void ReplicationState::build_snapshot(const GameWorld& world,
-                                      std::span<const std::uint32_t> interest, std::uint64_t tick,
+protocol::Pose pose_of(const Entity& e) {
+    return {e.move.position.x, e.move.position.y, e.move.position.z, e.yaw_deg, e.pitch_deg};
+}
+
+void ReplicationState::build_snapshot(const GameWorld& world, std::span<const Interest> interest,
+                                      std::uint64_t tick, bool audit,
                                       protocol::pb::Snapshot& snapshot) {
-    snapshot.Clear();
-    snapshot.set_server_tick(tick);
+    encoder_.begin(tick, snapshot);
     next_known_.clear();
 
     // Merge two increasing id lists: old knowledge and the new interest set.
@@ -32,45 +31,40 @@ void ReplicationState::build_snapshot(const GameWorld& world,
     std::size_t j = 0;
     while (i < known_.size() || j < interest.size()) {
         const bool take_old =
-            j == interest.size() || (i < known_.size() && known_[i] < interest[j]);
+            j == interest.size() || (i < known_.size() && known_[i] < interest[j].id);
         const bool take_new =
-            i == known_.size() || (j < interest.size() && interest[j] < known_[i]);
+            i == known_.size() || (j < interest.size() && interest[j].id < known_[i]);
         if (take_old) { // known, no longer of interest (or gone from the world)
-            snapshot.add_leave(known_[i]);
-            sent_.erase(known_[i]);
+            encoder_.leave(known_[i], snapshot);
             ++i;
             continue;
         }
-        const std::uint32_t id = interest[j];
-        const Entity* e = world.find(id);
+        const Interest wanted = interest[j];
+        const Entity* e = world.find(wanted.id);
         ++j;
         if (!take_new) {
             ++i; // known and still of interest
         }
         if (e == nullptr) { // contract breach: never leave a stale id known
             if (!take_new) {
-                snapshot.add_leave(id);
-                sent_.erase(id);
+                encoder_.leave(wanted.id, snapshot);
             }
             continue;
         }
-        next_known_.push_back(id);
+        next_known_.push_back(wanted.id);
         if (take_new) {
-            fill_state(world, *e, *snapshot.add_enter());
-            sent_[id] = {e->move.position, e->yaw_deg, e->pitch_deg};
-            continue;
+            const glm::vec3 half = world.box_of(*e).half_extents();
+            encoder_.enter(wanted.id, pose_of(*e), {half.x, half.y, half.z},
+                           static_cast<std::uint32_t>(e->kind), wanted.tier, snapshot);
+        } else {
+            const std::uint64_t interval = std::uint64_t{1} << wanted.tier;
+            if ((tick + wanted.id) % interval != 0) {
+                continue; // deferred: this coarse-tier entity is not due this tick
+            }
+            encoder_.update(wanted.id, pose_of(*e), wanted.tier, snapshot);
         }
-        SentState& last = sent_[id];
-        if (last.position != e->move.position || last.yaw_deg != e->yaw_deg ||
-            last.pitch_deg != e->pitch_deg) {
-            protocol::pb::EntityUpdate& u = *snapshot.add_update();
-            u.set_id(id);
-            u.set_x(e->move.position.x);
-            u.set_y(e->move.position.y);
-            u.set_z(e->move.position.z);
-            u.set_yaw(e->yaw_deg);
-            u.set_pitch(e->pitch_deg);
-            last = {e->move.position, e->yaw_deg, e->pitch_deg};
+        if (audit) {
+            add_audit(*e, snapshot);
         }
     }
     known_.swap(next_known_);

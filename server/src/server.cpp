@@ -22,7 +22,8 @@ constexpr std::size_t kMaxTickSamples = 4'000'000;
 Server::Server(asio::io_context& io, ServerConfig config, std::shared_ptr<const maps::Map> map)
     : io_(io), config_(std::move(config)), acceptor_(io), tick_timer_(io),
       tick_period_(std::chrono::nanoseconds(1'000'000'000LL / config_.tick_rate)),
-      world_(config_, std::move(map)), policy_(make_policy(config_, world_)) {}
+      world_(config_, std::move(map)), policy_(make_policy(config_, world_)),
+      pool_(config_.threads) {}
 
 Server::~Server() = default;
 
@@ -34,9 +35,10 @@ std::uint16_t Server::start() {
     acceptor_.bind(endpoint);
     acceptor_.listen();
     const std::uint16_t port = acceptor_.local_endpoint().port();
-    spdlog::info("dsoc-server listening on {}:{} map={} policy={} tick_rate={} Hz bots={}",
-                 config_.bind_address, port, world_.map().name, policy_->name(), config_.tick_rate,
-                 config_.bots);
+    spdlog::info(
+        "dsoc-server listening on {}:{} map={} policy={} tick_rate={} Hz bots={} threads={}",
+        config_.bind_address, port, world_.map().name, policy_->name(), config_.tick_rate,
+        config_.bots, pool_.threads());
     if (!config_.trace_file.empty()) {
         trace::TraceHeader header;
         header.map = world_.map().name;
@@ -108,7 +110,9 @@ void Server::run_tick() {
     ++tick_;
     const float dt = 1.0f / static_cast<float>(config_.tick_rate);
     world_.step(dt);
+    prepare_client_ticks();
     policy_->begin_tick(world_, tick_);
+    run_client_ticks(world_, *policy_, tick_, client_ticks_, pool_); // all threads
     send_snapshots();
     if (trace_ && tick_ % static_cast<std::uint64_t>(config_.trace_every) == 0) {
         write_trace_tick();
@@ -120,7 +124,8 @@ void Server::run_tick() {
     }
 }
 
-void Server::send_snapshots() {
+void Server::prepare_client_ticks() {
+    client_ticks_.clear();
     for (auto& [id, client] : clients_) {
         Session& session = *client.session;
         if (!session.active()) {
@@ -130,18 +135,28 @@ void Server::send_snapshots() {
         if (self == nullptr) {
             continue;
         }
-        const Viewer viewer{id, session.entity_id(), world_.eye_of(*self)};
-        policy_->select(world_, viewer, interest_);
-        const auto own = std::lower_bound(interest_.begin(), interest_.end(), viewer.entity_id);
-        if (own == interest_.end() || *own != viewer.entity_id) {
-            interest_.insert(own, viewer.entity_id);
+        ClientTick job;
+        job.viewer = Viewer{id, session.entity_id(), world_.eye_of(*self)};
+        job.replication = &client.replication;
+        job.interest = &client.interest;
+        job.envelope = &client.envelope;
+        job.audit = client.audit_every > 0 && tick_ % client.audit_every == 0;
+        job.network_lod = config_.network_lod;
+        client_ticks_.push_back(job);
+    }
+}
+
+void Server::send_snapshots() {
+    for (const ClientTick& job : client_ticks_) {
+        if (!job.build) {
+            continue;
         }
-        pb::Snapshot& snapshot = *envelope_.mutable_snapshot();
-        client.replication.build_snapshot(world_, interest_, tick_, snapshot);
+        Client& client = clients_.at(job.viewer.client_id);
+        const pb::Snapshot& snapshot = job.envelope->snapshot();
         stats_.entity_updates_sent +=
-            static_cast<std::uint64_t>(snapshot.enter_size() + snapshot.update_size());
+            static_cast<std::uint64_t>(snapshot.enter_size() + snapshot.update_id_size());
         ++stats_.snapshots_sent;
-        session.send(envelope_);
+        client.session->send(*job.envelope);
     }
 }
 
@@ -165,7 +180,7 @@ void Server::write_trace_tick() {
     trace_->write_tick(t);
 }
 
-void Server::on_hello(Session& session, const pb::ClientHello& /*hello*/) {
+void Server::on_hello(Session& session, const pb::ClientHello& client_hello) {
     if (shutting_down_) {
         session.disconnect(pb::DISCONNECT_REASON_SERVER_SHUTDOWN, "server is shutting down");
         return;
@@ -188,10 +203,16 @@ void Server::on_hello(Session& session, const pb::ClientHello& /*hello*/) {
     hello.set_map_name(world_.map().name);
     hello.set_server_tick(tick_);
     hello.set_max_speed(config_.max_speed);
+    protocol::to_message(quantization(config_), *hello.mutable_quantization());
     session.send(reply);
     session.mark_active();
     auto it = sessions_.find(session.client_id());
-    clients_[session.client_id()].session = it->second;
+    Client& client =
+        clients_
+            .try_emplace(session.client_id(),
+                         Client{it->second, ReplicationState(quantization(config_)), {}, {}, 0})
+            .first->second;
+    client.audit_every = client_hello.audit_every_ticks();
     spdlog::debug("client {} '{}' from {} joined as entity {}", session.client_id(), session.name(),
                   session.remote(), entity);
 }

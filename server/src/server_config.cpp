@@ -48,11 +48,23 @@ std::vector<std::string> validate(const ServerConfig& c) {
     check(p, c.max_send_queue_bytes >= c.max_frame_bytes, "max_send_queue_bytes",
           "must be at least max_frame_bytes");
     check(p, c.handshake_timeout_ms > 0, "handshake_timeout_ms", "must be > 0");
+    check(p, c.threads >= 0 && c.threads <= 256, "threads",
+          "must be 0 (one per core)..256, got " + std::to_string(c.threads));
+    for (auto& problem : protocol::validate(quantization(c))) {
+        p.push_back(std::move(problem));
+    }
     check(p, std::isfinite(c.max_speed) && c.max_speed > 0.0f, "max_speed",
           "must be a finite number > 0");
     check(p, !c.map.empty(), "map", "must name a map");
     check(p, std::isfinite(c.duration_s) && c.duration_s >= 0.0, "duration_s", "must be >= 0");
     return p;
+}
+
+protocol::QuantizationSettings quantization(const ServerConfig& c) {
+    protocol::QuantizationSettings q;
+    q.position_quantum = {c.position_quantum_near, c.position_quantum_mid, c.position_quantum_far};
+    q.angle_steps = c.angle_steps;
+    return q;
 }
 
 int lookahead_ticks(const ServerConfig& c) {

@@ -1,5 +1,6 @@
 #include "dsoc/simclient/load_run.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace dsoc::simclient {
@@ -143,6 +144,8 @@ LoadReport LoadRun::report() const {
         r.bytes_up += s.bytes_up;
         r.snapshots += s.snapshots;
         r.entity_updates += s.entity_updates;
+        r.audited_poses += s.audited_poses;
+        r.max_audit_error = std::max(r.max_audit_error, s.max_audit_error);
         known.insert(known.end(), s.known_samples.begin(), s.known_samples.end());
         interarrival.insert(interarrival.end(), s.interarrival_ms.begin(), s.interarrival_ms.end());
         rtt.insert(rtt.end(), s.rtt_ms.begin(), s.rtt_ms.end());

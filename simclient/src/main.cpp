@@ -30,6 +30,10 @@ int main(int argc, char** argv) {
         ->check(CLI::NonNegativeNumber);
     app.add_option("--report", report_file, "Write the JSON report to this file");
     app.add_option("--seed", config.seed, "Seed of the wandering inputs")->capture_default_str();
+    app.add_option("--audit-every", config.audit_every_ticks,
+                   "Check the decoded replica against the server's exact poses every N ticks "
+                   "(0: never)")
+        ->capture_default_str();
     app.add_flag("--quiet", quiet, "No progress lines");
     CLI11_PARSE(app, argc, argv);
 

@@ -35,6 +35,7 @@ std::string format_summary(const LoadReport& r) {
         "  entities known/client  mean {:.1f}  p95 {:.0f}\n"
         "  snapshot interarrival  p50 {:.1f} ms  p95 {:.1f} ms  p99 {:.1f} ms\n"
         "  round trip             p50 {:.2f} ms  p99 {:.2f} ms\n"
+        "  replica audit          {} poses, max error {:.3f} quanta (limit 0.5)\n"
         "  protocol errors        {} ({})\n"
         "  unexpected disconnects {}; clients missing own entity {}\n"
         "  disconnect reasons     {}\n",
@@ -43,9 +44,9 @@ std::string format_summary(const LoadReport& r) {
         r.bytes_down_per_client_s, r.entity_updates_per_client_s, r.bytes_up_per_client_s / 1024.0,
         r.bytes_up_per_client_s, r.snapshots, r.entities_known.mean, r.entities_known.p95,
         r.snapshot_interarrival_ms.p50, r.snapshot_interarrival_ms.p95,
-        r.snapshot_interarrival_ms.p99, r.rtt_ms.p50, r.rtt_ms.p99, r.protocol_errors,
-        join_counts(r.protocol_errors_by_kind), r.unexpected_disconnects, r.missing_own_entity,
-        join_counts(r.disconnect_reasons));
+        r.snapshot_interarrival_ms.p99, r.rtt_ms.p50, r.rtt_ms.p99, r.audited_poses,
+        r.max_audit_error, r.protocol_errors, join_counts(r.protocol_errors_by_kind),
+        r.unexpected_disconnects, r.missing_own_entity, join_counts(r.disconnect_reasons));
 }
 
 std::string format_json(const LoadReport& r) {
@@ -69,6 +70,8 @@ std::string format_json(const LoadReport& r) {
     j["bytes_up_per_client_per_s"] = r.bytes_up_per_client_s;
     j["entity_updates_per_client_per_s"] = r.entity_updates_per_client_s;
     j["snapshots_received"] = r.snapshots;
+    j["audited_poses"] = r.audited_poses;
+    j["max_audit_error_quanta"] = r.max_audit_error;
     j["entities_known_per_client"] = {{"mean", r.entities_known.mean},
                                       {"p95", r.entities_known.p95}};
     j["snapshot_interarrival_ms"] = summary_json(r.snapshot_interarrival_ms);

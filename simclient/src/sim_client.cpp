@@ -6,6 +6,7 @@
 #include <boost/asio/ip/address.hpp>
 #include <boost/asio/write.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace dsoc::simclient {
@@ -57,6 +58,7 @@ void SimClient::on_connected() {
     pb::Envelope hello;
     hello.mutable_client_hello()->set_protocol_version(protocol::kProtocolVersion);
     hello.mutable_client_hello()->set_name(config_.name_prefix + std::to_string(index_));
+    hello.mutable_client_hello()->set_audit_every_ticks(config_.audit_every_ticks);
     send(hello);
     read_some();
 }
@@ -111,6 +113,12 @@ void SimClient::handle(const pb::Envelope& message) {
         stats_.hello_received = true;
         stats_.entity_id = hello.entity_id();
         tick_rate_ = hello.tick_rate() > 0 ? static_cast<int>(hello.tick_rate()) : 30;
+        protocol::QuantizationSettings quantization;
+        std::string why;
+        if (!protocol::from_message(hello.quantization(), quantization, why)) {
+            error("bad_quantization");
+        }
+        replica_.set_settings(quantization);
         state_ = State::active;
         active_since_ = Clock::now();
         next_input_at_ = active_since_;
@@ -158,32 +166,19 @@ void SimClient::apply_snapshot(const pb::Snapshot& s) {
     last_snapshot_tick_ = s.server_tick();
     last_snapshot_at_ = now;
     ++stats_.snapshots;
-    for (const auto& e : s.enter()) {
-        const bool inserted =
-            replica_.try_emplace(e.id(), ReplicaEntity{e.x(), e.y(), e.z(), e.yaw(), e.pitch()})
-                .second;
-        if (!inserted) {
-            error("duplicate_enter");
-        }
-        if (!std::isfinite(e.x()) || !std::isfinite(e.y()) || !std::isfinite(e.z())) {
-            error("non_finite_state");
-        }
+    for (const auto& problem : replica_.apply(s)) {
+        error(problem.kind);
     }
-    for (const auto& u : s.update()) {
-        const auto it = replica_.find(u.id());
-        if (it == replica_.end()) {
-            error("update_for_unknown_entity");
-            continue;
+    if (s.audit_size() > 0) {
+        double worst = 0.0;
+        for (const auto& problem : replica_.check_audit(s, worst)) {
+            error(problem.kind);
         }
-        it->second = {u.x(), u.y(), u.z(), u.yaw(), u.pitch()};
+        stats_.audited_poses += static_cast<std::uint64_t>(s.audit_size());
+        stats_.max_audit_error = std::max(stats_.max_audit_error, worst);
     }
-    for (const std::uint32_t id : s.leave()) {
-        if (replica_.erase(id) == 0) {
-            error("leave_for_unknown_entity");
-        }
-    }
-    stats_.entity_updates += static_cast<std::uint64_t>(s.enter_size() + s.update_size());
-    if (replica_.contains(stats_.entity_id)) {
+    stats_.entity_updates += static_cast<std::uint64_t>(s.enter_size() + s.update_id_size());
+    if (replica_.knows(stats_.entity_id)) {
         stats_.saw_own_entity = true;
     }
     stats_.known_samples.push_back(static_cast<double>(replica_.size()));

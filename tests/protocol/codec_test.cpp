@@ -12,7 +12,7 @@ TEST(Codec, SnapshotRoundTripsThroughAFrame) {
     snap.set_server_tick(99);
     auto& e = *snap.add_enter();
     e.set_id(5);
-    e.set_x(1.5f);
+    e.set_x(-12);
     snap.add_leave(7);
     std::vector<std::uint8_t> stream;
     const std::size_t n = encode_frame(sent, stream);
@@ -26,7 +26,7 @@ TEST(Codec, SnapshotRoundTripsThroughAFrame) {
     ASSERT_EQ(decode_payload(payload, received), DecodeError::none);
     ASSERT_EQ(received.body_case(), pb::Envelope::kSnapshot);
     EXPECT_EQ(received.snapshot().server_tick(), 99u);
-    EXPECT_EQ(received.snapshot().enter(0).x(), 1.5f);
+    EXPECT_EQ(received.snapshot().enter(0).x(), -12);
     EXPECT_EQ(received.snapshot().leave(0), 7u);
 }
 

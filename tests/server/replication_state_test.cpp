@@ -1,9 +1,11 @@
+#include "dsoc/protocol/compact_snapshot.hpp"
 #include "dsoc/server/replication_state.hpp"
 #include "support/test_maps.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <random>
 #include <vector>
 
 namespace dsoc::server {
@@ -19,78 +21,131 @@ std::vector<std::uint32_t> ids(const google::protobuf::RepeatedField<std::uint32
     return {r.begin(), r.end()};
 }
 
+std::vector<Interest> near(std::initializer_list<std::uint32_t> list) {
+    std::vector<Interest> out;
+    for (const auto id : list) {
+        out.push_back({id, 0});
+    }
+    return out;
+}
+
+std::vector<std::uint32_t> id_list(const std::vector<Interest>& set) {
+    std::vector<std::uint32_t> out;
+    for (const auto& i : set) {
+        out.push_back(i.id);
+    }
+    return out;
+}
+
+/// The ids of a snapshot's update entries (update_id is delta-coded).
+std::vector<std::uint32_t> updated_ids(const protocol::pb::Snapshot& s) {
+    std::vector<std::uint32_t> out;
+    std::uint32_t id = 0;
+    for (int i = 0; i < s.update_id_size(); ++i) {
+        id = i == 0 ? s.update_id(i) : id + s.update_id(i);
+        out.push_back(id);
+    }
+    return out;
+}
+
 TEST(ReplicationState, EnterThenUpdateThenLeave) {
     GameWorld world(config_with_bots(3), testing::rooms_map()); // ids 1, 2, 3
     ReplicationState state;
     protocol::pb::Snapshot snap;
 
-    const std::vector<std::uint32_t> first = {1, 3};
-    state.build_snapshot(world, first, 1, snap);
+    const auto first = near({1, 3});
+    state.build_snapshot(world, first, 1, false, snap);
     ASSERT_EQ(snap.enter_size(), 2);
     EXPECT_EQ(snap.enter(0).id(), 1u);
     EXPECT_EQ(snap.enter(1).id(), 3u);
-    EXPECT_EQ(snap.update_size(), 0);
+    EXPECT_EQ(snap.update_id_size(), 0);
     EXPECT_EQ(snap.leave_size(), 0);
     EXPECT_EQ(snap.server_tick(), 1u);
 
     // Nothing moved: no updates.
-    state.build_snapshot(world, first, 2, snap);
-    EXPECT_EQ(snap.enter_size() + snap.update_size() + snap.leave_size(), 0);
+    state.build_snapshot(world, first, 2, false, snap);
+    EXPECT_EQ(snap.enter_size() + snap.update_id_size() + snap.leave_size(), 0);
 
     world.step(0.1f); // bots move
-    const std::vector<std::uint32_t> second = {2, 3};
-    state.build_snapshot(world, second, 3, snap);
+    const auto second = near({2, 3});
+    state.build_snapshot(world, second, 3, false, snap);
     ASSERT_EQ(snap.enter_size(), 1);
     EXPECT_EQ(snap.enter(0).id(), 2u);
-    ASSERT_EQ(snap.update_size(), 1);
-    EXPECT_EQ(snap.update(0).id(), 3u);
+    EXPECT_EQ(updated_ids(snap), std::vector<std::uint32_t>{3});
     EXPECT_EQ(ids(snap.leave()), std::vector<std::uint32_t>{1});
-    EXPECT_EQ(state.known(), second);
+    EXPECT_EQ(state.known(), id_list(second));
 }
 
 TEST(ReplicationState, RemovedEntityLeaves) {
     GameWorld world(config_with_bots(2), testing::rooms_map());
     ReplicationState state;
     protocol::pb::Snapshot snap;
-    const std::vector<std::uint32_t> both = {1, 2};
-    state.build_snapshot(world, both, 1, snap);
+    state.build_snapshot(world, near({1, 2}), 1, false, snap);
     world.remove(2);
-    const std::vector<std::uint32_t> one = {1};
-    state.build_snapshot(world, one, 2, snap);
+    state.build_snapshot(world, near({1}), 2, false, snap);
     EXPECT_EQ(ids(snap.leave()), std::vector<std::uint32_t>{2});
     EXPECT_EQ(state.known_count(), 1u);
 }
 
-TEST(ReplicationState, RandomSequencesKeepKnowledgeExact) {
-    GameWorld world(config_with_bots(40), testing::rooms_map());
+TEST(ReplicationState, CoarseTiersAreUpdatedEverySecondAndFourthTick) {
+    GameWorld world(config_with_bots(12), testing::rooms_map());
     ReplicationState state;
     protocol::pb::Snapshot snap;
-    std::vector<std::uint32_t> client_view; // what a client applying the snapshots knows
+    std::vector<Interest> set;
+    for (std::uint32_t id = 1; id <= 12; ++id) {
+        set.push_back({id, static_cast<std::uint8_t>(id % 3)});
+    }
+    state.build_snapshot(world, set, 1, false, snap);
+    std::vector<int> updates(13, 0);
+    for (std::uint64_t tick = 2; tick < 2 + 40; ++tick) {
+        world.step(1.0f / 30.0f);
+        state.build_snapshot(world, set, tick, false, snap);
+        for (const auto id : updated_ids(snap)) {
+            const std::uint64_t interval = std::uint64_t{1} << (id % 3);
+            EXPECT_EQ((tick + id) % interval, 0u) << "entity " << id << " tick " << tick;
+            ++updates[id];
+        }
+    }
+    // Every bot walks: near ones are updated (almost) every tick, far ones 1 in 4.
+    for (std::uint32_t id = 1; id <= 12; ++id) {
+        const int due = 40 >> (id % 3);
+        EXPECT_GE(updates[id], due * 3 / 4) << "entity " << id;
+        EXPECT_LE(updates[id], due) << "entity " << id;
+    }
+}
+
+TEST(ReplicationState, RandomSequencesKeepTheDecodedReplicaExact) {
+    GameWorld world(config_with_bots(40), testing::rooms_map());
+    const protocol::QuantizationSettings quantization;
+    ReplicationState state(quantization);
+    protocol::SnapshotDecoder client(quantization);
+    protocol::pb::Snapshot snap;
     std::mt19937 rng(3);
+    std::uint64_t audited = 0;
     for (int tick = 1; tick <= 300; ++tick) {
         world.step(1.0f / 30.0f);
-        std::vector<std::uint32_t> interest;
+        std::vector<Interest> interest;
         for (std::uint32_t id = 1; id <= 40; ++id) {
-            if (rng() % 3 == 0) {
-                interest.push_back(id);
+            if (rng() % 3 != 0) {
+                interest.push_back({id, static_cast<std::uint8_t>(rng() % 3)});
             }
         }
-        state.build_snapshot(world, interest, static_cast<std::uint64_t>(tick), snap);
-        for (const auto& e : snap.enter()) {
-            ASSERT_EQ(std::count(client_view.begin(), client_view.end(), e.id()), 0);
-            client_view.push_back(e.id());
+        state.build_snapshot(world, interest, static_cast<std::uint64_t>(tick), true, snap);
+        protocol::pb::Snapshot wire; // through the real encoder
+        ASSERT_TRUE(wire.ParseFromString(snap.SerializeAsString()));
+        const auto problems = client.apply(wire);
+        ASSERT_TRUE(problems.empty()) << problems.front().kind << ": " << problems.front().detail;
+        double worst = 0.0;
+        const auto audit = client.check_audit(wire, worst);
+        ASSERT_TRUE(audit.empty()) << audit.front().detail;
+        EXPECT_LE(worst, 0.5 + 1e-3);
+        audited += static_cast<std::uint64_t>(wire.audit_size());
+        ASSERT_EQ(client.size(), interest.size()) << "tick " << tick;
+        for (const auto& i : interest) {
+            ASSERT_TRUE(client.knows(i.id)) << "tick " << tick << " entity " << i.id;
         }
-        for (const auto& u : snap.update()) {
-            ASSERT_EQ(std::count(client_view.begin(), client_view.end(), u.id()), 1);
-        }
-        for (const auto id : snap.leave()) {
-            const auto it = std::find(client_view.begin(), client_view.end(), id);
-            ASSERT_NE(it, client_view.end());
-            client_view.erase(it);
-        }
-        std::sort(client_view.begin(), client_view.end());
-        ASSERT_EQ(client_view, interest) << "tick " << tick;
     }
+    EXPECT_GT(audited, 300u * 10u); // most known entities are current on most ticks
 }
 
 } // namespace

@@ -9,20 +9,22 @@ namespace {
 constexpr std::uint32_t kKindBot = 0;
 constexpr std::uint32_t kKindPlayer = 1;
 
+protocol::Pose pose_of(const EntityFrame& e) {
+    return {e.position.x, e.position.y, e.position.z, e.yaw_deg, 0.0f};
+}
+
 } // namespace
 
 SnapshotCost ClientReplication::send(const WorldFrame& frame,
                                      std::span<const std::uint32_t> interest, std::uint64_t tick,
                                      protocol::pb::Envelope& scratch,
                                      std::vector<std::uint8_t>& buffer) {
-    if (sent_.size() < frame.entities.size()) {
-        sent_.resize(frame.entities.size());
-    }
     protocol::pb::Snapshot& snapshot = *scratch.mutable_snapshot();
-    snapshot.Clear();
-    snapshot.set_server_tick(tick);
+    encoder_.begin(tick, snapshot);
     next_known_.clear();
     SnapshotCost cost;
+    constexpr std::uint32_t kPositionFields =
+        protocol::kFieldX | protocol::kFieldY | protocol::kFieldZ | protocol::kFieldRebase;
 
     // Merge two increasing id lists: old knowledge and the new interest set.
     std::size_t i = 0;
@@ -33,7 +35,7 @@ SnapshotCost ClientReplication::send(const WorldFrame& frame,
         const bool take_new =
             i == known_.size() || (j < interest.size() && interest[j] < known_[i]);
         if (take_old) {
-            snapshot.add_leave(known_[i]);
+            encoder_.leave(known_[i], snapshot);
             ++cost.leaves;
             ++i;
             continue;
@@ -44,37 +46,23 @@ SnapshotCost ClientReplication::send(const WorldFrame& frame,
         }
         const EntityFrame& e = frame.entities[id];
         next_known_.push_back(id);
-        Sent& last = sent_[id];
         if (take_new) {
-            auto& s = *snapshot.add_enter();
-            s.set_id(id);
-            s.set_x(e.position.x);
-            s.set_y(e.position.y);
-            s.set_z(e.position.z);
-            s.set_yaw(e.yaw_deg);
-            s.set_pitch(0.0f);
             const glm::vec3 half = e.box.half_extents();
-            s.set_half_x(half.x);
-            s.set_half_y(half.y);
-            s.set_half_z(half.z);
-            s.set_kind(id < players_ ? kKindPlayer : kKindBot);
-            last = {e.position, e.yaw_deg};
+            encoder_.enter(id, pose_of(e), {half.x, half.y, half.z},
+                           id < players_ ? kKindPlayer : kKindBot, 0, snapshot);
             ++cost.enters;
             continue;
         }
-        if (last.position != e.position || last.yaw_deg != e.yaw_deg) {
-            auto& u = *snapshot.add_update();
-            u.set_id(id);
-            u.set_x(e.position.x);
-            u.set_y(e.position.y);
-            u.set_z(e.position.z);
-            u.set_yaw(e.yaw_deg);
-            u.set_pitch(0.0f);
-            last = {e.position, e.yaw_deg};
+        if (encoder_.update(id, pose_of(e), 0, snapshot)) {
             ++cost.updates;
+            const int entries = snapshot.update_fields_size();
+            if ((snapshot.update_fields(entries - 1) & kPositionFields) != 0) {
+                ++cost.moving_updates;
+            }
         }
     }
     known_.swap(next_known_);
+    cost.update_bytes = static_cast<std::uint32_t>(protocol::update_column_bytes(snapshot));
     buffer.clear();
     cost.bytes = static_cast<std::uint32_t>(protocol::encode_frame(scratch, buffer));
     return cost;

@@ -1,7 +1,11 @@
 #pragma once
 // The occlusion-aware policies: "dsoc" (TBVs, region reuse, latency-safe) and
 // "occlusion" (the same culler, every entity's current box tested every tick, no
-// TBVs). Both wrap dsoc::visibility::InterestManager.
+// TBVs). Both wrap dsoc::visibility::InterestManager: begin_tick() is its serial
+// begin_update(); select() runs the viewer's update_client() and reads its decisions,
+// so the per-client culling of a tick runs wherever select() is called (in parallel
+// on the server's worker pool). The manager's network level-of-detail hint
+// (update_interval 1/2/4) becomes Interest::tier 0/1/2.
 
 #include "dsoc/server/interest_policy.hpp"
 #include "dsoc/sim/reach_clipper.hpp"
@@ -9,6 +13,7 @@
 
 #include <memory>
 #include <string_view>
+#include <unordered_map>
 #include <vector>
 
 namespace dsoc::server {
@@ -23,8 +28,7 @@ public:
 
     [[nodiscard]] std::string_view name() const override { return name_; }
     void begin_tick(const GameWorld& world, std::uint64_t tick) override;
-    void select(const GameWorld& world, const Viewer& viewer,
-                std::vector<std::uint32_t>& out) override;
+    void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
     void add_viewer(std::uint32_t client_id, std::uint32_t entity_id) override;
     void remove_viewer(std::uint32_t client_id) override;
 
@@ -40,6 +44,9 @@ private:
     visibility::ClientDesc client_desc_;
     std::vector<std::uint32_t> known_entities_; // increasing
     std::vector<std::uint32_t> scratch_;
+    /// Client id -> the manager's client index, rebuilt by begin_tick(); read-only
+    /// while select() runs.
+    std::unordered_map<std::uint32_t, std::size_t> client_index_;
 };
 
 } // namespace dsoc::server

@@ -1,6 +1,11 @@
 #pragma once
 // Interest policies decide, per tick and per client, which entities the client
 // should know about. The server turns the answer into enter/update/leave messages.
+//
+// Threading: begin_tick(), add_viewer() and remove_viewer() are serialized (the
+// server's tick thread). After begin_tick(), select() may run concurrently for
+// distinct viewers (the server's worker pool); its answer for a viewer depends only
+// on the world, the tick and that viewer, never on the order or the thread.
 
 #include "dsoc/server/game_world.hpp"
 #include "dsoc/server/server_config.hpp"
@@ -11,6 +16,16 @@
 #include <vector>
 
 namespace dsoc::server {
+
+/// One entity of a client's interest set, with its network level-of-detail tier.
+struct Interest {
+    std::uint32_t id = 0;
+    /// 0 near: updated every tick at the finest quantum; 1 mid: every 2nd tick, coarser;
+    /// 2 far: every 4th tick, coarsest (ServerConfig's position quanta). Policies
+    /// without a distance hint answer 0.
+    std::uint8_t tier = 0;
+    friend bool operator==(const Interest&, const Interest&) = default;
+};
 
 /// One client's point of view this tick.
 struct Viewer {
@@ -23,25 +38,27 @@ class InterestPolicy {
 public:
     virtual ~InterestPolicy() = default;
     [[nodiscard]] virtual std::string_view name() const = 0;
-    /// Called once per tick after movement, before any select().
+    /// Called once per tick after movement, before any select(). Serial.
     virtual void begin_tick(const GameWorld& /*world*/, std::uint64_t /*tick*/) {}
-    /// Fills `out` (cleared first) with the ids, in increasing order, of the entities
-    /// `viewer` should know. The server adds the viewer's own entity itself.
+    /// Fills `out` (cleared first) with the entities `viewer` should know, in
+    /// increasing id order. The server adds the viewer's own entity itself. Call at most
+    /// once per viewer per tick; concurrent calls for distinct viewers are safe.
     virtual void select(const GameWorld& world, const Viewer& viewer,
-                        std::vector<std::uint32_t>& out) = 0;
+                        std::vector<Interest>& out) = 0;
     /// A client joined, viewing from `entity_id`; it gets its first snapshot after the
     /// next begin_tick().
     virtual void add_viewer(std::uint32_t /*client_id*/, std::uint32_t /*entity_id*/) {}
     /// A client left: forget any per-client state.
     virtual void remove_viewer(std::uint32_t /*client_id*/) {}
+    /// Live TBV groups over all viewers (0 for policies without TBVs); for metrics.
+    /// Serialized with begin_tick().
 };
 
 /// Every entity, always.
 class BroadcastPolicy final : public InterestPolicy {
 public:
     [[nodiscard]] std::string_view name() const override { return "broadcast"; }
-    void select(const GameWorld& world, const Viewer& viewer,
-                std::vector<std::uint32_t>& out) override;
+    void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
 };
 
 /// Entities whose box comes within `radius` of the viewer's eye (ring culling, as in
@@ -50,8 +67,7 @@ class DistancePolicy final : public InterestPolicy {
 public:
     explicit DistancePolicy(float radius) : radius_(radius) {}
     [[nodiscard]] std::string_view name() const override { return "distance"; }
-    void select(const GameWorld& world, const Viewer& viewer,
-                std::vector<std::uint32_t>& out) override;
+    void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
 
 private:
     float radius_;
@@ -64,14 +80,10 @@ class PvsPolicy final : public InterestPolicy {
 public:
     explicit PvsPolicy(std::shared_ptr<const maps::Pvs> pvs) : pvs_(std::move(pvs)) {}
     [[nodiscard]] std::string_view name() const override { return "pvs"; }
-    void select(const GameWorld& world, const Viewer& viewer,
-                std::vector<std::uint32_t>& out) override;
+    void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
 
 private:
-    std::shared_ptr<const maps::Pvs> pvs_;
-    std::vector<std::int32_t> clusters_;
-    std::vector<std::int32_t> scratch_;
-    std::vector<std::uint8_t> rows_;
+    std::shared_ptr<const maps::Pvs> pvs_; ///< read-only after construction
 };
 
 /// The policy named by config.policy, for `world`; config must have passed validate().

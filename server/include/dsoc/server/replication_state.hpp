@@ -1,39 +1,49 @@
 #pragma once
-// What one client knows, and how a new interest set becomes a snapshot of
-// enter / update / leave.
+// What one client knows, and how a new interest set becomes a compact snapshot of
+// enter / update / leave (protocol version 2: quantized poses, updates as deltas
+// against what this client last received, only changed fields present).
+//
+// Threading: one per client; build_snapshot() of distinct clients may run
+// concurrently (it only reads the world).
 
+#include "dsoc/protocol/compact_snapshot.hpp"
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/server/game_world.hpp"
+#include "dsoc/server/interest_policy.hpp"
 
 #include <cstdint>
 #include <span>
-#include <unordered_map>
 #include <vector>
 
 namespace dsoc::server {
 
+/// The wire pose of a world entity.
+[[nodiscard]] protocol::Pose pose_of(const Entity& e);
+
 class ReplicationState {
 public:
-    /// Fills `snapshot` (cleared first) for `tick`: entities in `interest` (ids in
-    /// increasing order, each present in `world`) that the client did not know enter
-    /// with full state; known ones whose state changed since last sent get an update;
-    /// known ones not in `interest` leave. Afterwards the client knows exactly `interest`.
-    void build_snapshot(const GameWorld& world, std::span<const std::uint32_t> interest,
-                        std::uint64_t tick, protocol::pb::Snapshot& snapshot);
+    /// `quantization` must have passed protocol::validate().
+    explicit ReplicationState(const protocol::QuantizationSettings& quantization = {})
+        : encoder_(quantization) {}
+
+    /// Fills `snapshot` (cleared first) for `tick`: entities in `interest` (increasing
+    /// ids, each present in `world`) that the client did not know enter with full
+    /// state; known ones whose quantized state changed since last sent get an update
+    /// holding the changed fields - except that an entity on tier t > 0 is updated only
+    /// on ticks where (tick + id) is a multiple of 2^t (staggered, so tiers 1 and 2
+    /// cost a half and a quarter of the updates); known ones not in `interest` leave.
+    /// Afterwards the client knows exactly `interest`. `audit`: also fill
+    /// snapshot.audit with the exact pose of every entity made current.
+    void build_snapshot(const GameWorld& world, std::span<const Interest> interest,
+                        std::uint64_t tick, bool audit, protocol::pb::Snapshot& snapshot);
 
     [[nodiscard]] std::size_t known_count() const { return known_.size(); }
     [[nodiscard]] const std::vector<std::uint32_t>& known() const { return known_; }
 
 private:
-    struct SentState {
-        glm::vec3 position;
-        float yaw_deg;
-        float pitch_deg;
-    };
-
+    protocol::SnapshotEncoder encoder_;
     std::vector<std::uint32_t> known_; // increasing
     std::vector<std::uint32_t> next_known_;
-    std::unordered_map<std::uint32_t, SentState> sent_;
 };
 
 } // namespace dsoc::server

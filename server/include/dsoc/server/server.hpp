@@ -1,9 +1,14 @@
 #pragma once
 // The dsoc game server: accepts clients, runs a fixed-rate tick loop, moves every
 // entity authoritatively and sends each client the snapshot its interest policy
-// allows. Single-threaded: everything runs on the io_context given to it.
+// allows. Threading: sockets, sessions and the world live on the io_context given to
+// it (run it on one thread). Each tick, the per-client work - interest evaluation
+// and snapshot building - runs on a WorkerPool of config.threads threads (the
+// io_context thread among them), so no I/O is served while that part runs;
+// snapshots go to the sockets afterwards, on the io_context thread.
 
 #include "dsoc/protocol/messages.hpp"
+#include "dsoc/server/client_tick.hpp"
 #include "dsoc/server/game_world.hpp"
 #include "dsoc/server/interest_policy.hpp"
 #include "dsoc/server/replication_state.hpp"
@@ -64,11 +69,15 @@ private:
     struct Client {
         std::shared_ptr<Session> session;
         ReplicationState replication;
+        std::vector<Interest> interest;  // this tick's set, written by the worker pool
+        protocol::pb::Envelope envelope; // this tick's snapshot, written by the worker pool
+        std::uint32_t audit_every = 0;   // ClientHello.audit_every_ticks
     };
 
     void accept_next();
     void schedule_tick();
     void run_tick();
+    void prepare_client_ticks();
     void send_snapshots();
     void maybe_finish_shutdown();
     void write_trace_tick();
@@ -92,8 +101,8 @@ private:
     bool shutting_down_ = false;
     std::function<void()> on_shutdown_done_;
     ServerStats stats_;
-    std::vector<std::uint32_t> interest_;
-    protocol::pb::Envelope envelope_;
+    WorkerPool pool_;
+    std::vector<ClientTick> client_ticks_; // this tick's jobs, in client id order
     std::unique_ptr<trace::TraceWriter> trace_;
     trace::TraceTick trace_tick_;
 };

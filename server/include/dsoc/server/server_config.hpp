@@ -1,6 +1,8 @@
 #pragma once
 // Every server setting, with its default, unit and valid range.
 
+#include "dsoc/protocol/quantization.hpp"
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -46,6 +48,21 @@ struct ServerConfig {
     int trace_every = 1;
     /// Radius of the distance policy, from the viewer's eye. [Units: world units] [Limit: > 0]
     float distance_radius = 1500.0f;
+    /// Threads for the per-client work of a tick (interest evaluation and snapshot
+    /// building), the tick thread included; 0: one per core. Results do not depend on
+    /// it. [Limit: 0..256]
+    int threads = 0;
+    /// Position quantum of compact snapshots per network level-of-detail tier: near
+    /// (updated every tick), mid (every 2nd) and far (every 4th); the dsoc and
+    /// occlusion policies pick the tier from the client-entity distance, the others
+    /// send everything near. [Units: world units] [Limit: 1/1024..64, near <= mid <= far]
+    float position_quantum_near = 0.125f;
+    float position_quantum_mid = 0.5f;
+    float position_quantum_far = 1.0f;
+    /// Steps per full turn of the angles in snapshots. [Limit: 256..65536]
+    std::uint32_t angle_steps = 4096;
+    /// false: every entity near (every tick, finest quantum), whatever the policy says.
+    bool network_lod = true;
     /// Connected clients at most; more are refused with `server_full`. [Limit: 1..100000]
     int max_clients = 256;
     /// Largest frame payload a client may send. [Units: bytes] [Limit: 64..16 MiB]
@@ -66,6 +83,9 @@ struct ServerConfig {
 
 /// Every problem with the settings, each naming the field and why; empty when usable.
 std::vector<std::string> validate(const ServerConfig& config);
+
+/// The snapshot quantization the settings describe.
+[[nodiscard]] protocol::QuantizationSettings quantization(const ServerConfig& config);
 
 /// The latency allowance in ticks (rounded up).
 [[nodiscard]] int lookahead_ticks(const ServerConfig& config);

@@ -19,7 +19,11 @@ struct ClientStats {
     std::uint64_t bytes_down = 0; ///< frame headers included
     std::uint64_t bytes_up = 0;
     std::uint64_t snapshots = 0;
-    std::uint64_t entity_updates = 0;  ///< enters + updates received
+    std::uint64_t entity_updates = 0; ///< enters + updates received
+    std::uint64_t audited_poses = 0;  ///< replica poses checked against the server's
+    /// Largest audit error: distance of a replica pose from the server's, in quanta
+    /// (positions) or angle steps; at most 0.5 when the deltas decode right.
+    double max_audit_error = 0.0;
     double active_seconds = 0.0;       ///< from server hello to stop
     std::vector<double> known_samples; ///< entities known after each snapshot
     std::vector<double> interarrival_ms;

@@ -21,6 +21,10 @@ struct LoadConfig {
     std::uint64_t seed = 7;
     /// One progress line per second on stderr.
     bool progress = true;
+    /// Ask the server for its exact poses every this many ticks and check the decoded
+    /// replica against them (within half a quantum); 0: never. Audits cost bytes
+    /// (counted by both sides like any other). [Units: ticks]
+    std::uint32_t audit_every_ticks = 30;
     /// Prefix of the client names ("sim-0", "sim-1", ...).
     std::string name_prefix = "sim-";
 };

@@ -31,6 +31,8 @@ struct LoadReport {
     std::uint64_t bytes_up = 0;
     std::uint64_t snapshots = 0;
     std::uint64_t entity_updates = 0;
+    std::uint64_t audited_poses = 0;      ///< replica poses checked against the server's exact ones
+    double max_audit_error = 0.0;         ///< [Units: quanta or angle steps] <= 0.5 when correct
     double bytes_down_per_client_s = 0.0; ///< mean over connected clients of bytes / active s
     double bytes_up_per_client_s = 0.0;
     double entity_updates_per_client_s = 0.0;

@@ -1,8 +1,10 @@
 #pragma once
 // One headless simulated client: connects, says hello, sends a wandering input
-// every tick, applies snapshots to its own replica of the world and checks the
-// protocol's invariants.
+// every tick, decodes the compact snapshots into its own replica of the world and
+// checks the protocol's invariants - including, when it asks the server for audits,
+// that every replicated pose is within half a quantum of the server's own.
 
+#include "dsoc/protocol/compact_snapshot.hpp"
 #include "dsoc/protocol/framing.hpp"
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/simclient/client_stats.hpp"
@@ -35,13 +37,11 @@ public:
     [[nodiscard]] bool finished() const { return state_ == State::closed; }
     /// Entities in the replica right now.
     [[nodiscard]] std::size_t known() const { return replica_.size(); }
+    /// The replica (quantized poses as decoded).
+    [[nodiscard]] const protocol::SnapshotDecoder& replica() const { return replica_; }
 
 private:
     enum class State : std::uint8_t { idle, connecting, awaiting_hello, active, stopping, closed };
-
-    struct ReplicaEntity {
-        float x, y, z, yaw, pitch;
-    };
 
     void on_connected();
     void read_some();
@@ -67,7 +67,7 @@ private:
     std::deque<std::vector<std::uint8_t>> write_queue_;
     bool writing_ = false;
     bool goodbye_sent_ = false;
-    std::unordered_map<std::uint32_t, ReplicaEntity> replica_;
+    protocol::SnapshotDecoder replica_;
     ClientStats stats_;
     std::uint64_t last_snapshot_tick_ = 0;
     std::uint64_t input_seq_ = 0;

@@ -1,12 +1,16 @@
 #pragma once
 // What one client is sent: the enter/update/leave Snapshot between what it knew and
-// its new interest set, encoded with the real protocol encoder to count bytes.
-// The same rules as dsoc::server::ReplicationState (server/src/replication_state.cpp),
-// re-stated here over the evaluation's frames so that dsoc-eval does not link the
-// server (and Asio): enter with full state, update for a known entity whose
-// position or facing changed since it was last sent, leave for ids no longer in the set.
+// its new interest set, in the server's compact encoding (protocol version 2:
+// quantized poses, updates as deltas against what the client last received, only
+// changed fields present), written by the same dsoc::protocol::SnapshotEncoder the
+// server uses and sized by the real protocol encoder. Every entity is sent on the
+// near tier (updated every tick, finest quantum): the eval's policies give no
+// level-of-detail hint, so all of them are measured with the same precision.
+// dsoc-eval does not link the server (and Asio); the merge below re-states
+// dsoc::server::ReplicationState over the evaluation's frames.
 
 #include "dsoc/eval/world_sim.hpp"
+#include "dsoc/protocol/compact_snapshot.hpp"
 #include "dsoc/protocol/messages.hpp"
 
 #include <cstdint>
@@ -20,12 +24,23 @@ struct SnapshotCost {
     std::uint32_t updates = 0;
     std::uint32_t leaves = 0;
     std::uint32_t bytes = 0; ///< the encoded frame, 4-byte length header included
+    /// The update columns alone (protocol::update_column_bytes).
+    std::uint32_t update_bytes = 0;
+    /// Entities whose update carried a position change (the "moving" ones).
+    std::uint32_t moving_updates = 0;
 };
+
+/// Size of an entity's uncompressed full state, the baseline of the compression
+/// ratios: a 4-byte id and five 4-byte floats (x, y, z, yaw, pitch). [Units: bytes]
+inline constexpr std::uint32_t kFullStateBytes = 24;
 
 class ClientReplication {
 public:
     /// Entities with an id below `players` are sent as kind 1 (player), others as 0 (bot).
-    explicit ClientReplication(std::size_t players = 0) : players_(players) {}
+    /// `quantization` must have passed protocol::validate(); tier 0 is used.
+    explicit ClientReplication(std::size_t players = 0,
+                               const protocol::QuantizationSettings& quantization = {})
+        : encoder_(quantization), players_(players) {}
 
     /// Moves this client's knowledge to `interest` (increasing ids, entity ids of
     /// `frame`) and returns what the snapshot of `tick` costs. `scratch` and `buffer`
@@ -37,13 +52,9 @@ public:
     [[nodiscard]] const std::vector<std::uint32_t>& known() const { return known_; }
 
 private:
-    struct Sent {
-        glm::vec3 position{0.0f};
-        float yaw_deg = 0.0f;
-    };
+    protocol::SnapshotEncoder encoder_;
     std::vector<std::uint32_t> known_; ///< increasing
     std::vector<std::uint32_t> next_known_;
-    std::vector<Sent> sent_; ///< indexed by entity id
     std::size_t players_;
 };
 

@@ -1,0 +1,117 @@
+#pragma once
+// Compact snapshots (protocol version 2, docs/protocol.md): the sender's and the
+// receiver's halves of one connection's entity replica. The encoder remembers the
+// quantized pose it last sent for every entity the connection knows and writes only
+// the fields whose quantized value changed, as deltas; the decoder rebuilds the same
+// integers and so the same poses, within half a quantum of the sender's state.
+// Deltas are against what was last *sent*, which over TCP (reliable, ordered) is what
+// the peer last received; an unreliable transport would need acknowledged baselines.
+//
+// Threading: neither class is thread-safe; one per connection. Distinct instances
+// may be used concurrently (the server builds snapshots of many clients in parallel).
+
+#include "dsoc/protocol/messages.hpp"
+#include "dsoc/protocol/quantization.hpp"
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace dsoc::protocol {
+
+/// Bits of Snapshot.update_fields.
+enum UpdateField : std::uint32_t {
+    kFieldX = 1u << 0,
+    kFieldY = 1u << 1,
+    kFieldZ = 1u << 2,
+    kFieldYaw = 1u << 3,
+    kFieldPitch = 1u << 4,
+    kFieldRebase = 1u << 5, ///< tier changed: the new tier, then all five fields absolute
+};
+
+/// Wire bytes of a snapshot's three update columns (field tags and lengths
+/// included): what the updates cost, enters, leaves and the tick left out.
+[[nodiscard]] std::size_t update_column_bytes(const pb::Snapshot& snapshot);
+
+class SnapshotEncoder {
+public:
+    /// `settings` must have passed validate().
+    explicit SnapshotEncoder(const QuantizationSettings& settings) : settings_(settings) {}
+
+    /// Clears `out` and starts the snapshot of `tick`.
+    void begin(std::uint64_t tick, pb::Snapshot& out);
+    /// `id` (unknown to the connection) enters with its full state on `tier`
+    /// (< kLodTiers). `half_extents` in world units.
+    void enter(std::uint32_t id, const Pose& pose, const std::array<float, 3>& half_extents,
+               std::uint32_t kind, std::uint8_t tier, pb::Snapshot& out);
+    /// `id` (known) is now at `pose` on `tier`: appends an update entry holding the
+    /// fields whose quantized value changed, or nothing when none did. Within one
+    /// snapshot, update() ids must increase. Returns whether an entry was written.
+    bool update(std::uint32_t id, const Pose& pose, std::uint8_t tier, pb::Snapshot& out);
+    /// `id` (known) leaves; the connection forgets it.
+    void leave(std::uint32_t id, pb::Snapshot& out);
+
+    [[nodiscard]] bool knows(std::uint32_t id) const { return baseline_.contains(id); }
+    [[nodiscard]] std::size_t known_count() const { return baseline_.size(); }
+    [[nodiscard]] const QuantizationSettings& settings() const { return settings_; }
+
+private:
+    struct Baseline {
+        QuantizedPose pose;
+        std::uint8_t tier = 0;
+    };
+    QuantizationSettings settings_;
+    std::unordered_map<std::uint32_t, Baseline> baseline_;
+    std::uint32_t last_update_id_ = 0;
+    bool any_update_ = false;
+};
+
+/// Something wrong with a received snapshot. `kind` is a stable snake_case name
+/// (duplicate_enter, update_for_unknown_entity, leave_for_unknown_entity, bad_tier,
+/// malformed_update, audit_for_unknown_entity, pose_beyond_quantization); `detail`
+/// says which entity and why.
+struct SnapshotProblem {
+    std::string kind;
+    std::string detail;
+};
+
+/// One replicated entity as the receiver knows it.
+struct ReplicaEntity {
+    QuantizedPose quantized;
+    std::uint8_t tier = 0;
+    std::array<std::uint32_t, 3> half_extents{}; ///< in quanta of `tier` at enter
+    std::uint32_t kind = 0;
+};
+
+class SnapshotDecoder {
+public:
+    /// `settings`: the server's, from its ServerHello (from_message()).
+    explicit SnapshotDecoder(const QuantizationSettings& settings = {}) : settings_(settings) {}
+    void set_settings(const QuantizationSettings& settings) { settings_ = settings; }
+
+    /// Applies enters, then updates, then leaves. Never trusts the input: every
+    /// inconsistency is returned (empty when none) and skipped; a malformed update
+    /// column stops the updates there (later entries cannot be located).
+    std::vector<SnapshotProblem> apply(const pb::Snapshot& snapshot);
+    /// Compares the replica with the snapshot's audit poses (call after apply()):
+    /// each must be within half a quantum/step (+1e-3). `max_error` receives the
+    /// largest error seen, in quanta or steps (0 when the audit is empty).
+    std::vector<SnapshotProblem> check_audit(const pb::Snapshot& snapshot, double& max_error) const;
+
+    [[nodiscard]] bool knows(std::uint32_t id) const { return replica_.contains(id); }
+    [[nodiscard]] std::size_t size() const { return replica_.size(); }
+    /// The replica's pose of `id`, or nothing when the entity is not known.
+    [[nodiscard]] std::optional<Pose> pose(std::uint32_t id) const;
+    [[nodiscard]] const std::unordered_map<std::uint32_t, ReplicaEntity>& entities() const {
+        return replica_;
+    }
+
+private:
+    QuantizationSettings settings_;
+    std::unordered_map<std::uint32_t, ReplicaEntity> replica_;
+};
+
+} // namespace dsoc::protocol

@@ -1,0 +1,296 @@
+#include "dsoc/protocol/compact_snapshot.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cstdlib>
+
+namespace dsoc::protocol {
+
+namespace {
+
+constexpr std::uint32_t kKnownFields =
+    kFieldX | kFieldY | kFieldZ | kFieldYaw | kFieldPitch | kFieldRebase;
+
+std::size_t varint_size(std::uint64_t v) {
+    std::size_t n = 1;
+    while (v >= 0x80) {
+        v >>= 7;
+        ++n;
+    }
+    return n;
+}
+
+std::uint32_t zigzag(std::int32_t v) {
+    return (static_cast<std::uint32_t>(v) << 1) ^ static_cast<std::uint32_t>(v >> 31);
+}
+
+/// A packed repeated field: tag (field numbers 5..7 fit one byte), length, payload.
+std::size_t packed_size(std::size_t payload) {
+    return payload == 0 ? 0 : 1 + varint_size(payload) + payload;
+}
+
+/// `delta` wrapped into [-steps/2, steps/2).
+std::int32_t wrap_angle_delta(std::int64_t delta, std::uint32_t steps) {
+    const auto n = static_cast<std::int64_t>(steps);
+    std::int64_t d = ((delta % n) + n) % n;
+    if (d >= n / 2) {
+        d -= n;
+    }
+    return static_cast<std::int32_t>(d);
+}
+
+std::string entity(std::uint32_t id) {
+    return "entity " + std::to_string(id);
+}
+
+} // namespace
+
+std::size_t update_column_bytes(const pb::Snapshot& s) {
+    std::size_t ids = 0;
+    for (const std::uint32_t v : s.update_id()) {
+        ids += varint_size(v);
+    }
+    std::size_t fields = 0;
+    for (const std::uint32_t v : s.update_fields()) {
+        fields += varint_size(v);
+    }
+    std::size_t values = 0;
+    for (const std::int32_t v : s.update_values()) {
+        values += varint_size(zigzag(v));
+    }
+    return packed_size(ids) + packed_size(fields) + packed_size(values);
+}
+
+// --- encoder ---
+
+void SnapshotEncoder::begin(std::uint64_t tick, pb::Snapshot& out) {
+    out.Clear();
+    out.set_server_tick(tick);
+    any_update_ = false;
+    last_update_id_ = 0;
+}
+
+void SnapshotEncoder::enter(std::uint32_t id, const Pose& pose,
+                            const std::array<float, 3>& half_extents, std::uint32_t kind,
+                            std::uint8_t tier, pb::Snapshot& out) {
+    const float quantum = settings_.position_quantum[tier];
+    const QuantizedPose q = quantize(pose, quantum, settings_.angle_steps);
+    pb::EntityState& s = *out.add_enter();
+    s.set_id(id);
+    s.set_tier(tier);
+    s.set_x(q.x);
+    s.set_y(q.y);
+    s.set_z(q.z);
+    s.set_yaw(static_cast<std::uint32_t>(q.yaw));
+    s.set_pitch(q.pitch);
+    s.set_half_x(quantize_extent(half_extents[0], quantum));
+    s.set_half_y(quantize_extent(half_extents[1], quantum));
+    s.set_half_z(quantize_extent(half_extents[2], quantum));
+    s.set_kind(kind);
+    baseline_[id] = {q, tier};
+}
+
+bool SnapshotEncoder::update(std::uint32_t id, const Pose& pose, std::uint8_t tier,
+                             pb::Snapshot& out) {
+    Baseline& base = baseline_[id];
+    const QuantizedPose q = quantize(pose, settings_.position_quantum[tier], settings_.angle_steps);
+    std::uint32_t fields = 0;
+    auto* values = out.mutable_update_values();
+    if (tier != base.tier) {
+        fields = kFieldRebase;
+        for (const std::int32_t v :
+             {static_cast<std::int32_t>(tier), q.x, q.y, q.z, q.yaw, q.pitch}) {
+            values->Add(v);
+        }
+    } else {
+        auto delta = [&](std::uint32_t bit, std::int32_t now, std::int32_t then) {
+            if (now != then) {
+                fields |= bit;
+                values->Add(static_cast<std::int32_t>(static_cast<std::int64_t>(now) - then));
+            }
+        };
+        delta(kFieldX, q.x, base.pose.x);
+        delta(kFieldY, q.y, base.pose.y);
+        delta(kFieldZ, q.z, base.pose.z);
+        if (q.yaw != base.pose.yaw) {
+            fields |= kFieldYaw;
+            values->Add(wrap_angle_delta(static_cast<std::int64_t>(q.yaw) - base.pose.yaw,
+                                         settings_.angle_steps));
+        }
+        delta(kFieldPitch, q.pitch, base.pose.pitch);
+    }
+    if (fields == 0) {
+        return false;
+    }
+    out.add_update_id(any_update_ ? id - last_update_id_ : id);
+    out.add_update_fields(fields);
+    any_update_ = true;
+    last_update_id_ = id;
+    base = {q, tier};
+    return true;
+}
+
+void SnapshotEncoder::leave(std::uint32_t id, pb::Snapshot& out) {
+    out.add_leave(id);
+    baseline_.erase(id);
+}
+
+// --- decoder ---
+
+std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
+    std::vector<SnapshotProblem> problems;
+    const auto steps = static_cast<std::int64_t>(settings_.angle_steps);
+    for (const pb::EntityState& e : s.enter()) {
+        if (e.tier() >= kLodTiers) {
+            problems.push_back({"bad_tier", entity(e.id()) + " enters on tier " +
+                                                std::to_string(e.tier()) + "; tiers are 0..2"});
+            continue;
+        }
+        if (static_cast<std::int64_t>(e.yaw()) >= steps) {
+            problems.push_back({"malformed_update", entity(e.id()) + " enters with yaw step " +
+                                                        std::to_string(e.yaw()) +
+                                                        " >= " + std::to_string(steps)});
+            continue;
+        }
+        ReplicaEntity r;
+        r.quantized = {e.x(), e.y(), e.z(), static_cast<std::int32_t>(e.yaw()), e.pitch()};
+        r.tier = static_cast<std::uint8_t>(e.tier());
+        r.half_extents = {e.half_x(), e.half_y(), e.half_z()};
+        r.kind = e.kind();
+        if (!replica_.try_emplace(e.id(), r).second) {
+            problems.push_back({"duplicate_enter", entity(e.id()) + " entered while known"});
+        }
+    }
+
+    const int entries = s.update_id_size();
+    if (s.update_fields_size() != entries) {
+        problems.push_back({"malformed_update", "update_id has " + std::to_string(entries) +
+                                                    " entries, update_fields " +
+                                                    std::to_string(s.update_fields_size())});
+    } else {
+        const auto& values = s.update_values();
+        int v = 0;
+        std::uint64_t id = 0;
+        for (int i = 0; i < entries; ++i) {
+            const std::uint32_t step = s.update_id(i);
+            const std::uint32_t fields = s.update_fields(i);
+            id = i == 0 ? step : id + step;
+            std::string where = "update entry " + std::to_string(i) + " (" +
+                                entity(static_cast<std::uint32_t>(id)) + ")";
+            if ((i > 0 && step == 0) || id > 0xffffffffu) {
+                problems.push_back({"malformed_update", where + ": ids must increase"});
+                break;
+            }
+            if (fields == 0 || (fields & ~kKnownFields) != 0 ||
+                ((fields & kFieldRebase) != 0 && fields != kFieldRebase)) {
+                problems.push_back(
+                    {"malformed_update", where + ": bad field mask " + std::to_string(fields)});
+                break;
+            }
+            const int needed = (fields & kFieldRebase) != 0 ? 6 : std::popcount(fields);
+            if (values.size() - v < needed) {
+                problems.push_back({"malformed_update", where + ": update_values ends early"});
+                break;
+            }
+            const auto it = replica_.find(static_cast<std::uint32_t>(id));
+            const int at = v;
+            v += needed;
+            if (it == replica_.end()) {
+                problems.push_back({"update_for_unknown_entity", where + " is not known"});
+                continue;
+            }
+            ReplicaEntity& r = it->second;
+            if ((fields & kFieldRebase) != 0) {
+                const std::int32_t tier = values[at];
+                const std::int32_t yaw = values[at + 4];
+                if (tier < 0 || static_cast<std::size_t>(tier) >= kLodTiers) {
+                    problems.push_back(
+                        {"bad_tier", where + ": rebase to tier " + std::to_string(tier)});
+                    continue;
+                }
+                if (yaw < 0 || yaw >= steps) {
+                    problems.push_back(
+                        {"malformed_update", where + ": rebase yaw step " + std::to_string(yaw)});
+                    continue;
+                }
+                r.tier = static_cast<std::uint8_t>(tier);
+                r.quantized = {values[at + 1], values[at + 2], values[at + 3], yaw, values[at + 5]};
+                continue;
+            }
+            int k = at;
+            bool in_range = true;
+            auto add = [&](std::uint32_t bit, std::int32_t& field) {
+                if ((fields & bit) == 0) {
+                    return;
+                }
+                const std::int64_t sum = static_cast<std::int64_t>(field) + values[k++];
+                if (sum < -kMaxQuantizedCoordinate || sum > kMaxQuantizedCoordinate) {
+                    in_range = false;
+                    return;
+                }
+                field = static_cast<std::int32_t>(sum);
+            };
+            QuantizedPose q = r.quantized;
+            add(kFieldX, q.x);
+            add(kFieldY, q.y);
+            add(kFieldZ, q.z);
+            if ((fields & kFieldYaw) != 0) {
+                const std::int64_t yaw = static_cast<std::int64_t>(q.yaw) + values[k++];
+                q.yaw = static_cast<std::int32_t>(((yaw % steps) + steps) % steps);
+            }
+            add(kFieldPitch, q.pitch);
+            if (!in_range) {
+                problems.push_back({"malformed_update", where + ": a delta leaves the range"});
+                continue;
+            }
+            r.quantized = q;
+        }
+        if (problems.empty() && v != values.size()) {
+            problems.push_back({"malformed_update",
+                                std::to_string(values.size() - v) + " update_values left over"});
+        }
+    }
+
+    for (const std::uint32_t id : s.leave()) {
+        if (replica_.erase(id) == 0) {
+            problems.push_back({"leave_for_unknown_entity", entity(id) + " left while unknown"});
+        }
+    }
+    return problems;
+}
+
+std::vector<SnapshotProblem> SnapshotDecoder::check_audit(const pb::Snapshot& s,
+                                                          double& max_error) const {
+    std::vector<SnapshotProblem> problems;
+    max_error = 0.0;
+    constexpr double kAllowed = 0.5 + 1e-3;
+    for (const pb::AuditPose& a : s.audit()) {
+        const auto it = replica_.find(a.id());
+        if (it == replica_.end()) {
+            problems.push_back({"audit_for_unknown_entity", entity(a.id()) + " is not known"});
+            continue;
+        }
+        const float quantum = settings_.position_quantum[it->second.tier];
+        const Pose replica = dequantize(it->second.quantized, quantum, settings_.angle_steps);
+        const Pose exact{a.x(), a.y(), a.z(), a.yaw(), a.pitch()};
+        const double error = quantization_error(replica, exact, quantum, settings_.angle_steps);
+        max_error = std::max(max_error, error);
+        if (error > kAllowed) {
+            problems.push_back({"pose_beyond_quantization",
+                                entity(a.id()) + " replica is " + std::to_string(error) +
+                                    " quanta from the server's pose (allowed 0.5)"});
+        }
+    }
+    return problems;
+}
+
+std::optional<Pose> SnapshotDecoder::pose(std::uint32_t id) const {
+    const auto it = replica_.find(id);
+    if (it == replica_.end()) {
+        return std::nullopt;
+    }
+    return dequantize(it->second.quantized, settings_.position_quantum[it->second.tier],
+                      settings_.angle_steps);
+}
+
+} // namespace dsoc::protocol

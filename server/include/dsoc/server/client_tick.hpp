@@ -1,0 +1,41 @@
+#pragma once
+// The per-client half of a server tick: each client's interest set (the policy's
+// select(), which for dsoc/occlusion is that client's occlusion culling) and its
+// compact snapshot, run for all clients on a WorkerPool. What each client receives
+// depends only on the world, the tick and that client's own history, so the bytes
+// are identical whatever the thread count (tests/server/parallel_tick_test.cpp).
+
+#include "dsoc/protocol/messages.hpp"
+#include "dsoc/server/game_world.hpp"
+#include "dsoc/server/interest_policy.hpp"
+#include "dsoc/server/replication_state.hpp"
+#include "dsoc/server/worker_pool.hpp"
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace dsoc::server {
+
+/// One client's work this tick. The pointed-to objects belong to the client (one
+/// set per client, never shared), so distinct jobs touch distinct state.
+struct ClientTick {
+    Viewer viewer;
+    ReplicationState* replication = nullptr;
+    std::vector<Interest>* interest = nullptr;  ///< receives the interest set
+    protocol::pb::Envelope* envelope = nullptr; ///< receives the snapshot when `build`
+    /// false: select() still runs (the culler keeps its per-tick state) but no
+    /// snapshot is built - the client could not take one (latest wins), and its
+    /// replica stays what was really sent.
+    bool build = true;
+    bool audit = false;      ///< fill Snapshot.audit with the exact poses
+    bool network_lod = true; ///< false: every entity on tier 0
+};
+
+/// For every job: policy.select() (plus the viewer's own entity), then, when
+/// `build`, the snapshot of `tick`. policy.begin_tick(world, tick) must have run;
+/// `world` and the policy's shared state are only read meanwhile.
+void run_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
+                      std::span<const ClientTick> jobs, WorkerPool& pool);
+
+} // namespace dsoc::server

@@ -1,0 +1,259 @@
+#include "dsoc/protocol/compact_snapshot.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+
+namespace dsoc::protocol {
+namespace {
+
+const std::array<float, 3> kHalf{15.0f, 15.0f, 28.0f};
+
+/// Serializes and parses, so that the decoder sees exactly what travels.
+pb::Snapshot through_wire(const pb::Snapshot& s) {
+    pb::Snapshot out;
+    EXPECT_TRUE(out.ParseFromString(s.SerializeAsString()));
+    return out;
+}
+
+std::string kinds(const std::vector<SnapshotProblem>& problems) {
+    std::string out;
+    for (const auto& p : problems) {
+        out += p.kind + " (" + p.detail + ") ";
+    }
+    return out;
+}
+
+TEST(Quantization, RoundTripIsWithinHalfAQuantum) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> pos(-8000.0f, 8000.0f);
+    std::uniform_real_distribution<float> yaw(-180.0f, 179.999f);
+    std::uniform_real_distribution<float> pitch(-90.0f, 90.0f);
+    const QuantizationSettings s;
+    for (int i = 0; i < 20000; ++i) {
+        const Pose p{pos(rng), pos(rng), pos(rng), yaw(rng), pitch(rng)};
+        for (const float quantum : s.position_quantum) {
+            const Pose back =
+                dequantize(quantize(p, quantum, s.angle_steps), quantum, s.angle_steps);
+            ASSERT_LE(quantization_error(back, p, quantum, s.angle_steps), 0.5 + 1e-3)
+                << p.x << " " << p.yaw_deg;
+            ASSERT_GE(back.yaw_deg, -180.0f);
+            ASSERT_LT(back.yaw_deg, 180.0f);
+        }
+    }
+}
+
+TEST(Quantization, ExtentsRoundUpAndErrorsCompareYawAroundTheCircle) {
+    EXPECT_EQ(quantize_extent(15.0f, 0.125f), 120u);
+    EXPECT_EQ(quantize_extent(15.01f, 0.5f), 31u); // never smaller than the box
+    const Pose a{0, 0, 0, 179.99f, 0};
+    const Pose b{0, 0, 0, -179.99f, 0};
+    EXPECT_LT(quantization_error(a, b, 1.0f, 4096), 1.0); // 0.02 degrees apart, not 360
+}
+
+TEST(Quantization, ValidateNamesTheFieldAndTheReason) {
+    QuantizationSettings s;
+    EXPECT_TRUE(validate(s).empty());
+    s.position_quantum = {0.5f, 0.25f, 1.0f};
+    s.angle_steps = 100;
+    const auto problems = validate(s, "q.");
+    ASSERT_EQ(problems.size(), 2u);
+    EXPECT_NE(problems[0].find("q.position_quantum_mid"), std::string::npos) << problems[0];
+    EXPECT_NE(problems[1].find("q.angle_steps"), std::string::npos) << problems[1];
+    s.position_quantum = {std::nanf(""), 1.0f, 1.0f};
+    EXPECT_FALSE(validate(s).empty());
+
+    pb::Quantization m;
+    m.add_position_quantum(0.125f);
+    QuantizationSettings out;
+    std::string why;
+    EXPECT_FALSE(from_message(m, out, why));
+    EXPECT_NE(why.find("expected 3"), std::string::npos) << why;
+    to_message(QuantizationSettings{}, m);
+    EXPECT_TRUE(from_message(m, out, why)) << why;
+    EXPECT_EQ(out.angle_steps, 4096u);
+}
+
+TEST(CompactSnapshot, OnlyChangedFieldsTravel) {
+    const QuantizationSettings q;
+    SnapshotEncoder enc(q);
+    pb::Snapshot s;
+    enc.begin(1, s);
+    enc.enter(7, {100.0f, 200.0f, 24.0f, 90.0f, 0.0f}, kHalf, 0, 0, s);
+    enc.enter(9, {0.0f, 0.0f, 24.0f, 0.0f, 0.0f}, kHalf, 0, 0, s);
+    EXPECT_EQ(s.enter(0).x(), 800); // 100 / 0.125
+    EXPECT_EQ(s.enter(0).half_z(), 224u);
+
+    enc.begin(2, s);
+    EXPECT_TRUE(enc.update(7, {110.0f, 200.0f, 24.0f, 90.0f, 0.0f}, 0, s)); // x only
+    EXPECT_FALSE(enc.update(9, {0.01f, 0.0f, 24.0f, 0.0f, 0.0f}, 0, s));    // below a quantum
+    ASSERT_EQ(s.update_id_size(), 1);
+    EXPECT_EQ(s.update_id(0), 7u);
+    EXPECT_EQ(s.update_fields(0), kFieldX);
+    ASSERT_EQ(s.update_values_size(), 1);
+    EXPECT_EQ(s.update_values(0), 80);
+    // One entry: id, mask, one 2-byte value, plus three tag+length pairs.
+    EXPECT_EQ(update_column_bytes(s), 1u + 2 + 1 + 2 + 2 + 2);
+}
+
+TEST(CompactSnapshot, YawDeltasTakeTheShortWayAround) {
+    const QuantizationSettings q;
+    SnapshotEncoder enc(q);
+    SnapshotDecoder dec(q);
+    pb::Snapshot s;
+    enc.begin(1, s);
+    enc.enter(3, {0, 0, 0, 179.9f, 0}, kHalf, 0, 0, s);
+    ASSERT_TRUE(dec.apply(through_wire(s)).empty());
+    enc.begin(2, s);
+    ASSERT_TRUE(enc.update(3, {0, 0, 0, -179.9f, 0}, 0, s));
+    EXPECT_EQ(s.update_fields(0), kFieldYaw);
+    EXPECT_LE(std::abs(s.update_values(0)), 3); // 0.2 degrees = 2.3 steps, not 4094
+    ASSERT_TRUE(dec.apply(through_wire(s)).empty());
+    EXPECT_NEAR(dec.pose(3)->yaw_deg, -179.9f, 0.05f);
+}
+
+TEST(CompactSnapshot, UpdateColumnBytesMatchTheRealEncoder) {
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<std::int32_t> big(-5'000'000, 5'000'000);
+    for (int round = 0; round < 50; ++round) {
+        pb::Snapshot s;
+        const int n = static_cast<int>(rng() % 40);
+        for (int i = 0; i < n; ++i) {
+            s.add_update_id(rng() % 3000);
+            s.add_update_fields(rng() % 64);
+            s.add_update_values(big(rng));
+            s.add_update_values(static_cast<std::int32_t>(rng() % 200) - 100);
+        }
+        EXPECT_EQ(update_column_bytes(s), s.ByteSizeLong());
+    }
+}
+
+/// A server-side world of walking entities: random enters, leaves, tier changes,
+/// turns and jumps, through the wire, into a decoder that must track it exactly.
+TEST(CompactSnapshot, RandomWorldsDecodeWithinHalfAQuantum) {
+    QuantizationSettings q;
+    q.position_quantum = {0.125f, 0.5f, 2.0f};
+    q.angle_steps = 1024;
+    SnapshotEncoder enc(q);
+    SnapshotDecoder dec(q);
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    constexpr std::uint32_t kEntities = 120;
+    std::vector<Pose> world(kEntities);
+    for (auto& p : world) {
+        p = {unit(rng) * 4000.0f, unit(rng) * 4000.0f, unit(rng) * 500.0f, unit(rng) * 180.0f,
+             0.0f};
+    }
+    std::map<std::uint32_t, std::uint8_t> known; // id -> tier
+    std::uint64_t updates = 0;
+    std::uint64_t update_bytes = 0;
+    for (std::uint64_t tick = 1; tick <= 400; ++tick) {
+        for (auto& p : world) { // walk ~10 units a tick, turn now and then
+            p.x += 10.0f * std::cos(p.yaw_deg * 0.0174533f);
+            p.y += 10.0f * std::sin(p.yaw_deg * 0.0174533f);
+            if (rng() % 10 == 0) {
+                p.yaw_deg = std::fmod(p.yaw_deg + 540.0f + unit(rng) * 30.0f, 360.0f) - 180.0f;
+            }
+            if (rng() % 50 == 0) {
+                p.z += unit(rng) * 40.0f;
+                p.pitch_deg = unit(rng) * 89.0f;
+            }
+        }
+        pb::Snapshot s;
+        enc.begin(tick, s);
+        for (std::uint32_t id = 0; id < kEntities; ++id) {
+            const bool wanted = rng() % 8 != 0 || known.contains(id);
+            const bool drop = known.contains(id) && rng() % 40 == 0;
+            if (drop) {
+                enc.leave(id, s);
+                known.erase(id);
+            } else if (wanted && !known.contains(id)) {
+                const auto tier = static_cast<std::uint8_t>(rng() % 3);
+                enc.enter(id, world[id], kHalf, id % 2, tier, s);
+                known[id] = tier;
+            } else if (wanted) {
+                if (rng() % 30 == 0) {
+                    known[id] = static_cast<std::uint8_t>(rng() % 3);
+                }
+                updates += enc.update(id, world[id], known[id], s) ? 1 : 0;
+            }
+        }
+        update_bytes += update_column_bytes(s);
+        const auto problems = dec.apply(through_wire(s));
+        ASSERT_TRUE(problems.empty()) << "tick " << tick << ": " << kinds(problems);
+        ASSERT_EQ(dec.size(), known.size());
+        for (const auto& [id, tier] : known) {
+            const auto pose = dec.pose(id);
+            ASSERT_TRUE(pose.has_value()) << "entity " << id;
+            const double error =
+                quantization_error(*pose, world[id], q.position_quantum[tier], q.angle_steps);
+            ASSERT_LE(error, 0.5 + 1e-3) << "tick " << tick << " entity " << id;
+        }
+    }
+    ASSERT_GT(updates, 30000u);
+    // Walking entities (two ~2-byte position deltas, a 1-byte id step, a 1-byte mask):
+    // the columns must stay well under the 24 bytes of a raw full state.
+    EXPECT_LT(static_cast<double>(update_bytes) / static_cast<double>(updates), 8.0);
+}
+
+TEST(CompactSnapshot, HostileSnapshotsAreReportedNotTrusted) {
+    const QuantizationSettings q;
+    SnapshotDecoder dec(q);
+    pb::Snapshot s;
+    auto* e = s.add_enter();
+    e->set_id(4);
+    s.add_enter()->CopyFrom(*e); // duplicate
+    auto* bad_tier = s.add_enter();
+    bad_tier->set_id(5);
+    bad_tier->set_tier(7);
+    s.add_leave(99);
+    auto problems = dec.apply(s);
+    ASSERT_EQ(problems.size(), 3u) << kinds(problems);
+    EXPECT_EQ(problems[0].kind, "duplicate_enter");
+    EXPECT_EQ(problems[1].kind, "bad_tier");
+    EXPECT_EQ(problems[2].kind, "leave_for_unknown_entity");
+    EXPECT_TRUE(dec.knows(4));
+
+    const auto one = [](std::uint32_t id, std::uint32_t fields, std::vector<std::int32_t> values) {
+        pb::Snapshot u;
+        u.add_update_id(id);
+        u.add_update_fields(fields);
+        for (const auto v : values) {
+            u.add_update_values(v);
+        }
+        return u;
+    };
+    EXPECT_EQ(dec.apply(one(8, kFieldX, {1})).at(0).kind, "update_for_unknown_entity");
+    EXPECT_EQ(dec.apply(one(4, 0, {})).at(0).kind, "malformed_update");        // empty mask
+    EXPECT_EQ(dec.apply(one(4, 1u << 9, {1})).at(0).kind, "malformed_update"); // unknown bit
+    EXPECT_EQ(dec.apply(one(4, kFieldX | kFieldY, {1})).at(0).kind, "malformed_update"); // short
+    EXPECT_EQ(dec.apply(one(4, kFieldX, {1, 2})).at(0).kind, "malformed_update"); // left over
+    EXPECT_EQ(dec.apply(one(4, kFieldRebase, {9, 0, 0, 0, 0, 0})).at(0).kind, "bad_tier");
+    EXPECT_EQ(dec.apply(one(4, kFieldX, {2'000'000'000})).at(0).kind, "malformed_update");
+    pb::Snapshot twice = one(4, kFieldX, {1});
+    twice.add_update_id(0); // the same id again
+    twice.add_update_fields(kFieldX);
+    twice.add_update_values(1);
+    EXPECT_EQ(dec.apply(twice).at(0).kind, "malformed_update");
+    pb::Snapshot columns = one(4, kFieldX, {1});
+    columns.add_update_id(1);
+    EXPECT_EQ(dec.apply(columns).at(0).kind, "malformed_update");
+
+    // An audit that disagrees with the replica by more than half a quantum.
+    pb::Snapshot audit;
+    auto* a = audit.add_audit();
+    a->set_id(4);
+    a->set_x(dec.pose(4)->x + 0.2f); // 1.6 quanta of 0.125
+    a->set_y(dec.pose(4)->y);
+    a->set_z(dec.pose(4)->z);
+    double worst = 0.0;
+    const auto audited = dec.check_audit(audit, worst);
+    ASSERT_EQ(audited.size(), 1u);
+    EXPECT_EQ(audited[0].kind, "pose_beyond_quantization");
+    EXPECT_NEAR(worst, 1.6, 1e-3);
+}
+
+} // namespace
+} // namespace dsoc::protocol
