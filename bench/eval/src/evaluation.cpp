@@ -5,6 +5,9 @@
 #include "dsoc/eval/replication.hpp"
 #include "dsoc/eval/visibility_truth.hpp"
 #include "dsoc/eval/world_sim.hpp"
+#include "dsoc/sim/motion_limits.hpp"
+#include "dsoc/sim/reach_clipper.hpp"
+#include "dsoc/visibility/tbv.hpp"
 #include "dsoc/trace/trace_writer.hpp"
 
 #include <chrono>
@@ -182,6 +185,33 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
     VisibilityTruth truth(rays, result.sample_grid);
     const int every = sc.oracle_every;
     const auto stride = static_cast<std::size_t>(sc.oracle_client_stride());
+    // The region bound: eyes over the reachable eye region exactly as the culling
+    // policies compute it (motion limits over the allowance, clipped to the map and by
+    // sim::ReachClipper), a 3 x 3 x 3 lattice of them.
+    result.region_bound = options.region_bound;
+    VisibilityTruth::RegionEyes region_eyes;
+    std::shared_ptr<const sim::ReachClipper> clipper;
+    if (options.region_bound) {
+        clipper = std::make_shared<const sim::ReachClipper>(map.collision_brushes, world.move());
+        const visibility::MotionLimits limits = sim::walking_limits(world.move());
+        const float seconds = static_cast<float>(lookahead) / static_cast<float>(sc.tick_rate);
+        const visibility::Aabb bounds = map.bounds.expanded(64.0f);
+        region_eyes = [&world, clipper, limits, seconds, bounds](std::size_t c,
+                                                                 std::vector<glm::vec3>& eyes) {
+            const WorldFrame& now = world.current();
+            const glm::vec3 eye = world.eye(now, c);
+            const float down = std::max(0.0f, -now.entities[c].velocity.z);
+            visibility::Aabb region =
+                visibility::reachable_box(visibility::Aabb{eye, eye}, limits, seconds, 1.0f, down);
+            region = visibility::Aabb{glm::max(region.min, bounds.min), glm::min(region.max, bounds.max)};
+            region = clipper->clip(eye, region);
+            for (int k = 0; k < 27; ++k) {
+                const glm::vec3 f(static_cast<float>(k % 3), static_cast<float>((k / 3) % 3),
+                                  static_cast<float>(k / 9));
+                eyes.push_back(region.min + region.size() * f * 0.5f);
+            }
+        };
+    }
     const std::size_t judged_clients = (viewers + stride - 1) / stride;
     result.oracle_client_stride = static_cast<int>(stride);
     auto last_progress = std::chrono::steady_clock::now();
@@ -228,7 +258,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
 
         if (judged) {
             const auto oracle_start = std::chrono::steady_clock::now();
-            truth.judge(world, lookahead, result.threads, static_cast<int>(stride));
+            truth.judge(world, lookahead, result.threads, static_cast<int>(stride), region_eyes);
             ++result.oracle_ticks;
             result.oracle_client_ticks += judged_clients;
             if (measured) {
@@ -247,6 +277,10 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
             for (std::size_t c = 0; c < viewers; c += stride) {
                 truth.ideal_set(c, ideal_set);
                 result.ideal_visible_pairs += ideal_set.size();
+                for (std::size_t e = 0; options.region_bound && e < entities; ++e) {
+                    result.region_visible_pairs +=
+                        (truth.at(c, e) & VisibilityTruth::kRegion) != 0 ? 1u : 0u;
+                }
                 const SnapshotCost cost =
                     ideal[c].send(frame, ideal_set, tick, s.envelope, s.buffer);
                 if (measured) {

@@ -64,6 +64,9 @@ int main(int argc, char** argv) {
     app.add_option("--dsoc-set", options.dsoc_overrides,
                    "DSOCConfig KEY=VALUE for the dsoc policies (repeatable), e.g. "
                    "region_reuse_margin=8");
+    app.add_flag("--region-bound", options.region_bound,
+                 "also judge pairs from a lattice of eyes over each client's reachable region "
+                 "(what any policy covering that region must send; slow)");
     app.add_option("--json", json_path, "write every figure as JSON to this file");
     app.add_flag("--quiet", quiet, "no progress line on stderr");
     CLI11_PARSE(app, argc, argv);

@@ -123,7 +123,23 @@ void write_markdown(const EvalResult& r, const std::string& command, std::ostrea
     out << "| *oracle ideal* | " << fmt("%.1f", ideal_set) << " | "
         << fmt("%.0f", ideal_updates_per_client_s(r)) << " | "
         << fmt("%.2f", ideal_bytes_per_client_s(r) / 1000.0) << " | 1.00 | - | - | 0 | 0 | 0.0% | "
-        << fmt("%.1f", r.oracle_seconds) << " |\n\n";
+        << fmt("%.1f", r.oracle_seconds) << " |\n";
+    if (r.region_bound) {
+        // Updates scale with the set size: the ideal's updates per entity, times this set.
+        const double region_set = ratio(static_cast<double>(r.region_visible_pairs),
+                                        static_cast<double>(r.oracle_client_ticks));
+        out << "| *region bound* | " << fmt("%.1f", region_set) << " | "
+            << fmt("%.0f", ideal_set > 0.0 ? ideal_updates_per_client_s(r) * region_set / ideal_set
+                                           : 0.0)
+            << " | - | - | - | - | 0 | 0 | - | - |\n";
+    }
+    out << "\n";
+    if (r.region_bound) {
+        out << "*Region bound*: entities visible from some eye of a 3 x 3 x 3 lattice over "
+               "each client's reachable eye region (the box the culling policies cover), plus "
+               "the real eyes: at least what any policy covering that region must send "
+               "(updates scaled from the ideal's per-entity rate).\n\n";
+    }
 
     bool any_tbv = false;
     for (const auto& m : r.policies) {
@@ -194,6 +210,10 @@ std::string to_json(const EvalResult& r, const std::string& command) {
                    {"triangles", r.oracle_triangles},
                    {"ideal_bytes_per_client_s", ideal_bytes_per_client_s(r)},
                    {"ideal_updates_per_client_s", ideal_updates_per_client_s(r)},
+                   {"region_bound_set_size",
+                    r.region_bound ? ratio(static_cast<double>(r.region_visible_pairs),
+                                           static_cast<double>(r.oracle_client_ticks))
+                                   : 0.0},
                    {"ideal_set_size", ratio(static_cast<double>(r.ideal_visible_pairs),
                                             static_cast<double>(r.oracle_client_ticks))},
                    {"seconds", r.oracle_seconds}};

@@ -6,7 +6,8 @@
 
 namespace dsoc::eval {
 
-void VisibilityTruth::judge(const WorldSim& world, int lookahead, int threads, int client_stride) {
+void VisibilityTruth::judge(const WorldSim& world, int lookahead, int threads, int client_stride,
+                            const RegionEyes& region_eyes) {
     const auto stride = static_cast<std::size_t>(std::max(1, client_stride));
     const WorldFrame& now = world.current();
     entities_ = now.entities.size();
@@ -23,6 +24,10 @@ void VisibilityTruth::judge(const WorldSim& world, int lookahead, int threads, i
             }
             my_eyes.push_back(world.eye(world.ahead(k), c));
         }
+        std::vector<glm::vec3> lattice;
+        if (region_eyes) {
+            region_eyes(c, lattice);
+        }
         std::uint8_t* row = flags_.data() + c * entities_;
         for (std::size_t e = 0; e < entities_; ++e) {
             if (e == c) {
@@ -30,13 +35,18 @@ void VisibilityTruth::judge(const WorldSim& world, int lookahead, int threads, i
             }
             const visibility::Aabb& box = now.entities[e].box;
             if (rays_->box_visible(my_eyes[0], box, grid_)) {
-                row[e] = kPresent | kLookahead;
+                row[e] = kPresent | kLookahead | kRegion;
                 continue;
             }
             for (std::size_t k = 1; k < my_eyes.size(); ++k) {
                 if (rays_->box_visible(my_eyes[k], box, grid_)) {
-                    row[e] = kLookahead;
+                    row[e] = kLookahead | kRegion;
                     break;
+                }
+            }
+            for (std::size_t k = 0; row[e] == 0 && k < lattice.size(); ++k) {
+                if (rays_->box_visible(lattice[k], box, grid_)) {
+                    row[e] = kRegion;
                 }
             }
         }

@@ -29,6 +29,9 @@ struct EvalOptions {
     /// DSOCConfig settings (KEY=VALUE, visibility::set_field names) applied to the
     /// dsoc policies (not to occlusion), e.g. region_reuse_margin=8.
     std::vector<std::string> dsoc_overrides;
+    /// Also judge every pair from a 3 x 3 x 3 lattice of eyes over the client's reachable
+    /// eye region (the region the culling policies cover): the region bound. Costly.
+    bool region_bound = false;
     /// Concrete violations kept per policy for the report.
     std::size_t max_examples = 10;
 };
@@ -53,6 +56,10 @@ struct EvalResult {
     std::uint64_t ideal_bytes = 0;         ///< on measured ticks, all clients
     std::uint64_t ideal_updates = 0;       ///< enters + updates on measured ticks
     std::uint64_t ideal_visible_pairs = 0; ///< visible-within-allowance pairs on judged ticks
+    /// Pairs visible from the reachable eye region (lattice), on judged ticks; only with
+    /// EvalOptions::region_bound.
+    std::uint64_t region_visible_pairs = 0;
+    bool region_bound = false;
 
     std::string trace_path;
     std::string trace_policy;

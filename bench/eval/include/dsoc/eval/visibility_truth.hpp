@@ -10,6 +10,7 @@
 #include "dsoc/eval/world_sim.hpp"
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace dsoc::eval {
@@ -18,6 +19,13 @@ class VisibilityTruth {
 public:
     static constexpr std::uint8_t kPresent = 1;   ///< visible from the eye at t
     static constexpr std::uint8_t kLookahead = 2; ///< visible from some eye at t .. t + K
+    /// Visible from some eye of the client's whole reachable eye region (a lattice of
+    /// eyes in it, plus the real ones): what a conservative policy that covers that
+    /// region must send at least. Set only when judge() is given region eyes.
+    static constexpr std::uint8_t kRegion = 4;
+
+    /// Extra eyes for client `c` (e.g. a lattice over its reachable eye region).
+    using RegionEyes = std::function<void(std::size_t c, std::vector<glm::vec3>& eyes)>;
 
     /// `grid`: samples per box face side (>= 2).
     VisibilityTruth(const RayOracle& rays, int grid) : rays_(&rays), grid_(grid) {}
@@ -25,7 +33,8 @@ public:
     /// Judges the tick world.current() with eyes world.ahead(0 .. lookahead), for the
     /// clients c with c % client_stride == 0 (the others' flags are 0). Runs on
     /// `threads` threads.
-    void judge(const WorldSim& world, int lookahead, int threads, int client_stride = 1);
+    void judge(const WorldSim& world, int lookahead, int threads, int client_stride = 1,
+               const RegionEyes& region_eyes = {});
 
     /// Flags of (client, entity) after judge(); the client's own entity is 0.
     [[nodiscard]] std::uint8_t at(std::size_t client, std::size_t entity) const {
