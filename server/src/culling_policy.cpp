@@ -91,4 +91,12 @@ void CullingPolicy::remove_viewer(std::uint32_t client_id) {
     }
 }
 
+std::size_t CullingPolicy::tbvs_alive() const {
+    std::size_t total = 0;
+    for (std::size_t i = 0; i < manager_.client_count(); ++i) {
+        total += manager_.tbv_count(manager_.client_at(i));
+    }
+    return total;
+}
+
 } // namespace dsoc::server

@@ -1,6 +1,8 @@
 // dsoc-server: the game server with occlusion-aware interest management.
 
 #include "dsoc/maps/map_source.hpp"
+#include "dsoc/server/config_file.hpp"
+#include "dsoc/server/metrics_endpoint.hpp"
 #include "dsoc/server/server.hpp"
 #include "dsoc/server/stats_report.hpp"
 
@@ -14,12 +16,21 @@
 #include <fstream>
 #include <iostream>
 
-int main(int argc, char** argv) {
-    dsoc::server::ServerConfig config;
-    std::string log_level = "info";
-    std::string stats_json;
+namespace {
 
-    CLI::App app{"dsoc-server: authoritative game server with interest management"};
+struct ProgramOptions {
+    std::string config_file;
+    std::string stats_json;
+    bool print_config = false;
+};
+
+/// Every flag, bound to `config` and `options`. Flags given on the command line
+/// overwrite what the config file set.
+void add_options(CLI::App& app, dsoc::server::ServerConfig& config, ProgramOptions& options) {
+    app.add_option("--config", options.config_file,
+                   "TOML file with settings (keys as in --print-config); flags override it");
+    app.add_flag("--print-config", options.print_config,
+                 "Print the effective settings as TOML and exit (2 when they are invalid)");
     app.add_option("--bind", config.bind_address, "Address to listen on")->capture_default_str();
     app.add_option("--port", config.port, "TCP port; 0 picks a free one")->capture_default_str();
     app.add_option("--tick-rate", config.tick_rate, "Ticks (snapshots) per second [Hz]")
@@ -85,20 +96,76 @@ int main(int argc, char** argv) {
     app.add_option("--duration", config.duration_s,
                    "Stop after this many seconds (0: run until signalled)")
         ->capture_default_str();
-    app.add_option("--log-level", log_level, "trace|debug|info|warn|error")->capture_default_str();
-    app.add_option("--stats-json", stats_json, "Write the end-of-run figures as JSON to this file");
-    CLI11_PARSE(app, argc, argv);
+    app.add_option("--slow-client-timeout-ms", config.slow_client_timeout_ms,
+                   "Disconnect a client whose snapshot stays unsent this long [ms]")
+        ->capture_default_str();
+    app.add_option("--socket-send-buffer-bytes", config.socket_send_buffer_bytes,
+                   "SO_SNDBUF of client sockets; 0 keeps the OS default [bytes]")
+        ->capture_default_str();
+    app.add_option("--max-inputs-per-second", config.max_inputs_per_second,
+                   "Messages a client may send per second; more are dropped, twice that "
+                   "disconnects")
+        ->capture_default_str();
+    app.add_flag("--insecure", config.insecure,
+                 "Accept clients without connect tokens (local tests and demos only)");
+    app.add_option("--token-key-file", config.token_key_file,
+                   "Connect-token key file (64 hex digits; dsoc-token keygen makes one)");
+    app.add_option("--metrics-port", config.metrics_port,
+                   "Serve Prometheus /metrics on this port (-1 off, 0 any free port)")
+        ->capture_default_str();
+    app.add_option("--metrics-bind", config.metrics_bind_address, "Address of the metrics endpoint")
+        ->capture_default_str();
+    app.add_option("--log-level", config.log_level, "trace|debug|info|warn|error|critical|off")
+        ->capture_default_str();
+    app.add_option("--stats-json", options.stats_json,
+                   "Write the end-of-run figures as JSON to this file");
+}
 
-    spdlog::set_default_logger(spdlog::stderr_color_mt("server"));
-    spdlog::set_level(spdlog::level::from_str(log_level));
-    spdlog::set_pattern("[%H:%M:%S.%e] [server] [%^%l%$] %v");
+} // namespace
 
-    if (const auto problems = dsoc::server::validate(config); !problems.empty()) {
+int main(int argc, char** argv) {
+    dsoc::server::ServerConfig config;
+    ProgramOptions options;
+    const char* description = "dsoc-server: authoritative game server with interest management";
+    {
+        // First pass: only to find --config (and to answer --help and bad flags).
+        dsoc::server::ServerConfig scratch;
+        CLI::App app{description};
+        add_options(app, scratch, options);
+        CLI11_PARSE(app, argc, argv);
+    }
+    if (!options.config_file.empty()) {
+        if (const auto problems = dsoc::server::apply_config_file(options.config_file, config);
+            !problems.empty()) {
+            for (const auto& p : problems) {
+                std::fprintf(stderr, "invalid config file: %s\n", p.c_str());
+            }
+            return 2;
+        }
+    }
+    {
+        // Second pass: the flags over the file's settings.
+        CLI::App app{description};
+        add_options(app, config, options);
+        CLI11_PARSE(app, argc, argv);
+    }
+    const auto problems = dsoc::server::validate(config);
+    if (options.print_config) {
+        std::fputs(dsoc::server::format_config_toml(config).c_str(), stdout);
+    }
+    if (!problems.empty()) {
         for (const auto& p : problems) {
-            spdlog::error("invalid setting: {}", p);
+            std::fprintf(stderr, "invalid setting: %s\n", p.c_str());
         }
         return 2;
     }
+    if (options.print_config) {
+        return 0;
+    }
+
+    spdlog::set_default_logger(spdlog::stderr_color_mt("server"));
+    spdlog::set_level(spdlog::level::from_str(config.log_level));
+    spdlog::set_pattern("[%H:%M:%S.%e] [server] [%^%l%$] %v");
 
     const auto started = std::chrono::steady_clock::now();
     auto loaded = dsoc::maps::load_map(config.map, dsoc::maps::MapSearch::from_environment());
@@ -127,14 +194,30 @@ int main(int argc, char** argv) {
         spdlog::error("cannot start on {}:{}: {}", config.bind_address, config.port, e.what());
         return 1;
     }
-    // A machine-readable line for scripts that started us with --port 0.
+    // Machine-readable lines for scripts that started us with --port 0.
     std::printf("listening on port %u\n", static_cast<unsigned>(port));
+
+    dsoc::server::MetricsEndpoint metrics(io, [&server] { return server.render_metrics(); });
+    if (config.metrics_port >= 0) {
+        try {
+            const auto metrics_port = metrics.start(
+                config.metrics_bind_address, static_cast<std::uint16_t>(config.metrics_port));
+            spdlog::info("metrics on http://{}:{}/metrics", config.metrics_bind_address,
+                         metrics_port);
+            std::printf("metrics on port %u\n", static_cast<unsigned>(metrics_port));
+        } catch (const std::exception& e) {
+            spdlog::error("cannot serve metrics on {}:{}: {}", config.metrics_bind_address,
+                          config.metrics_port, e.what());
+            return 1;
+        }
+    }
     std::fflush(stdout);
 
     boost::asio::signal_set signals(io, SIGINT, SIGTERM);
     signals.async_wait([&](const boost::system::error_code& ec, int signal) {
         if (!ec) {
             spdlog::info("signal {} received", signal);
+            metrics.stop();
             server.shutdown([&] { signals.cancel(); });
         }
     });
@@ -144,6 +227,7 @@ int main(int argc, char** argv) {
             std::chrono::milliseconds(static_cast<long>(config.duration_s * 1000)));
         stop_timer.async_wait([&](const boost::system::error_code& ec) {
             if (!ec) {
+                metrics.stop();
                 server.shutdown([&] { signals.cancel(); });
             }
         });
@@ -152,11 +236,11 @@ int main(int argc, char** argv) {
     io.run();
 
     std::cout << dsoc::server::format_summary(server.stats(), config);
-    if (!stats_json.empty()) {
-        std::ofstream out(stats_json);
+    if (!options.stats_json.empty()) {
+        std::ofstream out(options.stats_json);
         out << dsoc::server::format_json(server.stats(), config) << "\n";
         if (!out) {
-            spdlog::error("cannot write {}", stats_json);
+            spdlog::error("cannot write {}", options.stats_json);
             return 1;
         }
     }

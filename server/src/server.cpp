@@ -1,6 +1,7 @@
 #include "dsoc/server/server.hpp"
 
 #include "dsoc/protocol/codec.hpp"
+#include "dsoc/server/connect_token.hpp"
 
 #include <boost/asio/post.hpp>
 #include <spdlog/spdlog.h>
@@ -30,6 +31,15 @@ Server::~Server() = default;
 std::uint16_t Server::start() {
     const asio::ip::tcp::endpoint endpoint(asio::ip::make_address(config_.bind_address),
                                            config_.port);
+    if (!config_.insecure) {
+        token_key_ = std::make_unique<TokenKey>();
+        std::string error;
+        if (!load_token_key(config_.token_key_file, *token_key_, error)) {
+            throw std::runtime_error(error);
+        }
+    } else {
+        spdlog::warn("insecure: clients connect without a connect token");
+    }
     acceptor_.open(endpoint.protocol());
     acceptor_.set_option(asio::socket_base::reuse_address(true));
     acceptor_.bind(endpoint);
@@ -110,22 +120,27 @@ void Server::run_tick() {
     ++tick_;
     const float dt = 1.0f / static_cast<float>(config_.tick_rate);
     world_.step(dt);
-    prepare_client_ticks();
+    prepare_client_ticks(); // serial: may disconnect slow clients
+    const auto culling_start = Clock::now();
     policy_->begin_tick(world_, tick_);
     run_client_ticks(world_, *policy_, tick_, client_ticks_, pool_); // all threads
+    stats_.culling_duration.observe(
+        std::chrono::duration<double>(Clock::now() - culling_start).count());
     send_snapshots();
     if (trace_ && tick_ % static_cast<std::uint64_t>(config_.trace_every) == 0) {
         write_trace_tick();
     }
     ++stats_.ticks;
+    const double cost_s = std::chrono::duration<double>(Clock::now() - start).count();
+    stats_.tick_duration.observe(cost_s);
     if (stats_.tick_cost_us.size() < kMaxTickSamples) {
-        stats_.tick_cost_us.push_back(
-            std::chrono::duration<double, std::micro>(Clock::now() - start).count());
+        stats_.tick_cost_us.push_back(cost_s * 1e6);
     }
 }
 
 void Server::prepare_client_ticks() {
     client_ticks_.clear();
+    const auto now = Clock::now();
     for (auto& [id, client] : clients_) {
         Session& session = *client.session;
         if (!session.active()) {
@@ -135,11 +150,18 @@ void Server::prepare_client_ticks() {
         if (self == nullptr) {
             continue;
         }
+        // false: its previous snapshot is still unsent; this one is dropped (latest
+        // wins). May disconnect the client as too slow.
+        const bool build = session.offer_snapshot(now);
+        if (!session.active()) {
+            continue;
+        }
         ClientTick job;
         job.viewer = Viewer{id, session.entity_id(), world_.eye_of(*self)};
         job.replication = &client.replication;
         job.interest = &client.interest;
         job.envelope = &client.envelope;
+        job.build = build;
         job.audit = client.audit_every > 0 && tick_ % client.audit_every == 0;
         job.network_lod = config_.network_lod;
         client_ticks_.push_back(job);
@@ -156,7 +178,7 @@ void Server::send_snapshots() {
         stats_.entity_updates_sent +=
             static_cast<std::uint64_t>(snapshot.enter_size() + snapshot.update_id_size());
         ++stats_.snapshots_sent;
-        client.session->send(*job.envelope);
+        client.session->send_snapshot(*job.envelope);
     }
 }
 
@@ -184,6 +206,28 @@ void Server::on_hello(Session& session, const pb::ClientHello& client_hello) {
     if (shutting_down_) {
         session.disconnect(pb::DISCONNECT_REASON_SERVER_SHUTDOWN, "server is shutting down");
         return;
+    }
+    if (token_key_) {
+        const auto& token = client_hello.connect_token();
+        const auto check = verify_connect_token(
+            *token_key_,
+            std::span(reinterpret_cast<const std::uint8_t*>(token.data()), token.size()),
+            unix_now_s());
+        if (check.status != TokenStatus::valid) {
+            session.disconnect(pb::DISCONNECT_REASON_UNAUTHORIZED, check.why);
+            return;
+        }
+        // One connection per client id: a second one with the same token is refused,
+        // so a leaked token cannot take over a player who is connected.
+        const auto [it, inserted] =
+            token_clients_.try_emplace(check.token.client_id, session.client_id());
+        if (!inserted) {
+            session.disconnect(pb::DISCONNECT_REASON_UNAUTHORIZED,
+                               "client " + std::to_string(check.token.client_id) +
+                                   " is already connected");
+            return;
+        }
+        session.set_token_client_id(check.token.client_id);
     }
     if (static_cast<int>(clients_.size()) >= config_.max_clients) {
         session.disconnect(pb::DISCONNECT_REASON_SERVER_FULL,
@@ -228,6 +272,16 @@ void Server::on_closed(Session& session) {
     stats_.bytes_sent += session.bytes_sent();
     stats_.bytes_received += session.bytes_received();
     ++stats_.disconnects[protocol::disconnect_reason_name(session.close_reason())];
+    stats_.snapshots_dropped += session.snapshots_dropped();
+    stats_.inputs_dropped += session.inputs_dropped();
+    stats_.inputs_clamped += session.inputs_clamped();
+    stats_.peak_queued_bytes = std::max(stats_.peak_queued_bytes, session.peak_queued_bytes());
+    if (session.token_client_id() != 0) {
+        const auto it = token_clients_.find(session.token_client_id());
+        if (it != token_clients_.end() && it->second == id) {
+            token_clients_.erase(it);
+        }
+    }
     if (session.entity_id() != 0) {
         world_.remove(session.entity_id());
     }

@@ -1,6 +1,7 @@
 #include "dsoc/server/server_config.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 namespace dsoc::server {
@@ -53,6 +54,37 @@ std::vector<std::string> validate(const ServerConfig& c) {
     for (auto& problem : protocol::validate(quantization(c))) {
         p.push_back(std::move(problem));
     }
+    check(p, c.slow_client_timeout_ms >= 100 && c.slow_client_timeout_ms <= 60000,
+          "slow_client_timeout_ms",
+          "must be 100..60000 ms, got " + std::to_string(c.slow_client_timeout_ms));
+    check(p,
+          c.socket_send_buffer_bytes == 0 ||
+              (c.socket_send_buffer_bytes >= 4096 && c.socket_send_buffer_bytes <= 16 << 20),
+          "socket_send_buffer_bytes",
+          "must be 0 (OS default) or 4096..16777216, got " +
+              std::to_string(c.socket_send_buffer_bytes));
+    check(p, c.max_inputs_per_second >= 1 && c.max_inputs_per_second <= 10000,
+          "max_inputs_per_second",
+          "must be 1..10000 per second, got " + std::to_string(c.max_inputs_per_second));
+    check(p, c.max_inputs_per_second >= c.tick_rate + 2, "max_inputs_per_second",
+          "must be at least tick_rate + 2 (an honest client sends one input per tick and a "
+          "ping a second), got " +
+              std::to_string(c.max_inputs_per_second));
+    check(p, c.insecure || !c.token_key_file.empty(), "token_key_file",
+          "required unless insecure = true (mint a key with dsoc-token keygen)");
+    check(p, c.metrics_port >= -1 && c.metrics_port <= 65535, "metrics_port",
+          "must be -1 (off), 0 (any free port) or 1..65535, got " + std::to_string(c.metrics_port));
+    check(p, c.metrics_port == -1 || !c.metrics_bind_address.empty(), "metrics_bind_address",
+          "must not be empty when metrics_port is set");
+    check(p,
+          c.log_level == "trace" || c.log_level == "debug" || c.log_level == "info" ||
+              c.log_level == "warn" || c.log_level == "error" || c.log_level == "critical" ||
+              c.log_level == "off",
+          "log_level",
+          "must be one of trace, debug, info, warn, error, critical, off; got '" + c.log_level +
+              "'");
+    check(p, c.seed <= static_cast<std::uint64_t>(INT64_MAX), "seed",
+          "must be at most 2^63-1 (a TOML integer)");
     check(p, std::isfinite(c.max_speed) && c.max_speed > 0.0f, "max_speed",
           "must be a finite number > 0");
     check(p, !c.map.empty(), "map", "must name a map");

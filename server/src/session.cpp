@@ -5,7 +5,8 @@
 #include <boost/asio/buffer.hpp>
 #include <boost/asio/write.hpp>
 
-#include <cmath>
+#include <algorithm>
+
 #include <spdlog/spdlog.h>
 
 namespace dsoc::server {
@@ -23,37 +24,22 @@ std::string body_name(const pb::Envelope& message) {
     return field != nullptr ? field->name() : "nothing";
 }
 
-/// Names the first non-finite field of an input, or returns nullptr.
-const char* non_finite_field(const pb::ClientInput& in) {
-    if (!std::isfinite(in.move_x())) {
-        return "move_x";
-    }
-    if (!std::isfinite(in.move_y())) {
-        return "move_y";
-    }
-    if (!std::isfinite(in.move_z())) {
-        return "move_z";
-    }
-    if (!std::isfinite(in.view_yaw())) {
-        return "view_yaw";
-    }
-    if (!std::isfinite(in.view_pitch())) {
-        return "view_pitch";
-    }
-    return nullptr;
-}
-
 } // namespace
 
 Session::Session(asio::ip::tcp::socket socket, std::uint32_t client_id, const ServerConfig& config,
                  SessionHost& host)
     : socket_(std::move(socket)), deadline_(socket_.get_executor()), client_id_(client_id),
-      config_(config), host_(host), decoder_(config.max_frame_bytes) {
+      config_(config), host_(host), decoder_(config.max_frame_bytes),
+      limiter_(config.max_inputs_per_second, Clock::now()) {
     boost::system::error_code ec;
     const auto endpoint = socket_.remote_endpoint(ec);
     remote_ =
         ec ? "unknown" : endpoint.address().to_string() + ":" + std::to_string(endpoint.port());
     socket_.set_option(asio::ip::tcp::no_delay(true), ec);
+    if (config_.socket_send_buffer_bytes > 0) {
+        socket_.set_option(asio::socket_base::send_buffer_size(config_.socket_send_buffer_bytes),
+                           ec);
+    }
 }
 
 void Session::start() {
@@ -87,12 +73,19 @@ void Session::read_some() {
 }
 
 void Session::on_read(std::size_t bytes) {
-    bytes_received_ += bytes;
-    if (state_ == State::closing) {
-        read_some(); // drain until the peer closes, so our last frames are not reset
+    receive(std::span<const std::uint8_t>(read_buffer_.data(), bytes));
+    // While closing, keep draining until the peer closes, so our last frames are not reset.
+    if (state_ != State::closed) {
+        read_some();
+    }
+}
+
+void Session::receive(std::span<const std::uint8_t> bytes) {
+    bytes_received_ += bytes.size();
+    if (state_ != State::awaiting_hello && state_ != State::active) {
         return;
     }
-    decoder_.feed(std::span<const std::uint8_t>(read_buffer_.data(), bytes));
+    decoder_.feed(bytes);
     while (state_ == State::awaiting_hello || state_ == State::active) {
         std::span<const std::uint8_t> payload;
         const auto status = decoder_.next(payload);
@@ -114,9 +107,6 @@ void Session::on_read(std::size_t bytes) {
         }
         handle(incoming_);
     }
-    if (state_ != State::closed) {
-        read_some();
-    }
 }
 
 void Session::handle(const pb::Envelope& message) {
@@ -130,23 +120,10 @@ void Session::handle(const pb::Envelope& message) {
         return;
     }
     switch (message.body_case()) {
-    case pb::Envelope::kClientInput: {
-        if (const char* field = non_finite_field(message.client_input())) {
-            disconnect(pb::DISCONNECT_REASON_INVALID_INPUT,
-                       std::string("client_input.") + field + " is not a finite number");
-            return;
-        }
-        host_.on_input(*this, message.client_input());
+    case pb::Envelope::kClientInput:
+    case pb::Envelope::kPing:
+        handle_client_message(message);
         return;
-    }
-    case pb::Envelope::kPing: {
-        pb::Envelope reply;
-        auto& pong = *reply.mutable_pong();
-        pong.set_nonce(message.ping().nonce());
-        pong.set_client_time_us(message.ping().client_time_us());
-        send(reply);
-        return;
-    }
     case pb::Envelope::kDisconnect:
         close_reason_ = pb::DISCONNECT_REASON_CLIENT_QUIT;
         state_ = State::closing;
@@ -166,6 +143,36 @@ void Session::handle(const pb::Envelope& message) {
                    "unexpected " + body_name(message) + " from a client");
         return;
     }
+}
+
+void Session::handle_client_message(const pb::Envelope& message) {
+    switch (limiter_.on_message(Clock::now())) {
+    case InputRateLimiter::Decision::accept:
+        break;
+    case InputRateLimiter::Decision::drop:
+        return;
+    case InputRateLimiter::Decision::flood:
+        disconnect(pb::DISCONNECT_REASON_INVALID_INPUT,
+                   "input flood: more than twice the cap of " +
+                       std::to_string(config_.max_inputs_per_second) + " messages per second");
+        return;
+    }
+    if (message.has_ping()) {
+        pb::Envelope reply;
+        auto& pong = *reply.mutable_pong();
+        pong.set_nonce(message.ping().nonce());
+        pong.set_client_time_us(message.ping().client_time_us());
+        send(reply);
+        return;
+    }
+    input_ = message.client_input();
+    const InputVerdict verdict = sanitize_input(input_);
+    if (!verdict.usable) {
+        disconnect(pb::DISCONNECT_REASON_INVALID_INPUT, verdict.why);
+        return;
+    }
+    inputs_clamped_ += static_cast<std::uint64_t>(verdict.clamped_fields > 0);
+    host_.on_input(*this, input_);
 }
 
 void Session::handle_hello(const pb::ClientHello& hello) {
@@ -201,7 +208,46 @@ void Session::send(const pb::Envelope& message) {
                        std::to_string(config_.max_send_queue_bytes));
         return;
     }
-    enqueue(std::move(frame));
+    enqueue(std::move(frame), false);
+}
+
+bool Session::offer_snapshot(Clock::time_point now) {
+    if (state_ != State::active) {
+        return false;
+    }
+    if (!snapshot_queued_) {
+        return true;
+    }
+    ++snapshots_dropped_;
+    const auto waited = now - snapshot_queued_at_;
+    if (waited > std::chrono::milliseconds(config_.slow_client_timeout_ms)) {
+        disconnect(pb::DISCONNECT_REASON_TOO_SLOW,
+                   "a snapshot has waited " +
+                       std::to_string(
+                           std::chrono::duration_cast<std::chrono::milliseconds>(waited).count()) +
+                       " ms to be sent (limit " + std::to_string(config_.slow_client_timeout_ms) +
+                       " ms); " + std::to_string(snapshots_dropped_) +
+                       " snapshots dropped so far: the client does not read fast enough");
+    }
+    return false;
+}
+
+void Session::send_snapshot(const pb::Envelope& message) {
+    if (state_ != State::active || snapshot_queued_) {
+        return;
+    }
+    std::vector<std::uint8_t> frame;
+    protocol::encode_frame(message, frame);
+    if (queued_bytes_ + frame.size() > config_.max_send_queue_bytes) {
+        disconnect(pb::DISCONNECT_REASON_TOO_SLOW,
+                   "a snapshot of " + std::to_string(frame.size()) + " bytes on top of " +
+                       std::to_string(queued_bytes_) + " unsent bytes exceeds the limit of " +
+                       std::to_string(config_.max_send_queue_bytes));
+        return;
+    }
+    snapshot_queued_ = true;
+    snapshot_queued_at_ = Clock::now();
+    enqueue(std::move(frame), true);
 }
 
 void Session::disconnect(pb::DisconnectReason reason, const std::string& text) {
@@ -217,7 +263,7 @@ void Session::disconnect(pb::DisconnectReason reason, const std::string& text) {
     message.mutable_disconnect()->set_text(text);
     std::vector<std::uint8_t> frame;
     protocol::encode_frame(message, frame);
-    enqueue(std::move(frame)); // beyond the queue limit on purpose: the reason must go out
+    enqueue(std::move(frame), false); // beyond the queue limit on purpose: the reason must go out
     deadline_.expires_after(kCloseGrace);
     deadline_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
         if (!ec) {
@@ -226,9 +272,10 @@ void Session::disconnect(pb::DisconnectReason reason, const std::string& text) {
     });
 }
 
-void Session::enqueue(std::vector<std::uint8_t> frame) {
+void Session::enqueue(std::vector<std::uint8_t> frame, bool snapshot) {
     queued_bytes_ += frame.size();
-    write_queue_.push_back(std::move(frame));
+    peak_queued_bytes_ = std::max(peak_queued_bytes_, queued_bytes_);
+    write_queue_.push_back({std::move(frame), snapshot});
     write_next();
 }
 
@@ -238,7 +285,7 @@ void Session::write_next() {
     }
     writing_ = true;
     asio::async_write(
-        socket_, asio::buffer(write_queue_.front()),
+        socket_, asio::buffer(write_queue_.front().bytes),
         [self = shared_from_this()](const boost::system::error_code& ec, std::size_t n) {
             self->writing_ = false;
             if (self->state_ == State::closed) {
@@ -249,7 +296,10 @@ void Session::write_next() {
                 return;
             }
             self->bytes_sent_ += n;
-            self->queued_bytes_ -= self->write_queue_.front().size();
+            self->queued_bytes_ -= self->write_queue_.front().bytes.size();
+            if (self->write_queue_.front().snapshot) {
+                self->snapshot_queued_ = false;
+            }
             self->write_queue_.pop_front();
             if (!self->write_queue_.empty()) {
                 self->write_next();
@@ -272,6 +322,7 @@ void Session::close_now() {
     socket_.close(ec);
     write_queue_.clear();
     queued_bytes_ = 0;
+    snapshot_queued_ = false;
     host_.on_closed(*this);
 }
 

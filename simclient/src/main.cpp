@@ -35,7 +35,32 @@ int main(int argc, char** argv) {
                    "(0: never)")
         ->capture_default_str();
     app.add_flag("--quiet", quiet, "No progress lines");
+    std::string token_key_file;
+    std::string token_hex;
+    app.add_option("--token-key-file", token_key_file,
+                   "Server's token key: each client mints a token for client id base + index");
+    app.add_option("--client-id-base", config.client_id_base, "First client id (with a key)")
+        ->capture_default_str()
+        ->check(CLI::PositiveNumber);
+    app.add_option("--token", token_hex,
+                   "Connect token (hex, from dsoc-token mint) sent by every client")
+        ->excludes("--token-key-file");
     CLI11_PARSE(app, argc, argv);
+    if (!token_key_file.empty()) {
+        dsoc::server::TokenKey key;
+        std::string error;
+        if (!dsoc::server::load_token_key(token_key_file, key, error)) {
+            std::cerr << "--token-key-file: " << error << "\n";
+            return 2;
+        }
+        config.token_key = key;
+        // Valid through the whole run: ramp-up, duration and a margin for clock skew.
+        config.token_ttl_s = static_cast<std::uint64_t>(config.duration_s) + 60;
+    }
+    if (!token_hex.empty() && !dsoc::server::from_hex(token_hex, config.connect_token)) {
+        std::cerr << "--token: expected hex digits\n";
+        return 2;
+    }
 
     const auto colon = server.rfind(':');
     if (colon == std::string::npos) {

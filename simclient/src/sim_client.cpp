@@ -58,6 +58,16 @@ void SimClient::on_connected() {
     pb::Envelope hello;
     hello.mutable_client_hello()->set_protocol_version(protocol::kProtocolVersion);
     hello.mutable_client_hello()->set_name(config_.name_prefix + std::to_string(index_));
+    if (config_.token_key) {
+        const server::ConnectToken grant{config_.client_id_base +
+                                             static_cast<std::uint64_t>(index_),
+                                         server::unix_now_s() + config_.token_ttl_s};
+        const auto token = server::mint_connect_token(*config_.token_key, grant);
+        hello.mutable_client_hello()->set_connect_token(token.data(), token.size());
+    } else if (!config_.connect_token.empty()) {
+        hello.mutable_client_hello()->set_connect_token(config_.connect_token.data(),
+                                                        config_.connect_token.size());
+    }
     hello.mutable_client_hello()->set_audit_every_ticks(config_.audit_every_ticks);
     send(hello);
     read_some();
@@ -105,6 +115,10 @@ void SimClient::read_some() {
 void SimClient::handle(const pb::Envelope& message) {
     switch (message.body_case()) {
     case pb::Envelope::kServerHello: {
+        if (state_ == State::stopping && !stats_.hello_received) {
+            return; // the run ended before the server answered: a connect failure, not a
+                    // protocol error
+        }
         if (state_ != State::awaiting_hello) {
             error("duplicate_server_hello");
             return;

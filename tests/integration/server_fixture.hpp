@@ -39,6 +39,8 @@ private:
     static server::ServerConfig prepare(server::ServerConfig c) {
         c.port = 0;
         c.bind_address = "127.0.0.1";
+        // Test servers accept clients without tokens unless the test gives them a key.
+        c.insecure = c.token_key_file.empty();
         return c;
     }
 

@@ -7,12 +7,22 @@
 namespace dsoc::server {
 namespace {
 
-TEST(ServerConfig, DefaultsAreValid) {
-    EXPECT_TRUE(validate(ServerConfig{}).empty());
+TEST(ServerConfig, DefaultsAreValidOnceTokensAreDecided) {
+    // Secure by default: a token key file, or an explicit insecure, is required.
+    const auto problems = validate(ServerConfig{});
+    ASSERT_EQ(problems.size(), 1u);
+    EXPECT_EQ(problems[0].rfind("token_key_file:", 0), 0u) << problems[0];
+    ServerConfig insecure;
+    insecure.insecure = true;
+    EXPECT_TRUE(validate(insecure).empty());
+    ServerConfig keyed;
+    keyed.token_key_file = "/etc/dsoc/token.key";
+    EXPECT_TRUE(validate(keyed).empty());
 }
 
 TEST(ServerConfig, EachProblemNamesItsField) {
     ServerConfig c;
+    c.insecure = true;
     c.tick_rate = 0;
     c.policy = "psychic";
     c.max_speed = std::nanf("");
@@ -22,6 +32,19 @@ TEST(ServerConfig, EachProblemNamesItsField) {
     EXPECT_NE(problems[1].find("policy"), std::string::npos);
     EXPECT_NE(problems[1].find("psychic"), std::string::npos);
     EXPECT_NE(problems[2].find("max_speed"), std::string::npos);
+}
+
+TEST(ServerConfig, InputCapMustLetAnHonestClientThrough) {
+    ServerConfig c;
+    c.insecure = true;
+    c.tick_rate = 60;
+    c.max_inputs_per_second = 61;
+    const auto problems = validate(c);
+    ASSERT_EQ(problems.size(), 1u);
+    EXPECT_EQ(problems[0].rfind("max_inputs_per_second: must be at least tick_rate + 2", 0), 0u)
+        << problems[0];
+    c.max_inputs_per_second = 62;
+    EXPECT_TRUE(validate(c).empty());
 }
 
 } // namespace

@@ -31,6 +31,7 @@ public:
     void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
     void add_viewer(std::uint32_t client_id, std::uint32_t entity_id) override;
     void remove_viewer(std::uint32_t client_id) override;
+    [[nodiscard]] std::size_t tbvs_alive() const override;
 
     [[nodiscard]] const visibility::InterestManager& manager() const { return manager_; }
 

@@ -52,6 +52,7 @@ public:
     virtual void remove_viewer(std::uint32_t /*client_id*/) {}
     /// Live TBV groups over all viewers (0 for policies without TBVs); for metrics.
     /// Serialized with begin_tick().
+    [[nodiscard]] virtual std::size_t tbvs_alive() const { return 0; }
 };
 
 /// Every entity, always.

@@ -9,8 +9,10 @@
 
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/server/client_tick.hpp"
+#include "dsoc/server/connect_token.hpp"
 #include "dsoc/server/game_world.hpp"
 #include "dsoc/server/interest_policy.hpp"
+#include "dsoc/server/metrics.hpp"
 #include "dsoc/server/replication_state.hpp"
 #include "dsoc/server/server_config.hpp"
 #include "dsoc/server/session.hpp"
@@ -39,7 +41,16 @@ struct ServerStats {
     std::uint64_t entity_updates_sent = 0; ///< enters + updates
     std::uint64_t clients_accepted = 0;
     std::map<std::string, std::uint64_t> disconnects; ///< by reason name
-    std::vector<double> tick_cost_us; ///< per tick, work time (not waiting), microseconds
+    // Of closed connections (render_metrics() adds the live ones).
+    std::uint64_t snapshots_dropped = 0; ///< not built: the client's previous one was unsent
+    std::uint64_t inputs_dropped = 0;    ///< client messages over max_inputs_per_second
+    std::uint64_t inputs_clamped = 0;    ///< inputs with an out-of-range field clamped
+    std::size_t peak_queued_bytes = 0;   ///< largest send queue of any client
+    std::vector<double> tick_cost_us;    ///< per tick, work time (not waiting), microseconds
+    DurationHistogram tick_duration;     ///< the same work time, for /metrics
+    /// Per tick, wall time of the policy's begin_tick and the per-client work on the
+    /// pool: interest evaluation (culling) and snapshot building of every client.
+    DurationHistogram culling_duration;
 };
 
 class Server final : private SessionHost {
@@ -52,7 +63,7 @@ public:
 
     /// Binds, listens and starts the tick loop. Returns the bound port (useful with
     /// port 0). Throws boost::system::system_error when the address cannot be bound,
-    /// std::runtime_error when the trace file cannot be opened.
+    /// std::runtime_error when the trace file or the token key cannot be read.
     std::uint16_t start();
 
     /// Stops accepting, stops ticking, tells every client `server_shutdown`, and lets
@@ -64,6 +75,10 @@ public:
     [[nodiscard]] const ServerConfig& config() const { return config_; }
     [[nodiscard]] std::size_t session_count() const { return sessions_.size(); }
     [[nodiscard]] std::uint64_t tick() const { return tick_; }
+    /// Everything an operator watches, in the Prometheus text format (what /metrics
+    /// serves; the names are listed in docs/operations.md). Totals include the live
+    /// connections. Call on the io_context thread.
+    [[nodiscard]] std::string render_metrics() const;
 
 private:
     struct Client {
@@ -98,6 +113,8 @@ private:
     std::map<std::uint32_t, Client> clients_;                    // active (after hello)
     std::map<std::uint32_t, std::shared_ptr<Session>> sessions_; // all open connections
     std::uint32_t next_client_id_ = 1;
+    std::unique_ptr<TokenKey> token_key_;                  // null when insecure
+    std::map<std::uint64_t, std::uint32_t> token_clients_; // token client id -> connection
     bool shutting_down_ = false;
     std::function<void()> on_shutdown_done_;
     ServerStats stats_;

@@ -67,11 +67,36 @@ struct ServerConfig {
     int max_clients = 256;
     /// Largest frame payload a client may send. [Units: bytes] [Limit: 64..16 MiB]
     std::uint32_t max_frame_bytes = 64 * 1024;
-    /// A client's queued, unsent snapshot bytes at most before it is disconnected as
-    /// too slow. [Units: bytes] [Limit: >= max_frame_bytes]
+    /// A client's queued, unsent bytes (its one pending snapshot plus replies) at most
+    /// before it is disconnected as too slow. [Units: bytes] [Limit: >= max_frame_bytes]
     std::size_t max_send_queue_bytes = 1024 * 1024;
     /// A connection that has not said a valid hello by then is closed. [Units: ms] [Limit: > 0]
     int handshake_timeout_ms = 5000;
+    /// A client with a snapshot still unsent after this long is disconnected as too slow.
+    /// Until then the snapshots it cannot take are dropped (latest wins: the next one it
+    /// gets is built from the newest state). [Units: ms] [Limit: 100..60000]
+    int slow_client_timeout_ms = 3000;
+    /// Kernel send buffer of each client socket (SO_SNDBUF); 0 keeps the OS default
+    /// (Linux autotunes it up to net.ipv4.tcp_wmem's maximum, several MiB per client).
+    /// [Units: bytes] [Limit: 0 or 4096..16 MiB]
+    int socket_send_buffer_bytes = 0;
+    /// Messages (inputs and pings) a client may send per second; a burst of one
+    /// second's worth is allowed. Beyond it messages are dropped, and a client whose
+    /// dropped messages within one second exceed this cap again is disconnected with
+    /// invalid_input. [Units: 1/s] [Limit: tick_rate + 2..10000]
+    int max_inputs_per_second = 120;
+    /// Accept clients without a connect token. For local tests and demos only.
+    bool insecure = false;
+    /// File holding the connect-token key: 64 hex digits (32 bytes), whitespace
+    /// ignored. Required unless `insecure`. See docs/operations.md and dsoc-token.
+    std::string token_key_file;
+    /// Serve Prometheus metrics on http://metrics_bind_address:metrics_port/metrics.
+    /// -1: no metrics endpoint; 0: any free port (printed at start). [Limit: -1..65535]
+    int metrics_port = -1;
+    /// Address of the metrics endpoint. Loopback by default: expose deliberately.
+    std::string metrics_bind_address = "127.0.0.1";
+    /// Log level: trace, debug, info, warn, error, critical or off.
+    std::string log_level = "info";
     /// Horizontal speed bound of every entity, enforced by the server. [Units: units/s] [Limit: >
     /// 0]
     float max_speed = 320.0f;

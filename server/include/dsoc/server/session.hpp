@@ -4,15 +4,18 @@
 
 #include "dsoc/protocol/framing.hpp"
 #include "dsoc/protocol/messages.hpp"
+#include "dsoc/server/input_guard.hpp"
 #include "dsoc/server/server_config.hpp"
 
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/steady_timer.hpp>
 
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -24,15 +27,25 @@ class Session;
 class SessionHost {
 public:
     virtual ~SessionHost() = default;
-    /// A valid hello arrived; the host sends the ServerHello.
+    /// A hello with the right version and a sane name arrived; the host checks the
+    /// connect token and sends the ServerHello (or disconnects).
     virtual void on_hello(Session& session, const protocol::pb::ClientHello& hello) = 0;
+    /// An input within the rate cap, already checked and clamped (sanitize_input).
     virtual void on_input(Session& session, const protocol::pb::ClientInput& input) = 0;
     /// The connection is closed; called exactly once per session.
     virtual void on_closed(Session& session) = 0;
 };
 
+/// Threading: every call on the io_context thread that runs the socket.
+///
+/// Memory: at most one snapshot is queued per client (being written or waiting);
+/// a client that cannot take a snapshot when one is due simply skips it (see
+/// offer_snapshot), so the queue holds one snapshot plus small replies, and it can
+/// never exceed max_send_queue_bytes without the client being disconnected.
 class Session : public std::enable_shared_from_this<Session> {
 public:
+    using Clock = std::chrono::steady_clock;
+
     enum class State : std::uint8_t { awaiting_hello, active, closing, closed };
 
     Session(boost::asio::ip::tcp::socket socket, std::uint32_t client_id,
@@ -41,9 +54,24 @@ public:
     /// Starts reading and arms the handshake deadline.
     void start();
 
+    /// Handles received bytes exactly as if they had been read from the socket:
+    /// framing, decoding, the handshake, the rate cap and dispatch to the host.
+    /// start() feeds it from the socket; fuzzers and tests call it directly.
+    void receive(std::span<const std::uint8_t> bytes);
+
     /// Queues one message. Messages queued after disconnect() are dropped. When the
     /// queue would exceed max_send_queue_bytes the client is disconnected as too slow.
     void send(const protocol::pb::Envelope& message);
+
+    /// Asks whether this client can take a snapshot now: true when it is active and
+    /// its previous snapshot has been handed to the socket. False drops this tick's
+    /// snapshot for it (latest wins: the next one is built from newer state, as a
+    /// delta against what was really sent); once a snapshot has waited longer than
+    /// slow_client_timeout_ms the client is disconnected with too_slow.
+    [[nodiscard]] bool offer_snapshot(Clock::time_point now);
+
+    /// Queues a snapshot; call only after offer_snapshot() returned true.
+    void send_snapshot(const protocol::pb::Envelope& message);
 
     /// Queues a Disconnect with `reason`, stops reading, and closes the socket once
     /// the queue has drained (or after a 1 s grace period).
@@ -60,6 +88,14 @@ public:
     [[nodiscard]] std::uint64_t bytes_sent() const { return bytes_sent_; }
     [[nodiscard]] std::uint64_t bytes_received() const { return bytes_received_; }
     [[nodiscard]] std::size_t queued_bytes() const { return queued_bytes_; }
+    /// Largest queued_bytes() seen over the session's life.
+    [[nodiscard]] std::size_t peak_queued_bytes() const { return peak_queued_bytes_; }
+    [[nodiscard]] std::uint64_t snapshots_dropped() const { return snapshots_dropped_; }
+    [[nodiscard]] std::uint64_t inputs_dropped() const { return limiter_.dropped(); }
+    [[nodiscard]] std::uint64_t inputs_clamped() const { return inputs_clamped_; }
+    /// The client id its connect token proved (0 on insecure servers).
+    [[nodiscard]] std::uint64_t token_client_id() const { return token_client_id_; }
+    void set_token_client_id(std::uint64_t id) { token_client_id_ = id; }
     /// Why the connection ended (unspecified while open).
     [[nodiscard]] protocol::pb::DisconnectReason close_reason() const { return close_reason_; }
 
@@ -68,7 +104,8 @@ private:
     void on_read(std::size_t bytes);
     void handle(const protocol::pb::Envelope& message);
     void handle_hello(const protocol::pb::ClientHello& hello);
-    void enqueue(std::vector<std::uint8_t> frame);
+    void enqueue(std::vector<std::uint8_t> frame, bool snapshot);
+    void handle_client_message(const protocol::pb::Envelope& message);
     void write_next();
     void close_now();
 
@@ -82,8 +119,20 @@ private:
     protocol::FrameDecoder decoder_;
     std::array<std::uint8_t, 16 * 1024> read_buffer_{};
     protocol::pb::Envelope incoming_;
-    std::deque<std::vector<std::uint8_t>> write_queue_;
+    struct QueuedFrame {
+        std::vector<std::uint8_t> bytes;
+        bool snapshot = false;
+    };
+    std::deque<QueuedFrame> write_queue_;
     std::size_t queued_bytes_ = 0;
+    std::size_t peak_queued_bytes_ = 0;
+    bool snapshot_queued_ = false; ///< a snapshot frame is in write_queue_
+    Clock::time_point snapshot_queued_at_;
+    std::uint64_t snapshots_dropped_ = 0;
+    std::uint64_t inputs_clamped_ = 0;
+    std::uint64_t token_client_id_ = 0;
+    InputRateLimiter limiter_;
+    protocol::pb::ClientInput input_; // scratch: the clamped copy
     bool writing_ = false;
     std::uint64_t bytes_sent_ = 0;
     std::uint64_t bytes_received_ = 0;

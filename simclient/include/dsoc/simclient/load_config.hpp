@@ -1,7 +1,11 @@
 #pragma once
 
+#include "dsoc/server/connect_token.hpp"
+
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <vector>
 
 namespace dsoc::simclient {
 
@@ -27,6 +31,15 @@ struct LoadConfig {
     std::uint32_t audit_every_ticks = 30;
     /// Prefix of the client names ("sim-0", "sim-1", ...).
     std::string name_prefix = "sim-";
+    /// With a key (a load test that knows the server's secret), client i mints its own
+    /// connect token for client id client_id_base + i, valid for token_ttl_s from its
+    /// connect. Without one, every client sends `connect_token` (empty for servers
+    /// started with --insecure).
+    std::optional<server::TokenKey> token_key;
+    std::uint64_t client_id_base = 1;
+    /// [Units: s] [Limit: >= 1]
+    std::uint64_t token_ttl_s = 60;
+    std::vector<std::uint8_t> connect_token;
 };
 
 } // namespace dsoc::simclient
