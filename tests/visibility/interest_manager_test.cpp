@@ -342,6 +342,43 @@ TEST_P(DsocStateMachine, TbvIsTheEntitysOwnAndSharedByEveryClient) {
     }
 }
 
+TEST_P(DsocStateMachine, PerObjectCapGivesTheSameAnswerInAnyClientOrder) {
+    // update_client() may run in any order (or in parallel): the cap on TBVs per
+    // entity must not make the decisions depend on that order.
+    DSOCConfig c = config();
+    c.max_tbvs_per_object = 2;
+    std::vector<std::vector<PairState>> runs;
+    for (const bool reversed : {false, true}) {
+        auto m = make(c);
+        add_viewer(*m, -500.0f);
+        for (ClientId id = 101; id < 104; ++id) {
+            ClientDesc d;
+            d.viewer = 1;
+            d.lookahead_ticks = 3;
+            ASSERT_TRUE(m->add_client(id, d));
+        }
+        ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
+        std::vector<PairState> states;
+        for (std::uint64_t t = 1; t <= 3; ++t) {
+            m->begin_update(t);
+            for (std::size_t k = 0; k < m->client_count(); ++k) {
+                m->update_client(reversed ? m->client_count() - 1 - k : k);
+            }
+            for (ClientId id = 100; id < 104; ++id) {
+                states.push_back(m->state(id, 2));
+            }
+        }
+        runs.push_back(states);
+        // The cap holds from the second tick on: at most 2 + one tick's worth of TBVs.
+        int with_tbv = 0;
+        for (ClientId id = 100; id < 104; ++id) {
+            with_tbv += m->state(id, 2) == PairState::hidden_with_tbv ? 1 : 0;
+        }
+        EXPECT_GE(with_tbv, 2);
+    }
+    EXPECT_EQ(runs[0], runs[1]);
+}
+
 INSTANTIATE_TEST_SUITE_P(Culler, DsocStateMachine, ::testing::Bool(),
                          [](const ::testing::TestParamInfo<bool>& param) {
                              return param.param ? std::string("PreparedStage")

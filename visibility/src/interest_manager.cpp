@@ -79,6 +79,10 @@ struct InterestManager::EntitySlot {
     std::array<int, kMaxTbvAttempts> tbv_durations{};
     std::uint64_t candidates_tick = 0;
     bool has_candidates = false;
+    /// TBVs the entity held across all clients when this tick began: the per-object
+    /// cap reads this, not the live counter, so decisions do not depend on the order
+    /// in which parallel update_client() calls run.
+    std::int32_t tbvs_at_tick_start = 0;
 };
 
 struct InterestManager::TbvGroup {
@@ -340,6 +344,8 @@ void InterestManager::begin_update(std::uint64_t tick) {
         e.history.push(to);
         e.box_at_last_update = e.box;
         e.seen_by_update = true;
+        e.tbvs_at_tick_start =
+            tbv_counts_[static_cast<std::size_t>(&e - entities_.data())].load(std::memory_order_relaxed);
         if (preparer_) {
             preparer_->prepare(e.box, e.prepared);
         } else {
@@ -526,7 +532,7 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
     auto& pair = c.pairs[slot];
     auto& count = tbv_counts_[slot];
     if (!config_.tbvs_enabled || tick_ < pair.next_tbv_tick ||
-        count.load(std::memory_order_relaxed) >= config_.max_tbvs_per_object) {
+        entities_[slot].tbvs_at_tick_start >= config_.max_tbvs_per_object) {
         pair.state = PairState::hidden_expired;
         return;
     }

@@ -30,7 +30,9 @@ struct DSOCConfig {
     /// Safety margin on a TBV's growth. [Units: factor] [Limit: >= 1.0]
     float tbv_expansion_factor = 1.2f;
     /// TBVs one entity may hold across all clients; past it a client re-tests that
-    /// entity every tick instead (costs CPU, never correctness). [Limit: >= 1]
+    /// entity every tick instead (costs CPU, never correctness). Judged on the count at
+    /// the start of the tick (deterministic whatever the threads), so one tick may add
+    /// up to one TBV per client beyond it. [Limit: >= 1]
     int max_tbvs_per_object = 256;
     /// TBV groups one client may hold; past it the earliest-expiring group is evicted
     /// and its entities become HIDDEN_EXPIRED (re-tested). [Limit: >= 1]
