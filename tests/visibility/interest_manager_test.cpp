@@ -49,7 +49,9 @@ public:
             seen_ |= cell == 0 ? 0b011 : cell == 2 ? 0b110 : 0b111;
         }
     }
-    [[nodiscard]] Visibility test_box(const Aabb& box) const override { return wall_.test_box(box); }
+    [[nodiscard]] Visibility test_box(const Aabb& box) const override {
+        return wall_.test_box(box);
+    }
     [[nodiscard]] bool has_prepared_stage() const override { return true; }
     void prepare(const Aabb& box, PreparedBox& out) const override {
         out.box = box;
@@ -58,7 +60,7 @@ public:
     }
     [[nodiscard]] Visibility test_prepared(const PreparedBox& p) const override {
         return test_prepared_coarse(p) == Visibility::occluded ? Visibility::occluded
-                                                                : wall_.test_box(p.box);
+                                                               : wall_.test_box(p.box);
     }
     [[nodiscard]] Visibility test_prepared_coarse(const PreparedBox& p) const override {
         ++coarse_tests;
@@ -382,7 +384,7 @@ TEST_P(DsocStateMachine, PerObjectCapGivesTheSameAnswerInAnyClientOrder) {
 INSTANTIATE_TEST_SUITE_P(Culler, DsocStateMachine, ::testing::Bool(),
                          [](const ::testing::TestParamInfo<bool>& param) {
                              return param.param ? std::string("PreparedStage")
-                                               : std::string("Plain");
+                                                : std::string("Plain");
                          });
 
 TEST(InterestManager, RefusesAnInvalidConfigAndTheReservedEntityId) {

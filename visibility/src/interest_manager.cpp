@@ -130,7 +130,7 @@ struct InterestManager::ClientSlot {
     std::priority_queue<Expiry, std::vector<Expiry>, std::greater<>> expiries;
     std::vector<std::uint32_t> new_groups;
     std::vector<std::uint32_t> scratch;
-    PreparedBox candidate; // hide()'s TBV candidate, reused
+    PreparedBox candidate;          // hide()'s TBV candidate, reused
     std::vector<EntityId> previous; // replicated ids of the last update, increasing
     ClientDecisions decisions;
     ClientStats stats;
@@ -344,8 +344,8 @@ void InterestManager::begin_update(std::uint64_t tick) {
         e.history.push(to);
         e.box_at_last_update = e.box;
         e.seen_by_update = true;
-        e.tbvs_at_tick_start =
-            tbv_counts_[static_cast<std::size_t>(&e - entities_.data())].load(std::memory_order_relaxed);
+        e.tbvs_at_tick_start = tbv_counts_[static_cast<std::size_t>(&e - entities_.data())].load(
+            std::memory_order_relaxed);
         if (preparer_) {
             preparer_->prepare(e.box, e.prepared);
         } else {
@@ -445,8 +445,8 @@ void InterestManager::update_client(std::size_t index) {
             // Each group carries its keys: re-proving it costs a few bit tests, cheaper
             // than any octree traversal.
             for (std::uint32_t g = 0; g < c.groups.size(); ++g) {
-                if (c.groups[g].alive &&
-                    c.visibility->test_prepared_coarse(c.groups[g].prepared) != Visibility::occluded) {
+                if (c.groups[g].alive && c.visibility->test_prepared_coarse(c.groups[g].prepared) !=
+                                             Visibility::occluded) {
                     c.scratch.push_back(g);
                 }
             }
@@ -545,7 +545,8 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
     std::uint64_t expiry = 0;
     if (coarse_tbvs_) {
         for (std::size_t k = 0; k < e.tbv_candidates.size() && e.tbv_durations[k] >= 1; ++k) {
-            const std::uint64_t last = e.candidates_tick + static_cast<std::uint64_t>(e.tbv_durations[k]);
+            const std::uint64_t last =
+                e.candidates_tick + static_cast<std::uint64_t>(e.tbv_durations[k]);
             if (!e.has_candidates || last <= tick_) {
                 break; // this and the shorter ones have run out
             }
@@ -558,7 +559,8 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
         }
     } else {
         duration = tbv_duration(e);
-        for (int attempt = 0; attempt < kMaxTbvAttempts && duration >= 1; ++attempt, duration /= 2) {
+        for (int attempt = 0; attempt < kMaxTbvAttempts && duration >= 1;
+             ++attempt, duration /= 2) {
             c.candidate.box = tbv_box(e, duration);
             c.candidate.prepared = false;
             ++c.stats.tbv_tests;

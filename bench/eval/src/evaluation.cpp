@@ -7,8 +7,8 @@
 #include "dsoc/eval/world_sim.hpp"
 #include "dsoc/sim/motion_limits.hpp"
 #include "dsoc/sim/reach_clipper.hpp"
-#include "dsoc/visibility/tbv.hpp"
 #include "dsoc/trace/trace_writer.hpp"
+#include "dsoc/visibility/tbv.hpp"
 
 #include <chrono>
 #include <ctime>
@@ -203,7 +203,8 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
             const float down = std::max(0.0f, -now.entities[c].velocity.z);
             visibility::Aabb region =
                 visibility::reachable_box(visibility::Aabb{eye, eye}, limits, seconds, 1.0f, down);
-            region = visibility::Aabb{glm::max(region.min, bounds.min), glm::min(region.max, bounds.max)};
+            region = visibility::Aabb{glm::max(region.min, bounds.min),
+                                      glm::min(region.max, bounds.max)};
             region = clipper->clip(eye, region);
             for (int k = 0; k < 27; ++k) {
                 const glm::vec3 f(static_cast<float>(k % 3), static_cast<float>((k / 3) % 3),

@@ -10,9 +10,9 @@
 #include <glm/geometric.hpp>
 
 #include <array>
+#include <stdexcept>
 #include <string>
 #include <string_view>
-#include <stdexcept>
 
 namespace dsoc::eval {
 

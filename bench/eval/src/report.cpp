@@ -129,8 +129,8 @@ void write_markdown(const EvalResult& r, const std::string& command, std::ostrea
         const double region_set = ratio(static_cast<double>(r.region_visible_pairs),
                                         static_cast<double>(r.oracle_client_ticks));
         out << "| *region bound* | " << fmt("%.1f", region_set) << " | "
-            << fmt("%.0f", ideal_set > 0.0 ? ideal_updates_per_client_s(r) * region_set / ideal_set
-                                           : 0.0)
+            << fmt("%.0f",
+                   ideal_set > 0.0 ? ideal_updates_per_client_s(r) * region_set / ideal_set : 0.0)
             << " | - | - | - | - | 0 | 0 | - | - |\n";
     }
     out << "\n";

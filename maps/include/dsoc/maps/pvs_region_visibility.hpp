@@ -73,9 +73,8 @@ public:
         if (!p.prepared || !active_) {
             return test_prepared(p);
         }
-        return pvs_->may_see_clusters(visible_clusters_, p.keys)
-                   ? visibility::Visibility::visible
-                   : visibility::Visibility::occluded;
+        return pvs_->may_see_clusters(visible_clusters_, p.keys) ? visibility::Visibility::visible
+                                                                 : visibility::Visibility::occluded;
     }
 
 private:
