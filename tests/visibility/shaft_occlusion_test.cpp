@@ -83,7 +83,7 @@ TEST(ShaftOcclusion, RandomRegionsNeverHideWhatAnEyeSees) {
                      : make_city_world(3, 4, 4);
         OccluderGrid grid(tw.world);
         ShaftOcclusion shaft(tw.world, grid);
-        OccluderGrid::Scratch scratch;
+        ShaftOcclusion::Scratch scratch;
         ReferenceVisibility ref(tw.world);
         std::uniform_real_distribution<float> ux(tw.play_area.min.x, tw.play_area.max.x);
         std::uniform_real_distribution<float> uy(tw.play_area.min.y, tw.play_area.max.y);

@@ -113,6 +113,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
     env.rays = &rays;
     env.lookahead_ticks = lookahead;
     env.dsoc_overrides = &options.dsoc_overrides;
+    env.fusion = options.fusion;
 
     std::vector<std::string> names = options.policies;
     if (names.empty()) {

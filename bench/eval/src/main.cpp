@@ -64,6 +64,8 @@ int main(int argc, char** argv) {
     app.add_option("--dsoc-set", options.dsoc_overrides,
                    "DSOCConfig KEY=VALUE for the dsoc policies (repeatable), e.g. "
                    "region_reuse_margin=8");
+    app.add_flag("--fusion,!--no-fusion", options.fusion,
+                 "occluder fusion across cut planes in the culler's shaft stage (default on)");
     app.add_flag("--region-bound", options.region_bound,
                  "also judge pairs from a lattice of eyes over each client's reachable region "
                  "(what any policy covering that region must send; slow)");

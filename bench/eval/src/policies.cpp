@@ -87,10 +87,11 @@ private:
 
 /// The server's culler: the exact shaft stage without a per-region z-pyramid build
 /// (see ServerConfig::culler).
-visibility::RegionCullerConfig culler_config() {
+visibility::RegionCullerConfig culler_config(bool fusion) {
     visibility::RegionCullerConfig c;
     c.pyramid = false;
     c.shaft = true;
+    c.fusion = fusion;
     return c;
 }
 
@@ -102,7 +103,7 @@ public:
                                                              env.world->move())),
           manager_(config, env.map->bounds.expanded(64.0f),
                    maps::with_pvs_stage(env.map->pvs, visibility::occluder_region_visibility(
-                                                          env.scene, culler_config())),
+                                                          env.scene, culler_config(env.fusion))),
                    [clipper = clipper_](glm::vec3 eye, const visibility::Aabb& region) {
                        return clipper->clip(eye, region);
                    }) {

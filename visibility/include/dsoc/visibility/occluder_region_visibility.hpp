@@ -34,6 +34,10 @@ struct RegionCullerConfig {
     bool pyramid = true;
     /// The exact single-occluder shaft test: no build, ~2-5 us per box that reaches it.
     bool shaft = true;
+    /// Within the shaft stage, occluder fusion across cut planes through the walls
+    /// the centre segment crosses (cut_plane_fusion.hpp), for boxes no single
+    /// occluder hides.
+    bool fusion = true;
     RegionOcclusionBufferConfig buffer;
 };
 
@@ -59,7 +63,8 @@ public:
         if (!config_.shaft || scene_->grid == nullptr) {
             return Visibility::visible;
         }
-        return ShaftOcclusion(scene_->world, *scene_->grid).test(region_, box, scratch_);
+        return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion)
+            .test(region_, box, scratch_);
     }
     /// The z-pyramid alone; without it, no test at all (`visible`, which is always
     /// allowed): an entity visible last tick stays replicated until its next full test.
@@ -73,7 +78,7 @@ private:
     RegionCullerConfig config_;
     RegionOcclusionBuffer buffer_;
     Aabb region_;
-    mutable OccluderGrid::Scratch scratch_;
+    mutable ShaftOcclusion::Scratch scratch_;
 };
 
 /// A factory for InterestManager: one OccluderRegionVisibility per client over `scene`.

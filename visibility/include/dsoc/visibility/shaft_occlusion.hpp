@@ -13,6 +13,8 @@
 
 #include "dsoc/visibility/box_visibility.hpp"
 #include "dsoc/visibility/geometry.hpp"
+#include "dsoc/visibility/cut_plane_fusion.hpp"
+#include "dsoc/visibility/occluder_grid.hpp"
 #include "dsoc/visibility/occluder_world.hpp"
 
 #include <cstdint>
@@ -25,57 +27,40 @@ namespace dsoc::visibility {
 [[nodiscard]] bool shaft_blocked_by(const Aabb& region, const Aabb& box,
                                     std::span<const Plane> planes);
 
-/// A uniform grid over an occluder world's bounds listing the occluders that
-/// overlap each cell, to find the occluders that may cut a shaft. Immutable after
-/// construction; queries are const and thread-safe given a caller-owned scratch.
-class OccluderGrid {
-public:
-    /// `cell_size` in world units (> 0).
-    explicit OccluderGrid(const OccluderWorld& world, float cell_size = 256.0f);
-
-    /// Scratch for one querying thread (a visit stamp per occluder).
-    struct Scratch {
-        std::vector<std::uint32_t> stamp;
-        std::uint32_t epoch = 0;
-        std::vector<OccluderId> found;
-    };
-
-    /// Occluders whose bounds overlap `box`, each once, into scratch.found.
-    void query(const Aabb& box, Scratch& scratch) const;
-
-    /// Occluders in the cells the segment `from`-`to` passes through (a 3D DDA walk),
-    /// each once, into scratch.found: every occluder that intersects the segment is
-    /// among them (up to float rounding at cell borders, which can only drop one).
-    void query_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch) const;
-
-private:
-    const OccluderWorld* world_;
-    Aabb bounds_;
-    float cell_size_;
-    int dims_[3] = {1, 1, 1};
-    std::vector<std::uint32_t> cell_start_; ///< CSR offsets, one more than cells
-    std::vector<OccluderId> cell_items_;
-};
-
 /// Shaft stage over a world: `occluded` when some single occluder blocks every
-/// segment from `region` to `box` (exact per occluder, see above); `visible`
-/// otherwise (may be a false positive). Occluders that cut into the region take part:
-/// the argument needs only convexity.
+/// segment from `region` to `box` (exact per occluder, see above) or, with fusion on,
+/// when the occluders cut by one of a few axis-aligned planes through the walls the
+/// centre segment crosses cover every crossing together (cut_plane_fusion.hpp);
+/// `visible` otherwise (may be a false positive). Occluders that cut into the region
+/// take part: the arguments need only convexity.
 class ShaftOcclusion {
 public:
-    explicit ShaftOcclusion(const OccluderWorld& world, const OccluderGrid& grid)
-        : world_(&world), grid_(&grid) {}
+    /// `world` and `grid` (built over `world`) must outlive this.
+    explicit ShaftOcclusion(const OccluderWorld& world, const OccluderGrid& grid,
+                            bool fusion = true)
+        : world_(&world), grid_(&grid), fusion_(fusion) {}
 
-    [[nodiscard]] Visibility test(const Aabb& region, const Aabb& box,
-                                  OccluderGrid::Scratch& scratch) const;
+    /// Per-thread memory, reused between tests.
+    struct Scratch {
+        OccluderGrid::Scratch grid;
+        CutPlaneFusion::Scratch fusion;
+        std::vector<CutPlane> planes;
+    };
+
+    [[nodiscard]] Visibility test(const Aabb& region, const Aabb& box, Scratch& scratch) const;
 
     /// Occluders given the full 64-segment test per query at most (those that block
-    /// the centre-to-centre segment); past it the answer is `visible`.
+    /// the centre-to-centre segment); past it no further single occluder is tried.
     static constexpr int kMaxFullTests = 16;
+    /// Cut planes tried for fusion per query at most: the axis planes through the
+    /// middle of the occluders that block the centre segment, nearest the region
+    /// first. (On oa_dm4, 3 planes prove 98% of what 6 do at 60% of the cost.)
+    static constexpr std::size_t kMaxCutPlanes = 3;
 
 private:
     const OccluderWorld* world_;
     const OccluderGrid* grid_;
+    bool fusion_;
 };
 
 } // namespace dsoc::visibility

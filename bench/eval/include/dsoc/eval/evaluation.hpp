@@ -29,6 +29,8 @@ struct EvalOptions {
     /// DSOCConfig settings (KEY=VALUE, visibility::set_field names) applied to the
     /// dsoc policies (not to occlusion), e.g. region_reuse_margin=8.
     std::vector<std::string> dsoc_overrides;
+    /// Occluder fusion in the culling policies' shaft stage (RegionCullerConfig::fusion).
+    bool fusion = true;
     /// Also judge every pair from a 3 x 3 x 3 lattice of eyes over the client's reachable
     /// eye region (the region the culling policies cover): the region bound. Costly.
     bool region_bound = false;

@@ -36,6 +36,8 @@ struct PolicyEnv {
     const RayOracle* rays = nullptr;
     /// DSOCConfig settings (KEY=VALUE) for the dsoc policies, over their defaults.
     const std::vector<std::string>* dsoc_overrides = nullptr;
+    /// RegionCullerConfig::fusion for the culling policies.
+    bool fusion = true;
     /// The latency allowance the culling policies promise. [Units: ticks]
     int lookahead_ticks = 5;
 };

@@ -1,0 +1,44 @@
+#pragma once
+// A uniform grid of occluder ids: which occluders may touch a box or a segment.
+
+#include "dsoc/visibility/geometry.hpp"
+#include "dsoc/visibility/occluder_world.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace dsoc::visibility {
+
+/// A uniform grid over an occluder world's bounds listing the occluders that
+/// overlap each cell, to find the occluders that may cut a shaft. Immutable after
+/// construction; queries are const and thread-safe given a caller-owned scratch.
+class OccluderGrid {
+public:
+    /// `cell_size` in world units (> 0).
+    explicit OccluderGrid(const OccluderWorld& world, float cell_size = 256.0f);
+
+    /// Scratch for one querying thread (a visit stamp per occluder).
+    struct Scratch {
+        std::vector<std::uint32_t> stamp;
+        std::uint32_t epoch = 0;
+        std::vector<OccluderId> found;
+    };
+
+    /// Occluders whose bounds overlap `box`, each once, into scratch.found.
+    void query(const Aabb& box, Scratch& scratch) const;
+
+    /// Occluders in the cells the segment `from`-`to` passes through (a 3D DDA walk),
+    /// each once, into scratch.found: every occluder that intersects the segment is
+    /// among them (up to float rounding at cell borders, which can only drop one).
+    void query_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch) const;
+
+private:
+    const OccluderWorld* world_;
+    Aabb bounds_;
+    float cell_size_;
+    int dims_[3] = {1, 1, 1};
+    std::vector<std::uint32_t> cell_start_; ///< CSR offsets, one more than cells
+    std::vector<OccluderId> cell_items_;
+};
+
+} // namespace dsoc::visibility

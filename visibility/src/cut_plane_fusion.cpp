@@ -1,0 +1,240 @@
+#include "dsoc/visibility/cut_plane_fusion.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace dsoc::visibility {
+
+namespace {
+
+using Polygon = CutPlaneFusion::Polygon;
+
+/// A half-plane { p : dot(n, p) <= d } of the cut plane.
+struct HalfPlane {
+    glm::dvec2 n;
+    double d;
+};
+
+/// Sutherland-Hodgman against one half-plane (keeps dot(n, p) <= d). False when the
+/// result would not fit a Polygon (the caller gives up: "not covered").
+bool clip(const Polygon& in, const HalfPlane& h, Polygon& out) {
+    out.n = 0;
+    if (in.n == 0) {
+        return true;
+    }
+    for (int i = 0; i < in.n; ++i) {
+        const glm::dvec2& p = in.v[static_cast<std::size_t>(i)];
+        const glm::dvec2& q = in.v[static_cast<std::size_t>((i + 1) % in.n)];
+        const double dp = glm::dot(h.n, p) - h.d;
+        const double dq = glm::dot(h.n, q) - h.d;
+        if (dp <= 0.0) {
+            if (out.n == Polygon::kCapacity) {
+                return false;
+            }
+            out.v[static_cast<std::size_t>(out.n++)] = p;
+        }
+        if ((dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0)) {
+            if (out.n == Polygon::kCapacity) {
+                return false;
+            }
+            const double t = dp / (dp - dq);
+            out.v[static_cast<std::size_t>(out.n++)] = p + (q - p) * t;
+        }
+    }
+    if (out.n < 3) {
+        out.n = 0;
+    }
+    return true;
+}
+
+/// True for an empty polygon or one narrower than kNoiseWidth (twice the area over
+/// the perimeter is the width of a thin sliver).
+bool negligible(const Polygon& poly) {
+    if (poly.n < 3) {
+        return true;
+    }
+    double area2 = 0.0;
+    double perimeter = 0.0;
+    for (int i = 0; i < poly.n; ++i) {
+        const glm::dvec2& p = poly.v[static_cast<std::size_t>(i)];
+        const glm::dvec2& q = poly.v[static_cast<std::size_t>((i + 1) % poly.n)];
+        area2 += p.x * q.y - q.x * p.y;
+        perimeter += glm::length(q - p);
+    }
+    return perimeter <= 0.0 || std::abs(area2) / perimeter < CutPlaneFusion::kNoiseWidth;
+}
+
+void bounds_of(const Polygon& poly, glm::dvec2& lo, glm::dvec2& hi) {
+    lo = hi = poly.v[0];
+    for (int i = 1; i < poly.n; ++i) {
+        lo = glm::min(lo, poly.v[static_cast<std::size_t>(i)]);
+        hi = glm::max(hi, poly.v[static_cast<std::size_t>(i)]);
+    }
+}
+
+} // namespace
+
+bool CutPlaneFusion::crossing_rectangle(const Aabb& region, const Aabb& box, CutPlane plane,
+                                        glm::dvec2& lo, glm::dvec2& hi) {
+    const int a = plane.axis;
+    const double c = plane.offset;
+    const bool region_below = region.max[a] < c && box.min[a] > c;
+    const bool region_above = region.min[a] > c && box.max[a] < c;
+    if (!region_below && !region_above) {
+        return false;
+    }
+    const int u = (a + 1) % 3;
+    const int v = (a + 2) % 3;
+    lo = glm::dvec2(std::numeric_limits<double>::infinity());
+    hi = -lo;
+    // The crossing of r + t (b - r) is linear in r and b with positive weights for a
+    // fixed t, so per t the extremes come from the min (max) corners; t takes its
+    // extremes at the four combinations of the two boxes' faces on the axis.
+    for (const double ra : {double{region.min[a]}, double{region.max[a]}}) {
+        for (const double ba : {double{box.min[a]}, double{box.max[a]}}) {
+            const double t = (c - ra) / (ba - ra);
+            const double s = 1.0 - t;
+            lo.x = std::min(lo.x, s * region.min[u] + t * box.min[u]);
+            lo.y = std::min(lo.y, s * region.min[v] + t * box.min[v]);
+            hi.x = std::max(hi.x, s * region.max[u] + t * box.max[u]);
+            hi.y = std::max(hi.y, s * region.max[v] + t * box.max[v]);
+        }
+    }
+    return true;
+}
+
+bool CutPlaneFusion::covers(const Aabb& region, const Aabb& box, CutPlane plane,
+                            OccluderGrid::Scratch& grid_scratch, Scratch& scratch) const {
+    if (region.is_empty() || box.is_empty()) {
+        return false;
+    }
+    glm::dvec2 lo;
+    glm::dvec2 hi;
+    if (!crossing_rectangle(region, box, plane, lo, hi)) {
+        return false;
+    }
+    const int a = plane.axis;
+    const int u = (a + 1) % 3;
+    const int v = (a + 2) % 3;
+    const double c = plane.offset;
+
+    // Occluders the plane cuts (strictly: their bounds straddle it) over S.
+    Aabb query;
+    query.min[a] = query.max[a] = plane.offset;
+    query.min[u] = static_cast<float>(lo.x);
+    query.max[u] = static_cast<float>(hi.x);
+    query.min[v] = static_cast<float>(lo.y);
+    query.max[v] = static_cast<float>(hi.y);
+    grid_->query(query, grid_scratch);
+    scratch.cut.clear();
+    double overlap_sum = 0.0;
+    for (const OccluderId id : grid_scratch.found) {
+        const Aabb& ob = world_->occluder(id).bounds();
+        if (!(ob.min[a] < plane.offset && ob.max[a] > plane.offset)) {
+            continue;
+        }
+        const double w = std::min<double>(hi.x, ob.max[u]) - std::max<double>(lo.x, ob.min[u]);
+        const double h = std::min<double>(hi.y, ob.max[v]) - std::max<double>(lo.y, ob.min[v]);
+        if (w <= 0.0 || h <= 0.0) {
+            continue;
+        }
+        scratch.cut.emplace_back(w * h, id);
+        overlap_sum += w * h;
+    }
+    // The union cannot cover S when even the bounds' overlaps add up to less.
+    const glm::dvec2 extent = hi - lo;
+    if (overlap_sum + 2.0 * kNoiseWidth * (extent.x + extent.y) < extent.x * extent.y) {
+        return false;
+    }
+    // Each corner of S must lie in some cut occluder's bounds (a cross-section lies
+    // within its occluder's bounds): a cheap necessary condition.
+    for (int k = 0; k < 4; ++k) {
+        const glm::dvec2 corner((k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y);
+        const bool inside = std::any_of(scratch.cut.begin(), scratch.cut.end(), [&](const auto& e) {
+            const Aabb& ob = world_->occluder(e.second).bounds();
+            return corner.x >= ob.min[u] && corner.x <= ob.max[u] && corner.y >= ob.min[v] &&
+                   corner.y <= ob.max[v];
+        });
+        if (!inside) {
+            return false;
+        }
+    }
+    // Largest first: a wall's big brushes leave few pieces for the small ones.
+    std::sort(scratch.cut.begin(), scratch.cut.end(),
+              [](const auto& x, const auto& y) { return x.first > y.first; });
+    if (scratch.cut.size() > kMaxOccluders) {
+        scratch.cut.resize(kMaxOccluders); // fewer occluders can only cover less
+    }
+
+    Polygon rect;
+    rect.n = 4;
+    rect.v = {};
+    rect.v[0] = {lo.x, lo.y};
+    rect.v[1] = {hi.x, lo.y};
+    rect.v[2] = {hi.x, hi.y};
+    rect.v[3] = {lo.x, hi.y};
+    scratch.pieces.assign(1, rect);
+
+    std::array<HalfPlane, 64> halves;
+    Polygon rest;
+    Polygon inside;
+    Polygon outside;
+    for (const auto& [area, id] : scratch.cut) {
+        // The occluder's cross-section as half-planes of (u, v); a plane parallel to the
+        // cut must have the cut strictly inside it, else the section is empty.
+        std::size_t count = 0;
+        bool empty = false;
+        for (const Plane& p : world_->solid_planes(id)) {
+            const double rhs = double{p.distance} - double{p.normal[a]} * c;
+            const glm::dvec2 n(p.normal[u], p.normal[v]);
+            if (std::abs(n.x) < 1e-9 && std::abs(n.y) < 1e-9) {
+                empty = empty || rhs <= 0.0;
+                continue;
+            }
+            if (count == halves.size()) {
+                empty = true; // too many planes to use: skip the occluder (covers less)
+                break;
+            }
+            halves[count++] = {n, rhs};
+        }
+        if (empty || count == 0) {
+            continue;
+        }
+        const Aabb& ob = world_->occluder(id).bounds();
+        const glm::dvec2 olo(ob.min[u], ob.min[v]);
+        const glm::dvec2 ohi(ob.max[u], ob.max[v]);
+        scratch.next.clear();
+        for (const Polygon& piece : scratch.pieces) {
+            glm::dvec2 plo;
+            glm::dvec2 phi;
+            bounds_of(piece, plo, phi);
+            if (phi.x <= olo.x || plo.x >= ohi.x || phi.y <= olo.y || plo.y >= ohi.y) {
+                scratch.next.push_back(piece); // untouched by this occluder
+                continue;
+            }
+            // piece \ section = union over i of piece n (outside half i) n (inside halves < i).
+            rest = piece;
+            for (std::size_t i = 0; i < count && rest.n > 0; ++i) {
+                const HalfPlane flipped{-halves[i].n, -halves[i].d};
+                if (!clip(rest, flipped, outside) || !clip(rest, halves[i], inside)) {
+                    return false;
+                }
+                if (!negligible(outside)) {
+                    scratch.next.push_back(outside);
+                }
+                rest = inside;
+            }
+            if (scratch.next.size() > kMaxPieces) {
+                return false;
+            }
+        }
+        scratch.pieces.swap(scratch.next);
+        if (scratch.pieces.empty()) {
+            return true;
+        }
+    }
+    return scratch.pieces.empty();
+}
+
+} // namespace dsoc::visibility

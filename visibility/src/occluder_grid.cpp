@@ -1,0 +1,182 @@
+#include "dsoc/visibility/occluder_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace dsoc::visibility {
+
+OccluderGrid::OccluderGrid(const OccluderWorld& world, float cell_size)
+    : world_(&world), bounds_(world.bounds()), cell_size_(cell_size) {
+    if (bounds_.is_empty()) {
+        cell_start_.assign(2, 0);
+        return;
+    }
+    for (int a = 0; a < 3; ++a) {
+        dims_[a] = std::clamp(
+            static_cast<int>(std::ceil((bounds_.max[a] - bounds_.min[a]) / cell_size_)), 1, 512);
+    }
+    const std::size_t cells = static_cast<std::size_t>(dims_[0]) *
+                              static_cast<std::size_t>(dims_[1]) *
+                              static_cast<std::size_t>(dims_[2]);
+    std::vector<std::vector<OccluderId>> lists(cells);
+    const auto cell_range = [&](const Aabb& b, int lo[3], int hi[3]) {
+        for (int a = 0; a < 3; ++a) {
+            lo[a] =
+                std::clamp(static_cast<int>(std::floor((b.min[a] - bounds_.min[a]) / cell_size_)),
+                           0, dims_[a] - 1);
+            hi[a] =
+                std::clamp(static_cast<int>(std::floor((b.max[a] - bounds_.min[a]) / cell_size_)),
+                           0, dims_[a] - 1);
+        }
+    };
+    for (OccluderId id = 0; id < world.size(); ++id) {
+        int lo[3];
+        int hi[3];
+        cell_range(world.occluder(id).bounds(), lo, hi);
+        for (int z = lo[2]; z <= hi[2]; ++z) {
+            for (int y = lo[1]; y <= hi[1]; ++y) {
+                for (int x = lo[0]; x <= hi[0]; ++x) {
+                    lists[static_cast<std::size_t>((z * dims_[1] + y) * dims_[0] + x)].push_back(
+                        id);
+                }
+            }
+        }
+    }
+    cell_start_.reserve(cells + 1);
+    cell_start_.push_back(0);
+    for (const auto& l : lists) {
+        cell_items_.insert(cell_items_.end(), l.begin(), l.end());
+        cell_start_.push_back(static_cast<std::uint32_t>(cell_items_.size()));
+    }
+}
+
+void OccluderGrid::query(const Aabb& box, Scratch& scratch) const {
+    scratch.found.clear();
+    if (bounds_.is_empty() || !box.overlaps(bounds_)) {
+        return;
+    }
+    if (scratch.stamp.size() != world_->size()) {
+        scratch.stamp.assign(world_->size(), 0);
+        scratch.epoch = 0;
+    }
+    if (++scratch.epoch == 0) { // wrapped: reset stamps
+        std::fill(scratch.stamp.begin(), scratch.stamp.end(), 0);
+        scratch.epoch = 1;
+    }
+    int lo[3];
+    int hi[3];
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = std::clamp(static_cast<int>(std::floor((box.min[a] - bounds_.min[a]) / cell_size_)),
+                           0, dims_[a] - 1);
+        hi[a] = std::clamp(static_cast<int>(std::floor((box.max[a] - bounds_.min[a]) / cell_size_)),
+                           0, dims_[a] - 1);
+    }
+    for (int z = lo[2]; z <= hi[2]; ++z) {
+        for (int y = lo[1]; y <= hi[1]; ++y) {
+            for (int x = lo[0]; x <= hi[0]; ++x) {
+                const std::size_t cell =
+                    static_cast<std::size_t>((z * dims_[1] + y) * dims_[0] + x);
+                for (std::uint32_t i = cell_start_[cell]; i < cell_start_[cell + 1]; ++i) {
+                    const OccluderId id = cell_items_[i];
+                    if (scratch.stamp[id] != scratch.epoch) {
+                        scratch.stamp[id] = scratch.epoch;
+                        if (world_->occluder(id).bounds().overlaps(box)) {
+                            scratch.found.push_back(id);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+void OccluderGrid::query_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch) const {
+    scratch.found.clear();
+    if (bounds_.is_empty()) {
+        return;
+    }
+    if (scratch.stamp.size() != world_->size()) {
+        scratch.stamp.assign(world_->size(), 0);
+        scratch.epoch = 0;
+    }
+    if (++scratch.epoch == 0) {
+        std::fill(scratch.stamp.begin(), scratch.stamp.end(), 0);
+        scratch.epoch = 1;
+    }
+    // Clip the segment to the grid (slabs), in the segment's parameter t in [0, 1].
+    const glm::vec3 dir = to - from;
+    float t0 = 0.0f;
+    float t1 = 1.0f;
+    for (int a = 0; a < 3; ++a) {
+        if (std::abs(dir[a]) < 1e-12f) {
+            if (from[a] < bounds_.min[a] || from[a] > bounds_.max[a]) {
+                return;
+            }
+            continue;
+        }
+        float ta = (bounds_.min[a] - from[a]) / dir[a];
+        float tb = (bounds_.max[a] - from[a]) / dir[a];
+        if (ta > tb) {
+            std::swap(ta, tb);
+        }
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t0 > t1) {
+            return;
+        }
+    }
+    const glm::vec3 start = from + dir * t0;
+    int cell[3];
+    int step[3];
+    float t_max[3];
+    float t_delta[3];
+    for (int a = 0; a < 3; ++a) {
+        cell[a] = std::clamp(static_cast<int>(std::floor((start[a] - bounds_.min[a]) / cell_size_)),
+                             0, dims_[a] - 1);
+        if (dir[a] > 0.0f) {
+            step[a] = 1;
+            const float border = bounds_.min[a] + static_cast<float>(cell[a] + 1) * cell_size_;
+            t_max[a] = (border - from[a]) / dir[a];
+            t_delta[a] = cell_size_ / dir[a];
+        } else if (dir[a] < 0.0f) {
+            step[a] = -1;
+            const float border = bounds_.min[a] + static_cast<float>(cell[a]) * cell_size_;
+            t_max[a] = (border - from[a]) / dir[a];
+            t_delta[a] = -cell_size_ / dir[a];
+        } else {
+            step[a] = 0;
+            t_max[a] = std::numeric_limits<float>::infinity();
+            t_delta[a] = std::numeric_limits<float>::infinity();
+        }
+    }
+    // Every cell is visited at most once per axis step: dims sum bounds the walk.
+    for (int guard = dims_[0] + dims_[1] + dims_[2] + 3; guard > 0; --guard) {
+        const std::size_t index =
+            static_cast<std::size_t>((cell[2] * dims_[1] + cell[1]) * dims_[0] + cell[0]);
+        for (std::uint32_t i = cell_start_[index]; i < cell_start_[index + 1]; ++i) {
+            const OccluderId id = cell_items_[i];
+            if (scratch.stamp[id] != scratch.epoch) {
+                scratch.stamp[id] = scratch.epoch;
+                scratch.found.push_back(id);
+            }
+        }
+        int axis = 0;
+        if (t_max[1] < t_max[axis]) {
+            axis = 1;
+        }
+        if (t_max[2] < t_max[axis]) {
+            axis = 2;
+        }
+        if (t_max[axis] > t1) {
+            return;
+        }
+        cell[axis] += step[axis];
+        if (cell[axis] < 0 || cell[axis] >= dims_[axis]) {
+            return;
+        }
+        t_max[axis] += t_delta[axis];
+    }
+}
+
+} // namespace dsoc::visibility
