@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 
 namespace dsoc::eval {
@@ -52,6 +53,41 @@ TEST(DsocOnARealMap, ZeroPopInOverTwentyThousandClientTicks) {
                 static_cast<unsigned long long>(result.oracle_client_ticks),
                 static_cast<unsigned long long>(dsoc->popin_present),
                 static_cast<unsigned long long>(dsoc->popin_lookahead), kept * 100.0);
+}
+
+TEST(DsocWithoutAPvs, ZeroPopInOnAGeneratedCityWithEntityClusters) {
+    // gen:city has no PVS: every hidden entity is proven by the shaft stage (with
+    // fusion), crowds by their cluster's box, and their TBVs are shared group TBVs.
+    EvalOptions options;
+    Scenario& s = options.scenario;
+    s.name = "dsoc-city";
+    s.map = "gen:city";
+    s.city_blocks = 6;
+    s.viewers = 16;
+    s.bots = 600;
+    s.tick_rate = 30;
+    s.rtt_ms = 100;
+    s.interpolation_ms = 50;
+    s.duration_s = 6.0; // 180 ticks x 16 viewers = 2,880 client-ticks
+    s.oracle_every = 1;
+    s.seed = 23;
+    options.policies = {"broadcast", "occlusion", "dsoc"};
+    const EvalResult result = run_evaluation(options, nullptr);
+
+    ASSERT_GE(result.oracle_client_ticks, 2800u);
+    for (const auto& m : result.policies) {
+        if (m.name == "broadcast") {
+            continue;
+        }
+        EXPECT_EQ(m.popin_present, 0u) << m.name;
+        EXPECT_EQ(m.popin_lookahead, 0u) << m.name;
+        EXPECT_GT(m.tbv.cluster_hits, 1000u) << m.name << ": clusters never hid a crowd";
+        std::printf("%s on gen:city:6: pop-in %llu / %llu, %llu of %llu cluster tests hidden\n",
+                    m.name.c_str(), static_cast<unsigned long long>(m.popin_present),
+                    static_cast<unsigned long long>(m.popin_lookahead),
+                    static_cast<unsigned long long>(m.tbv.cluster_hits),
+                    static_cast<unsigned long long>(m.tbv.cluster_tests));
+    }
 }
 
 } // namespace

@@ -381,6 +381,50 @@ TEST_P(DsocStateMachine, PerObjectCapGivesTheSameAnswerInAnyClientOrder) {
     EXPECT_EQ(runs[0], runs[1]);
 }
 
+TEST_P(DsocStateMachine, ACrowdBehindTheWallIsHiddenByOneClusterTest) {
+    // 8 entities behind the wall in one 512-unit cell, 3 in view in another.
+    auto m = make(config());
+    add_viewer(*m, -900.0f);
+    for (EntityId id = 2; id < 10; ++id) {
+        const float k = static_cast<float>(id);
+        ASSERT_TRUE(m->add_entity(id, EntityDesc{kHalf, {}}, box_at({100.0f + 40.0f * k, 30.0f * k, 0})));
+    }
+    for (EntityId id = 10; id < 13; ++id) {
+        ASSERT_TRUE(m->add_entity(id, EntityDesc{kHalf, {}},
+                                  box_at({-300.0f, 100.0f + 50.0f * static_cast<float>(id), 0})));
+    }
+    step(*m, 1);
+    for (EntityId id = 2; id < 10; ++id) {
+        EXPECT_EQ(m->state(100, id), PairState::hidden_with_tbv) << id;
+        EXPECT_FALSE(replicated(*m, id));
+    }
+    for (EntityId id = 10; id < 13; ++id) {
+        EXPECT_TRUE(replicated(*m, id)) << id;
+    }
+    const ClientStats& s = *m->stats(100);
+    EXPECT_EQ(s.cluster_hits, 1u);
+    EXPECT_EQ(s.cluster_tests, 2u); // the crowd's cell, and the cell in view
+    EXPECT_EQ(s.box_tests, 3u);     // only the three in view tested on their own
+    EXPECT_EQ(s.tbvs_created, 8u);
+    // Without a prepared stage the crowd shares one TBV group made by one test; with
+    // one, each TBV is the entity's own (a few bit tests each).
+    EXPECT_EQ(m->tbv_count(100), GetParam() ? 8u : 1u);
+
+    // Off: every entity is tested on its own.
+    auto c = config();
+    c.entity_cluster_size = 0.0f;
+    auto plain = make(c);
+    add_viewer(*plain, -900.0f);
+    for (EntityId id = 2; id < 10; ++id) {
+        const float k = static_cast<float>(id);
+        ASSERT_TRUE(plain->add_entity(id, EntityDesc{kHalf, {}},
+                                      box_at({100.0f + 40.0f * k, 30.0f * k, 0})));
+    }
+    step(*plain, 1);
+    EXPECT_EQ(plain->stats(100)->cluster_tests, 0u);
+    EXPECT_EQ(plain->stats(100)->box_tests, 8u);
+}
+
 INSTANTIATE_TEST_SUITE_P(Culler, DsocStateMachine, ::testing::Bool(),
                          [](const ::testing::TestParamInfo<bool>& param) {
                              return param.param ? std::string("PreparedStage")
@@ -417,10 +461,12 @@ TEST(DsocConfig, ValidateNamesTheField) {
     c.min_adaptive_duration = 50;
     c.max_adaptive_duration = 10;
     c.fuzzy_confidence = 2.0f;
+    c.entity_cluster_size = 4.0f;
     const auto problems = validate(c);
-    ASSERT_EQ(problems.size(), 2u);
+    ASSERT_EQ(problems.size(), 3u);
     EXPECT_NE(problems[0].find("max_adaptive_duration"), std::string::npos);
     EXPECT_NE(problems[1].find("fuzzy_confidence"), std::string::npos);
+    EXPECT_NE(problems[2].find("entity_cluster_size"), std::string::npos);
     EXPECT_TRUE(validate(DSOCConfig{}).empty());
 }
 

@@ -67,6 +67,9 @@ std::vector<std::string> validate(const DSOCConfig& c) {
           "must be a finite number >= 0");
     check(std::isfinite(c.region_reuse_margin) && c.region_reuse_margin >= 0.0f,
           "region_reuse_margin", "must be a finite number >= 0");
+    check(std::isfinite(c.entity_cluster_size) &&
+              (c.entity_cluster_size == 0.0f || c.entity_cluster_size >= 16.0f),
+          "entity_cluster_size", "must be 0 (off) or a finite number >= 16");
     check(c.full_test_interval >= 1 && c.full_test_interval <= 64, "full_test_interval",
           "must be 1..64 ticks");
     check(std::isfinite(c.lod_near_distance) && c.lod_near_distance > 0.0f, "lod_near_distance",
@@ -106,7 +109,7 @@ bool set_field_flag(bool& out, std::string_view text) {
 
 std::string set_field(DSOCConfig& c, std::string_view key, std::string_view value) {
     using Field = std::variant<int DSOCConfig::*, float DSOCConfig::*, bool DSOCConfig::*>;
-    static constexpr std::array<std::pair<std::string_view, Field>, 16> kFields{{
+    static constexpr std::array<std::pair<std::string_view, Field>, 17> kFields{{
         {"tick_rate", &DSOCConfig::tick_rate},
         {"default_tbv_duration", &DSOCConfig::default_tbv_duration},
         {"tbv_expansion_factor", &DSOCConfig::tbv_expansion_factor},
@@ -123,6 +126,7 @@ std::string set_field(DSOCConfig& c, std::string_view key, std::string_view valu
         {"tbvs_enabled", &DSOCConfig::tbvs_enabled},
         {"reuse_buffers", &DSOCConfig::reuse_buffers},
         {"full_test_interval", &DSOCConfig::full_test_interval},
+        {"entity_cluster_size", &DSOCConfig::entity_cluster_size},
     }};
     const std::string bad = "bad value '" + std::string(value) + "' for " + std::string(key);
     if (key == "strategy") {

@@ -27,6 +27,9 @@ constexpr int kMaxTbvAttempts = 3;
 /// ticks before TBVs are tried again (entities at the edge of visibility would
 /// otherwise pay for failed TBV tests every tick). [Units: ticks]
 constexpr std::uint64_t kTbvRetryTicks = 8;
+/// No entity cluster. Clusters of fewer members are not worth a test of their own.
+constexpr std::uint32_t kNoCluster = 0xffffffffu;
+constexpr std::size_t kMinClusterMembers = 3;
 
 /// `into` becomes the union of `into` and `more`, both sorted and free of duplicates.
 void merge_keys(std::vector<std::int32_t>& into, const std::vector<std::int32_t>& more) {
@@ -96,6 +99,12 @@ struct InterestManager::TbvGroup {
     std::vector<std::uint32_t> members; ///< entity slots
 };
 
+/// Entities whose box centres share a cell of DSOCConfig::entity_cluster_size.
+struct InterestManager::EntityCluster {
+    PreparedBox prepared; ///< union of the members' boxes at begin_update()
+    std::vector<std::uint32_t> members; ///< entity slots, increasing
+};
+
 struct InterestManager::ClientSlot {
     struct Pair {
         PairState state = PairState::unknown;
@@ -131,6 +140,9 @@ struct InterestManager::ClientSlot {
     std::vector<std::uint32_t> new_groups;
     std::vector<std::uint32_t> scratch;
     PreparedBox candidate;          // hide()'s TBV candidate, reused
+    /// By cluster, this tick: 0 not proven hidden, 1 proven hidden, 2 members decided.
+    std::vector<std::uint8_t> cluster_hidden;
+    std::vector<std::uint32_t> cluster_members; // hide_cluster()'s scratch
     std::vector<EntityId> previous; // replicated ids of the last update, increasing
     ClientDecisions decisions;
     ClientStats stats;
@@ -370,6 +382,62 @@ void InterestManager::begin_update(std::uint64_t tick) {
             }
         }
     }
+    build_clusters();
+}
+
+void InterestManager::build_clusters() {
+    cluster_of_.assign(entities_.size(), kNoCluster);
+    for (std::size_t k = 0; k < cluster_count_; ++k) {
+        clusters_[k].members.clear();
+    }
+    cluster_count_ = 0;
+    if (config_.entity_cluster_size <= 0.0f) {
+        return;
+    }
+    cluster_cells_.clear();
+    const float inv = 1.0f / config_.entity_cluster_size;
+    for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
+        const EntitySlot& e = entities_[slot];
+        if (!e.alive) {
+            continue;
+        }
+        const glm::vec3 cell = glm::floor(e.box.center() * inv);
+        // 21 bits per axis: cells within +-2^20 of the origin (any float world).
+        const auto key_of = [](float v) {
+            return static_cast<std::uint64_t>(
+                       std::clamp(static_cast<std::int64_t>(v), std::int64_t{-(1 << 20)},
+                                  std::int64_t{(1 << 20) - 1}) +
+                       (1 << 20)) &
+                   0x1fffffu;
+        };
+        const std::uint64_t key = key_of(cell.x) | key_of(cell.y) << 21 | key_of(cell.z) << 42;
+        const auto [it, added] =
+            cluster_cells_.try_emplace(key, static_cast<std::uint32_t>(cluster_count_));
+        if (added) {
+            if (clusters_.size() == cluster_count_) {
+                clusters_.emplace_back();
+            }
+            ++cluster_count_;
+        }
+        clusters_[it->second].members.push_back(slot);
+    }
+    for (std::uint32_t k = 0; k < cluster_count_; ++k) {
+        EntityCluster& cluster = clusters_[k];
+        if (cluster.members.size() < kMinClusterMembers) {
+            continue;
+        }
+        Aabb box;
+        for (const std::uint32_t slot : cluster.members) {
+            box.extend(entities_[slot].box);
+            cluster_of_[slot] = k;
+        }
+        if (preparer_) {
+            preparer_->prepare(box, cluster.prepared);
+        } else {
+            cluster.prepared.box = box;
+            cluster.prepared.prepared = false;
+        }
+    }
 }
 
 Aabb InterestManager::eye_region_for(const ClientSlot& c, glm::vec3& eye) const {
@@ -468,6 +536,44 @@ void InterestManager::update_client(std::size_t index) {
     const auto viewer =
         c.desc.viewer != kNoEntity ? entity_slot_.find(c.desc.viewer) : entity_slot_.end();
     const std::uint32_t viewer_slot = viewer != entity_slot_.end() ? viewer->second : kNoGroup;
+    // Temporal coherence: an entity visible last tick most likely still is; give it
+    // the full (slower) test only every full_test_interval ticks, staggered.
+    const auto quick_test = [&](std::uint32_t slot) {
+        return c.pairs[slot].state == PairState::visible &&
+               (tick_ + slot) % static_cast<std::uint64_t>(config_.full_test_interval) != 0;
+    };
+    // e.prepared (and its cluster's box) is current unless the box was set after
+    // begin_update().
+    const auto fresh_box = [&](std::uint32_t slot) {
+        const EntitySlot& e = entities_[slot];
+        return e.prepared.box.min == e.box.min && e.prepared.box.max == e.box.max;
+    };
+
+    // 5a. Clusters with at least two members due a full test: one test of the union
+    //     of their boxes may hide them all.
+    c.cluster_hidden.assign(cluster_count_, 0);
+    for (std::uint32_t k = 0; k < cluster_count_; ++k) {
+        const EntityCluster& cluster = clusters_[k];
+        if (cluster.members.size() < kMinClusterMembers) {
+            continue;
+        }
+        int due = 0;
+        for (const std::uint32_t slot : cluster.members) {
+            const bool decided = c.pairs[slot].state == PairState::hidden_with_tbv ||
+                                 slot == viewer_slot || !fresh_box(slot);
+            due += decided || quick_test(slot) ? 0 : 1;
+        }
+        if (due < 2) {
+            continue;
+        }
+        ++c.stats.cluster_tests;
+        if (c.visibility->test_prepared(cluster.prepared) == Visibility::occluded) {
+            c.cluster_hidden[k] = 1;
+            ++c.stats.cluster_hits;
+        }
+    }
+
+    // 5b. Each entity.
     for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
         const EntitySlot& e = entities_[slot];
         auto& pair = c.pairs[slot];
@@ -478,14 +584,21 @@ void InterestManager::update_client(std::size_t index) {
             pair.state = PairState::visible;
             continue;
         }
+        const bool fresh = fresh_box(slot);
+        const std::uint32_t cluster = cluster_of_[slot];
+        if (fresh && cluster != kNoCluster && c.cluster_hidden[cluster] != 0) {
+            // Hidden with its cluster (whose box holds this one's current box).
+            if (c.cluster_hidden[cluster] == 1) {
+                c.cluster_hidden[cluster] = 2;
+                hide_cluster(c, cluster, viewer_slot);
+            }
+            if (pair.state != PairState::hidden_with_tbv) {
+                pair.state = PairState::hidden_expired; // hide_cluster() made no TBV
+            }
+            continue;
+        }
         ++c.stats.box_tests;
-        // Temporal coherence: an entity visible last tick most likely still is; give
-        // it the full (slower) test only every full_test_interval ticks, staggered.
-        const bool quick =
-            pair.state == PairState::visible &&
-            (tick_ + slot) % static_cast<std::uint64_t>(config_.full_test_interval) != 0;
-        // e.prepared is current unless the box was set after begin_update().
-        const bool fresh = e.prepared.box.min == e.box.min && e.prepared.box.max == e.box.max;
+        const bool quick = quick_test(slot);
         const Visibility v =
             fresh ? (quick ? c.visibility->test_prepared_quick(e.prepared)
                            : c.visibility->test_prepared(e.prepared))
@@ -530,7 +643,6 @@ Aabb InterestManager::tbv_box(const EntitySlot& e, int duration) const {
 
 void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
     auto& pair = c.pairs[slot];
-    auto& count = tbv_counts_[slot];
     if (!config_.tbvs_enabled || tick_ < pair.next_tbv_tick ||
         entities_[slot].tbvs_at_tick_start >= config_.max_tbvs_per_object) {
         pair.state = PairState::hidden_expired;
@@ -622,20 +734,88 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
         }
     }
     if (group == kNoGroup) {
-        group = allocate_group(c);
-        TbvGroup& g = c.groups[group];
-        g.box = box;
-        g.prepared = candidate;
-        g.expiry = expiry;
-        c.tree.insert(group, box);
-        c.expiries.push({expiry, group, g.generation});
-        c.new_groups.push_back(group);
+        group = new_group(c, candidate, expiry);
     }
+    join_group(c, group, slot);
+}
+
+std::uint32_t InterestManager::new_group(ClientSlot& c, const PreparedBox& prepared,
+                                         std::uint64_t expiry) {
+    const std::uint32_t group = allocate_group(c);
+    TbvGroup& g = c.groups[group];
+    g.box = prepared.box;
+    g.prepared = prepared;
+    g.expiry = expiry;
+    c.tree.insert(group, g.box);
+    c.expiries.push({expiry, group, g.generation});
+    c.new_groups.push_back(group);
+    return group;
+}
+
+void InterestManager::join_group(ClientSlot& c, std::uint32_t group, std::uint32_t slot) {
     c.groups[group].members.push_back(slot);
+    auto& pair = c.pairs[slot];
     pair.state = PairState::hidden_with_tbv;
     pair.group = group;
-    count.fetch_add(1, std::memory_order_relaxed);
+    tbv_counts_[slot].fetch_add(1, std::memory_order_relaxed);
     ++c.stats.tbvs_created;
+}
+
+void InterestManager::hide_cluster(ClientSlot& c, std::uint32_t cluster,
+                                   std::uint32_t viewer_slot) {
+    // Members still undecided this tick (the caller visits them after this call).
+    auto& members = c.cluster_members;
+    members.clear();
+    for (const std::uint32_t slot : clusters_[cluster].members) {
+        const EntitySlot& e = entities_[slot];
+        if (e.alive && slot != viewer_slot && c.pairs[slot].state != PairState::hidden_with_tbv &&
+            e.prepared.box.min == e.box.min && e.prepared.box.max == e.box.max) {
+            members.push_back(slot);
+        }
+    }
+    // With a prepared stage each member's own TBV costs a few bit tests: no group.
+    if (coarse_tbvs_ || !config_.tbvs_enabled) {
+        for (const std::uint32_t slot : members) {
+            hide(c, slot);
+        }
+        return;
+    }
+    // Members allowed a TBV now (the same rules as hide()); the others only hide.
+    std::size_t eligible = 0;
+    int duration = std::numeric_limits<int>::max();
+    for (const std::uint32_t slot : members) {
+        if (tick_ < c.pairs[slot].next_tbv_tick ||
+            entities_[slot].tbvs_at_tick_start >= config_.max_tbvs_per_object) {
+            c.pairs[slot].state = PairState::hidden_expired;
+            continue;
+        }
+        members[eligible++] = slot;
+        duration = std::min(duration, tbv_duration(entities_[slot]));
+    }
+    members.resize(eligible);
+    // One TBV for all: the union of every member's TBV for the shortest duration,
+    // halved until hidden.
+    for (int attempt = 0; attempt < kMaxTbvAttempts && duration >= 1 && !members.empty();
+         ++attempt, duration /= 2) {
+        Aabb box;
+        for (const std::uint32_t slot : members) {
+            box.extend(tbv_box(entities_[slot], duration));
+        }
+        ++c.stats.tbv_tests;
+        if (c.visibility->test_box(box) == Visibility::occluded) {
+            PreparedBox prepared;
+            prepared.box = box;
+            const std::uint32_t group =
+                new_group(c, prepared, tick_ + static_cast<std::uint64_t>(duration));
+            for (const std::uint32_t slot : members) {
+                join_group(c, group, slot);
+            }
+            return;
+        }
+    }
+    for (const std::uint32_t slot : members) {
+        hide(c, slot); // each on its own, as without clusters
+    }
 }
 
 std::size_t InterestManager::expire_earliest_group(ClientSlot& c) {

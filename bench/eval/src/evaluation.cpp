@@ -114,6 +114,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
     env.lookahead_ticks = lookahead;
     env.dsoc_overrides = &options.dsoc_overrides;
     env.fusion = options.fusion;
+    env.entity_cluster_size = options.entity_cluster_size;
 
     std::vector<std::string> names = options.policies;
     if (names.empty()) {

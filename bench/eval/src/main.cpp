@@ -64,6 +64,9 @@ int main(int argc, char** argv) {
     app.add_option("--dsoc-set", options.dsoc_overrides,
                    "DSOCConfig KEY=VALUE for the dsoc policies (repeatable), e.g. "
                    "region_reuse_margin=8");
+    app.add_option("--entity-clusters", options.entity_cluster_size,
+                   "DSOCConfig::entity_cluster_size for occlusion and dsoc alike (0 = off)")
+        ->capture_default_str();
     app.add_flag("--fusion,!--no-fusion", options.fusion,
                  "occluder fusion across cut planes in the culler's shaft stage (default on)");
     app.add_flag("--region-bound", options.region_bound,

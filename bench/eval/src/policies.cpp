@@ -169,6 +169,8 @@ public:
             t.buffer_builds += s->buffer_builds;
             t.box_tests += s->box_tests;
             t.tbv_tests += s->tbv_tests;
+            t.cluster_tests += s->cluster_tests;
+            t.cluster_hits += s->cluster_hits;
             t.tbvs_created += s->tbvs_created;
             t.tbvs_merged += s->tbvs_merged;
             t.tbvs_rejected += s->tbvs_rejected;
@@ -287,6 +289,7 @@ std::unique_ptr<Policy> make_policy(std::string_view name, const PolicyEnv& env)
     } else {
         return nullptr;
     }
+    config.entity_cluster_size = env.entity_cluster_size;
     if (name != "occlusion" && env.dsoc_overrides != nullptr) { // --dsoc-set KEY=VALUE
         for (const std::string& setting : *env.dsoc_overrides) {
             const std::size_t eq = setting.find('=');

@@ -250,6 +250,8 @@ std::string to_json(const EvalResult& r, const std::string& command) {
                         {"buffer_builds_per_client_s", d.builds_per_client_s},
                         {"box_tests", m.tbv.box_tests},
                         {"tbv_tests", m.tbv.tbv_tests},
+                        {"cluster_tests", m.tbv.cluster_tests},
+                        {"cluster_hits", m.tbv.cluster_hits},
                         {"created", m.tbv.tbvs_created},
                         {"created_per_client_s", d.tbvs_created_per_client_s},
                         {"merged", m.tbv.tbvs_merged},

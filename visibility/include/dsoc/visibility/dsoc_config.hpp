@@ -70,6 +70,13 @@ struct DSOCConfig {
     /// [Limit: >= lod_near_distance]
     float lod_far_distance = 2048.0f;
 
+    /// Entities whose box centres fall in the same cell of this size (at least 3 of
+    /// them) are first tested together, per client: when the union of their boxes is
+    /// hidden, so is each of them, with one test instead of one each, and (without a
+    /// prepared stage) they share one TBV group made with one test. 0 = off.
+    /// [Units: world units] [Limit: 0 or >= 16]
+    float entity_cluster_size = 512.0f;
+
     /// false: no TBVs at all - every hidden entity is re-tested every tick (the plain
     /// "occlusion" policy, for comparison). [Units: flag]
     bool tbvs_enabled = true;

@@ -105,6 +105,8 @@ struct ClientStats {
     std::uint64_t tbvs_expired = 0;
     std::uint64_t evictions = 0;
     std::uint64_t teleports = 0; ///< TBVs voided by a jump beyond the limits
+    std::uint64_t cluster_tests = 0; ///< entity clusters tested (DSOCConfig::entity_cluster_size)
+    std::uint64_t cluster_hits = 0;  ///< clusters proven hidden: their entities need no own test
 };
 
 class InterestManager {
@@ -175,10 +177,21 @@ private:
     struct EntitySlot;
     struct ClientSlot;
     struct TbvGroup;
+    struct EntityCluster;
 
     [[nodiscard]] int tbv_duration(const EntitySlot& e) const;
     [[nodiscard]] Aabb tbv_box(const EntitySlot& e, int duration) const;
     void hide(ClientSlot& c, std::uint32_t slot);
+    /// Hides every member of a cluster proven hidden that still needs a decision this
+    /// tick: one TBV group for all of them when the union of their TBVs is hidden,
+    /// else each on its own (hide()).
+    void hide_cluster(ClientSlot& c, std::uint32_t cluster, std::uint32_t viewer_slot);
+    /// A new TBV group holding `prepared` until `expiry`, in the octree and the heap.
+    std::uint32_t new_group(ClientSlot& c, const PreparedBox& prepared, std::uint64_t expiry);
+    /// Makes `slot` a member of `group` (state hidden_with_tbv).
+    void join_group(ClientSlot& c, std::uint32_t group, std::uint32_t slot);
+    /// Groups this tick's entities by cell of entity_cluster_size (begin_update()).
+    void build_clusters();
     void release_group_member(ClientSlot& c, std::uint32_t slot);
     void free_group(ClientSlot& c, std::uint32_t group);
     std::uint32_t allocate_group(ClientSlot& c);
@@ -209,6 +222,12 @@ private:
     /// TBVs each entity slot holds across all clients; updated by concurrent
     /// update_client() calls (deque: stable addresses for the atomics).
     std::deque<std::atomic<std::int32_t>> tbv_counts_;
+    /// Entity clusters of this tick (begin_update(); read-only during update_client()):
+    /// the first cluster_count_ entries are live, the rest keep their memory.
+    std::vector<EntityCluster> clusters_;
+    std::size_t cluster_count_ = 0;
+    std::vector<std::uint32_t> cluster_of_; ///< by entity slot; kNoCluster when none
+    std::unordered_map<std::uint64_t, std::uint32_t> cluster_cells_;
 };
 
 } // namespace dsoc::visibility

@@ -5,6 +5,7 @@
 
 #include "dsoc/eval/metrics.hpp"
 #include "dsoc/eval/scenario.hpp"
+#include "dsoc/visibility/dsoc_config.hpp"
 
 #include <cstdint>
 #include <iosfwd>
@@ -31,6 +32,8 @@ struct EvalOptions {
     std::vector<std::string> dsoc_overrides;
     /// Occluder fusion in the culling policies' shaft stage (RegionCullerConfig::fusion).
     bool fusion = true;
+    /// DSOCConfig::entity_cluster_size for every InterestManager policy. [Units: world units]
+    float entity_cluster_size = visibility::DSOCConfig{}.entity_cluster_size;
     /// Also judge every pair from a 3 x 3 x 3 lattice of eyes over the client's reachable
     /// eye region (the region the culling policies cover): the region bound. Costly.
     bool region_bound = false;

@@ -18,6 +18,7 @@
 #include "dsoc/eval/ray_oracle.hpp"
 #include "dsoc/eval/scenario.hpp"
 #include "dsoc/eval/world_sim.hpp"
+#include "dsoc/visibility/dsoc_config.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
 
 #include <cstdint>
@@ -38,6 +39,8 @@ struct PolicyEnv {
     const std::vector<std::string>* dsoc_overrides = nullptr;
     /// RegionCullerConfig::fusion for the culling policies.
     bool fusion = true;
+    /// DSOCConfig::entity_cluster_size for the culling policies. [Units: world units]
+    float entity_cluster_size = visibility::DSOCConfig{}.entity_cluster_size;
     /// The latency allowance the culling policies promise. [Units: ticks]
     int lookahead_ticks = 5;
 };
@@ -48,6 +51,8 @@ struct TbvSummary {
     std::uint64_t buffer_builds = 0;
     std::uint64_t box_tests = 0;
     std::uint64_t tbv_tests = 0;
+    std::uint64_t cluster_tests = 0; ///< entity clusters tested (summed over clients)
+    std::uint64_t cluster_hits = 0;  ///< of those, proven hidden
     std::uint64_t tbvs_created = 0;
     std::uint64_t tbvs_merged = 0;
     std::uint64_t tbvs_rejected = 0;
