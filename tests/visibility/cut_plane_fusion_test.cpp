@@ -90,10 +90,11 @@ TEST(CutPlaneFusion, TheCrossingRectangleHoldsEveryCrossing) {
         const int u = (axis + 1) % 3;
         const int v = (axis + 2) % 3;
         for (int k = 0; k < 50; ++k) {
-            const glm::dvec3 r = glm::dvec3(region.min) +
-                                 glm::dvec3(region.size()) * glm::dvec3(t01(rng), t01(rng), t01(rng));
-            const glm::dvec3 b =
-                glm::dvec3(box.min) + glm::dvec3(box.size()) * glm::dvec3(t01(rng), t01(rng), t01(rng));
+            const glm::dvec3 r =
+                glm::dvec3(region.min) +
+                glm::dvec3(region.size()) * glm::dvec3(t01(rng), t01(rng), t01(rng));
+            const glm::dvec3 b = glm::dvec3(box.min) +
+                                 glm::dvec3(box.size()) * glm::dvec3(t01(rng), t01(rng), t01(rng));
             const double t = (double{plane.offset} - r[axis]) / (b[axis] - r[axis]);
             ASSERT_GT(t, 0.0);
             ASSERT_LT(t, 1.0);

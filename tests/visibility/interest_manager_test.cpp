@@ -387,7 +387,8 @@ TEST_P(DsocStateMachine, ACrowdBehindTheWallIsHiddenByOneClusterTest) {
     add_viewer(*m, -900.0f);
     for (EntityId id = 2; id < 10; ++id) {
         const float k = static_cast<float>(id);
-        ASSERT_TRUE(m->add_entity(id, EntityDesc{kHalf, {}}, box_at({100.0f + 40.0f * k, 30.0f * k, 0})));
+        ASSERT_TRUE(
+            m->add_entity(id, EntityDesc{kHalf, {}}, box_at({100.0f + 40.0f * k, 30.0f * k, 0})));
     }
     for (EntityId id = 10; id < 13; ++id) {
         ASSERT_TRUE(m->add_entity(id, EntityDesc{kHalf, {}},

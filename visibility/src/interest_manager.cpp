@@ -101,7 +101,7 @@ struct InterestManager::TbvGroup {
 
 /// Entities whose box centres share a cell of DSOCConfig::entity_cluster_size.
 struct InterestManager::EntityCluster {
-    PreparedBox prepared; ///< union of the members' boxes at begin_update()
+    PreparedBox prepared;               ///< union of the members' boxes at begin_update()
     std::vector<std::uint32_t> members; ///< entity slots, increasing
 };
 
@@ -139,11 +139,11 @@ struct InterestManager::ClientSlot {
     std::priority_queue<Expiry, std::vector<Expiry>, std::greater<>> expiries;
     std::vector<std::uint32_t> new_groups;
     std::vector<std::uint32_t> scratch;
-    PreparedBox candidate;          // hide()'s TBV candidate, reused
+    PreparedBox candidate; // hide()'s TBV candidate, reused
     /// By cluster, this tick: 0 not proven hidden, 1 proven hidden, 2 members decided.
     std::vector<std::uint8_t> cluster_hidden;
     std::vector<std::uint32_t> cluster_members; // hide_cluster()'s scratch
-    std::vector<EntityId> previous; // replicated ids of the last update, increasing
+    std::vector<EntityId> previous;             // replicated ids of the last update, increasing
     ClientDecisions decisions;
     ClientStats stats;
 };
@@ -404,10 +404,10 @@ void InterestManager::build_clusters() {
         const glm::vec3 cell = glm::floor(e.box.center() * inv);
         // 21 bits per axis: cells within +-2^20 of the origin (any float world).
         const auto key_of = [](float v) {
-            return static_cast<std::uint64_t>(
-                       std::clamp(static_cast<std::int64_t>(v), std::int64_t{-(1 << 20)},
-                                  std::int64_t{(1 << 20) - 1}) +
-                       (1 << 20)) &
+            return static_cast<std::uint64_t>(std::clamp(static_cast<std::int64_t>(v),
+                                                         std::int64_t{-(1 << 20)},
+                                                         std::int64_t{(1 << 20) - 1}) +
+                                              (1 << 20)) &
                    0x1fffffu;
         };
         const std::uint64_t key = key_of(cell.x) | key_of(cell.y) << 21 | key_of(cell.z) << 42;

@@ -20,8 +20,8 @@
 // "not covered" (always allowed).
 
 #include "dsoc/visibility/geometry.hpp"
-#include "dsoc/visibility/occluder_world.hpp"
 #include "dsoc/visibility/occluder_grid.hpp"
+#include "dsoc/visibility/occluder_world.hpp"
 
 #include <glm/vec2.hpp>
 

@@ -104,7 +104,7 @@ struct ClientStats {
     std::uint64_t tbv_hits = 0;      ///< groups found visible after a rebuild
     std::uint64_t tbvs_expired = 0;
     std::uint64_t evictions = 0;
-    std::uint64_t teleports = 0; ///< TBVs voided by a jump beyond the limits
+    std::uint64_t teleports = 0;     ///< TBVs voided by a jump beyond the limits
     std::uint64_t cluster_tests = 0; ///< entity clusters tested (DSOCConfig::entity_cluster_size)
     std::uint64_t cluster_hits = 0;  ///< clusters proven hidden: their entities need no own test
 };

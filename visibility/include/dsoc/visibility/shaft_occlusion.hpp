@@ -12,8 +12,8 @@
 // several times more (docs/region-visibility.md).
 
 #include "dsoc/visibility/box_visibility.hpp"
-#include "dsoc/visibility/geometry.hpp"
 #include "dsoc/visibility/cut_plane_fusion.hpp"
+#include "dsoc/visibility/geometry.hpp"
 #include "dsoc/visibility/occluder_grid.hpp"
 #include "dsoc/visibility/occluder_world.hpp"
 
