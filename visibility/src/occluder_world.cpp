@@ -44,6 +44,27 @@ OccluderId OccluderWorld::add(ConvexPolyhedron polyhedron) {
         }
     }
     solid_offset_.push_back(solid_planes_.size());
+    // An axis-aligned box: six solid planes, one per axis and direction. The solid is
+    // then exactly the box the planes bound.
+    Aabb solid;
+    int sides = 0;
+    for (std::size_t k = solid_begin; k < solid_planes_.size(); ++k) {
+        const Plane& p = solid_planes_[k];
+        for (int a = 0; a < 3; ++a) {
+            if (p.normal[(a + 1) % 3] != 0.0f || p.normal[(a + 2) % 3] != 0.0f) {
+                continue;
+            }
+            if (p.normal[a] == 1.0f) {
+                solid.max[a] = p.distance;
+                sides |= 1 << (2 * a);
+            } else if (p.normal[a] == -1.0f) {
+                solid.min[a] = -p.distance;
+                sides |= 2 << (2 * a);
+            }
+        }
+    }
+    const bool box = solid_planes_.size() - solid_begin == 6 && sides == 0b111111;
+    solid_box_.push_back(box ? solid : Aabb{});
 
     // Edges: each directed edge (a->b) of a face loop meets its twin (b->a) in the
     // neighbouring face. Sorting by the undirected key pairs them up.

@@ -48,6 +48,50 @@ bool segment_hits_box(glm::vec3 from, glm::vec3 dir, glm::vec3 inv, const Aabb& 
 
 } // namespace
 
+bool segment_through_box(glm::vec3 a, glm::vec3 b, const Aabb& solid) {
+    const glm::vec3 lo = solid.min + glm::vec3(kBoxShrink);
+    const glm::vec3 hi = solid.max - glm::vec3(kBoxShrink);
+    float t0 = 0.0f;
+    float t1 = 1.0f;
+    for (int axis = 0; axis < 3; ++axis) {
+        const float d = b[axis] - a[axis];
+        if (d == 0.0f) {
+            if (!(a[axis] > lo[axis] && a[axis] < hi[axis])) {
+                return false;
+            }
+            continue;
+        }
+        const float inv = 1.0f / d;
+        float ta = (lo[axis] - a[axis]) * inv;
+        float tb = (hi[axis] - a[axis]) * inv;
+        if (ta > tb) {
+            std::swap(ta, tb);
+        }
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t1 - t0 <= 1.0e-6f) {
+            return false;
+        }
+    }
+    return true;
+}
+
+bool shaft_blocked_by_box(const Aabb& region, const Aabb& box, const Aabb& solid) {
+    if (region.is_empty() || box.is_empty() || solid.is_empty()) {
+        return false;
+    }
+    const auto rc = corners(region);
+    const auto bc = corners(box);
+    for (const auto& a : rc) {
+        for (const auto& b : bc) {
+            if (!segment_through_box(a, b, solid)) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
 bool shaft_blocked_by(const Aabb& region, const Aabb& box, std::span<const Plane> planes) {
     if (region.is_empty() || box.is_empty() || planes.empty()) {
         return false;
@@ -110,15 +154,18 @@ Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& sc
             continue; // misses the occluder's bounds, so it cannot block the segment
         }
         const auto planes = world_->solid_planes(id);
+        const Aabb& solid = world_->solid_box(id); // non-empty: an axis box (fast path)
         // Necessary condition, one segment: the occluder must block centre to centre
         // (also for fusion: some occluder's interior holds the centre's crossing).
         if (full_tests >= kMaxFullTests) {
             break;
         }
-        if (!segment_blocked_by(from, to, planes)) {
+        if (!(solid.is_empty() ? segment_blocked_by(from, to, planes)
+                               : segment_through_box(from, to, solid))) {
             continue;
         }
-        if (shaft_blocked_by(region, box, planes)) {
+        if (solid.is_empty() ? shaft_blocked_by(region, box, planes)
+                             : shaft_blocked_by_box(region, box, solid)) {
             return Visibility::occluded;
         }
         ++full_tests;

@@ -56,6 +56,10 @@ public:
     /// the brush itself). Only such occluders make occlusion beams: a missing edge
     /// would leave a hole in the silhouette, a missing plane a too-large solid.
     [[nodiscard]] bool is_closed(OccluderId id) const { return closed_[id] != 0; }
+    /// When the solid is an axis-aligned box (its solid_planes() are six axis planes),
+    /// that box, exactly as the planes bound it; else an empty box. Tests may use it
+    /// instead of the planes.
+    [[nodiscard]] const Aabb& solid_box(OccluderId id) const { return solid_box_[id]; }
     /// Union of all occluder bounds (empty when the world is).
     [[nodiscard]] const Aabb& bounds() const { return bounds_; }
 
@@ -68,6 +72,7 @@ private:
     std::vector<OccluderEdge> edges_;
     std::vector<std::size_t> edge_offset_{0};
     std::vector<std::uint8_t> closed_;
+    std::vector<Aabb> solid_box_;
     Aabb bounds_;
 };
 

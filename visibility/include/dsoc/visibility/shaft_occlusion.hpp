@@ -27,6 +27,20 @@ namespace dsoc::visibility {
 [[nodiscard]] bool shaft_blocked_by(const Aabb& region, const Aabb& box,
                                     std::span<const Plane> planes);
 
+/// The same for an axis-aligned solid box, in float: every segment passes through the
+/// interior of `solid` shrunk by kBoxShrink on every side (the shrink absorbs float
+/// rounding, so `true` also holds for the exact box). About 5x cheaper than the planes.
+[[nodiscard]] bool shaft_blocked_by_box(const Aabb& region, const Aabb& box, const Aabb& solid);
+
+/// True when the open segment a-b passes through the interior of `solid` shrunk by
+/// kBoxShrink (positive length inside; float). `true` implies segment_blocked_by() for
+/// the box's six planes.
+[[nodiscard]] bool segment_through_box(glm::vec3 a, glm::vec3 b, const Aabb& solid);
+
+/// How far the box fast path shrinks a solid box: float rounding at world coordinates
+/// up to 2^15 units stays below it. [Units: world units]
+inline constexpr float kBoxShrink = 1.0f / 64.0f;
+
 /// Shaft stage over a world: `occluded` when some single occluder blocks every
 /// segment from `region` to `box` (exact per occluder, see above) or, with fusion on,
 /// when the occluders cut by one of a few axis-aligned planes through the walls the
