@@ -45,11 +45,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         }
         at += n;
     }
-    for (const auto& [id, entity] : decoder.entities()) {
+    decoder.entities().for_each([&](std::uint32_t id, const ReplicaEntity& /*entity*/) {
         const auto pose = decoder.pose(id);
         if (!pose || !std::isfinite(pose->x) || !std::isfinite(pose->yaw_deg)) {
             std::abort();
         }
-    }
+    });
     return 0;
 }

@@ -92,8 +92,13 @@ void SnapshotEncoder::enter(std::uint32_t id, const Pose& pose,
 
 bool SnapshotEncoder::update(std::uint32_t id, const Pose& pose, std::uint8_t tier,
                              pb::Snapshot& out) {
+    return update_quantized(
+        id, quantize(pose, settings_.position_quantum[tier], settings_.angle_steps), tier, out);
+}
+
+bool SnapshotEncoder::update_quantized(std::uint32_t id, const QuantizedPose& q, std::uint8_t tier,
+                                       pb::Snapshot& out) {
     Baseline& base = baseline_[id];
-    const QuantizedPose q = quantize(pose, settings_.position_quantum[tier], settings_.angle_steps);
     std::uint32_t fields = 0;
     auto* values = out.mutable_update_values();
     if (tier != base.tier) {
@@ -175,42 +180,45 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
             const std::uint32_t step = s.update_id(i);
             const std::uint32_t fields = s.update_fields(i);
             id = i == 0 ? step : id + step;
-            std::string where = "update entry " + std::to_string(i) + " (" +
-                                entity(static_cast<std::uint32_t>(id)) + ")";
+            // Built only for a problem: this loop runs for every update a client receives.
+            const auto where = [&] {
+                return "update entry " + std::to_string(i) + " (" +
+                       entity(static_cast<std::uint32_t>(id)) + ")";
+            };
             if ((i > 0 && step == 0) || id > 0xffffffffu) {
-                problems.push_back({"malformed_update", where + ": ids must increase"});
+                problems.push_back({"malformed_update", where() + ": ids must increase"});
                 break;
             }
             if (fields == 0 || (fields & ~kKnownFields) != 0 ||
                 ((fields & kFieldRebase) != 0 && fields != kFieldRebase)) {
                 problems.push_back(
-                    {"malformed_update", where + ": bad field mask " + std::to_string(fields)});
+                    {"malformed_update", where() + ": bad field mask " + std::to_string(fields)});
                 break;
             }
             const int needed = (fields & kFieldRebase) != 0 ? 6 : std::popcount(fields);
             if (values.size() - v < needed) {
-                problems.push_back({"malformed_update", where + ": update_values ends early"});
+                problems.push_back({"malformed_update", where() + ": update_values ends early"});
                 break;
             }
-            const auto it = replica_.find(static_cast<std::uint32_t>(id));
+            ReplicaEntity* const known = replica_.find(static_cast<std::uint32_t>(id));
             const int at = v;
             v += needed;
-            if (it == replica_.end()) {
-                problems.push_back({"update_for_unknown_entity", where + " is not known"});
+            if (known == nullptr) {
+                problems.push_back({"update_for_unknown_entity", where() + " is not known"});
                 continue;
             }
-            ReplicaEntity& r = it->second;
+            ReplicaEntity& r = *known;
             if ((fields & kFieldRebase) != 0) {
                 const std::int32_t tier = values[at];
                 const std::int32_t yaw = values[at + 4];
                 if (tier < 0 || static_cast<std::size_t>(tier) >= kLodTiers) {
                     problems.push_back(
-                        {"bad_tier", where + ": rebase to tier " + std::to_string(tier)});
+                        {"bad_tier", where() + ": rebase to tier " + std::to_string(tier)});
                     continue;
                 }
                 if (yaw < 0 || yaw >= steps) {
                     problems.push_back(
-                        {"malformed_update", where + ": rebase yaw step " + std::to_string(yaw)});
+                        {"malformed_update", where() + ": rebase yaw step " + std::to_string(yaw)});
                     continue;
                 }
                 r.tier = static_cast<std::uint8_t>(tier);
@@ -240,7 +248,7 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
             }
             add(kFieldPitch, q.pitch);
             if (!in_range) {
-                problems.push_back({"malformed_update", where + ": a delta leaves the range"});
+                problems.push_back({"malformed_update", where() + ": a delta leaves the range"});
                 continue;
             }
             r.quantized = q;
@@ -252,7 +260,7 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
     }
 
     for (const std::uint32_t id : s.leave()) {
-        if (replica_.erase(id) == 0) {
+        if (!replica_.erase(id)) {
             problems.push_back({"leave_for_unknown_entity", entity(id) + " left while unknown"});
         }
     }
@@ -265,13 +273,13 @@ std::vector<SnapshotProblem> SnapshotDecoder::check_audit(const pb::Snapshot& s,
     max_error = 0.0;
     constexpr double kAllowed = 0.5 + 1e-3;
     for (const pb::AuditPose& a : s.audit()) {
-        const auto it = replica_.find(a.id());
-        if (it == replica_.end()) {
+        const ReplicaEntity* const known = replica_.find(a.id());
+        if (known == nullptr) {
             problems.push_back({"audit_for_unknown_entity", entity(a.id()) + " is not known"});
             continue;
         }
-        const float quantum = settings_.position_quantum[it->second.tier];
-        const Pose replica = dequantize(it->second.quantized, quantum, settings_.angle_steps);
+        const float quantum = settings_.position_quantum[known->tier];
+        const Pose replica = dequantize(known->quantized, quantum, settings_.angle_steps);
         const Pose exact{a.x(), a.y(), a.z(), a.yaw(), a.pitch()};
         const double error = quantization_error(replica, exact, quantum, settings_.angle_steps);
         max_error = std::max(max_error, error);
@@ -285,11 +293,11 @@ std::vector<SnapshotProblem> SnapshotDecoder::check_audit(const pb::Snapshot& s,
 }
 
 std::optional<Pose> SnapshotDecoder::pose(std::uint32_t id) const {
-    const auto it = replica_.find(id);
-    if (it == replica_.end()) {
+    const ReplicaEntity* const known = replica_.find(id);
+    if (known == nullptr) {
         return std::nullopt;
     }
-    return dequantize(it->second.quantized, settings_.position_quantum[it->second.tier],
+    return dequantize(known->quantized, settings_.position_quantum[known->tier],
                       settings_.angle_steps);
 }
 

@@ -1,5 +1,7 @@
 #include "dsoc/server/client_tick.hpp"
 
+#include "dsoc/protocol/codec.hpp"
+
 #include <algorithm>
 
 namespace dsoc::server {
@@ -25,7 +27,11 @@ void run_one(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
     }
     if (job.build) {
         job.replication->build_snapshot(world, interest, tick, job.audit,
-                                        *job.envelope->mutable_snapshot());
+                                        *job.envelope->mutable_snapshot(), job.poses);
+        if (job.frame != nullptr) {
+            job.frame->clear();
+            protocol::encode_frame(*job.envelope, *job.frame);
+        }
     }
 }
 

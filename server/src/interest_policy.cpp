@@ -32,20 +32,45 @@ void DistancePolicy::select(const GameWorld& world, const Viewer& viewer,
     }
 }
 
-void PvsPolicy::select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) {
+void PvsPolicy::begin_tick(const GameWorld& world, std::uint64_t /*tick*/) {
+    ids_.clear();
+    first_.clear();
+    clusters_.clear();
+    const bool vis = pvs_ != nullptr && pvs_->has_visibility();
+    for (const Entity& e : world.entities()) {
+        ids_.push_back(e.id);
+        first_.push_back(static_cast<std::uint32_t>(clusters_.size()));
+        if (vis && pvs_->clusters_of(world.box_of(e), scratch_)) {
+            clusters_.insert(clusters_.end(), scratch_.begin(), scratch_.end());
+        } else {
+            clusters_.push_back(kAlwaysSent);
+        }
+    }
+    first_.push_back(static_cast<std::uint32_t>(clusters_.size()));
+}
+
+void PvsPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
+                       std::vector<Interest>& out) {
     out.clear();
     // Per-thread scratch: select() runs concurrently for distinct viewers.
-    thread_local std::vector<std::int32_t> clusters;
-    thread_local std::vector<std::int32_t> scratch;
+    thread_local std::vector<std::int32_t> eye_clusters;
     thread_local std::vector<std::uint8_t> rows;
+    thread_local std::vector<std::int32_t> entity_clusters;
     const bool known = pvs_ != nullptr && pvs_->has_visibility() &&
-                       pvs_->clusters_of(visibility::Aabb{viewer.eye, viewer.eye}, clusters);
+                       pvs_->clusters_of(visibility::Aabb{viewer.eye, viewer.eye}, eye_clusters);
     if (known) {
-        pvs_->union_of_rows(clusters, rows);
+        pvs_->union_of_rows(eye_clusters, rows);
     }
-    for (const Entity& e : world.entities()) {
-        if (!known || pvs_->may_see(rows, world.box_of(e), scratch)) {
-            out.push_back({e.id, 0});
+    for (std::size_t i = 0; i < ids_.size(); ++i) {
+        const std::int32_t* begin = clusters_.data() + first_[i];
+        const std::int32_t* end = clusters_.data() + first_[i + 1];
+        bool send = !known || *begin == kAlwaysSent;
+        if (!send) {
+            entity_clusters.assign(begin, end);
+            send = pvs_->may_see_clusters(rows, entity_clusters);
+        }
+        if (send) {
+            out.push_back({ids_[i], 0});
         }
     }
 }

@@ -1,5 +1,7 @@
 #include "dsoc/server/replication_state.hpp"
 
+#include <cassert>
+
 namespace dsoc::server {
 
 namespace {
@@ -20,13 +22,42 @@ protocol::Pose pose_of(const Entity& e) {
     return {e.move.position.x, e.move.position.y, e.move.position.z, e.yaw_deg, e.pitch_deg};
 }
 
+void SharedPoses::compute(const GameWorld& world,
+                          const protocol::QuantizationSettings& quantization) {
+    quantization_ = quantization;
+    poses_.clear();
+    for (const Entity& e : world.entities()) {
+        const protocol::Pose pose = pose_of(e);
+        for (const float quantum : quantization.position_quantum) {
+            poses_.push_back(protocol::quantize(pose, quantum, quantization.angle_steps));
+        }
+    }
+}
+
 void ReplicationState::build_snapshot(const GameWorld& world, std::span<const Interest> interest,
                                       std::uint64_t tick, bool audit,
-                                      protocol::pb::Snapshot& snapshot) {
+                                      protocol::pb::Snapshot& snapshot, const SharedPoses* poses) {
+    assert(poses == nullptr ||
+           (poses->size() == world.entities().size() &&
+            poses->quantization().angle_steps == encoder_.settings().angle_steps &&
+            poses->quantization().position_quantum == encoder_.settings().position_quantum));
     encoder_.begin(tick, snapshot);
     next_known_.clear();
 
-    // Merge two increasing id lists: old knowledge and the new interest set.
+    // Merge two increasing id lists: old knowledge and the new interest set. The
+    // world's entities are in increasing id order too, so each wanted entity is found
+    // by walking forward (no per-entity lookup: this loop runs for every entity of
+    // every client every tick).
+    const std::vector<Entity>& entities = world.entities();
+    std::size_t next_entity = 0;
+    const auto find_entity = [&](std::uint32_t id) -> const Entity* {
+        while (next_entity < entities.size() && entities[next_entity].id < id) {
+            ++next_entity;
+        }
+        return next_entity < entities.size() && entities[next_entity].id == id
+                   ? &entities[next_entity]
+                   : nullptr;
+    };
     std::size_t i = 0;
     std::size_t j = 0;
     while (i < known_.size() || j < interest.size()) {
@@ -40,7 +71,7 @@ void ReplicationState::build_snapshot(const GameWorld& world, std::span<const In
             continue;
         }
         const Interest wanted = interest[j];
-        const Entity* e = world.find(wanted.id);
+        const Entity* e = find_entity(wanted.id);
         ++j;
         if (!take_new) {
             ++i; // known and still of interest
@@ -61,7 +92,12 @@ void ReplicationState::build_snapshot(const GameWorld& world, std::span<const In
             if ((tick + wanted.id) % interval != 0) {
                 continue; // deferred: this coarse-tier entity is not due this tick
             }
-            encoder_.update(wanted.id, pose_of(*e), wanted.tier, snapshot);
+            if (poses != nullptr) {
+                encoder_.update_quantized(wanted.id, poses->at(next_entity, wanted.tier),
+                                          wanted.tier, snapshot);
+            } else {
+                encoder_.update(wanted.id, pose_of(*e), wanted.tier, snapshot);
+            }
         }
         if (audit) {
             add_audit(*e, snapshot);

@@ -68,7 +68,8 @@ std::uint16_t Server::start() {
                      config_.trace_every);
     }
     accept_next();
-    tick_epoch_ = Clock::now();
+    last_skip_log_ = Clock::now();
+    next_tick_due_ = last_skip_log_ + tick_period_;
     schedule_tick();
     return port;
 }
@@ -99,9 +100,30 @@ void Server::accept_next() {
 }
 
 void Server::schedule_tick() {
-    // Deadlines come from the epoch, not from "now", so the loop does not drift.
-    const auto deadline = tick_epoch_ + tick_period_ * static_cast<std::int64_t>(tick_ + 1);
-    tick_timer_.expires_at(deadline);
+    // A fixed grid of due times (no drift), but a server that fell behind by a whole
+    // period or more drops the ticks it missed instead of running them back to back:
+    // a burst of catch-up ticks would only delay every client further. The tick that
+    // runs next is the latest one already due; it runs at once.
+    const auto now = Clock::now();
+    if (now - next_tick_due_ >= tick_period_) {
+        const auto missed = (now - next_tick_due_) / tick_period_;
+        next_tick_due_ += tick_period_ * missed;
+        const bool first = stats_.skipped_ticks == 0;
+        stats_.skipped_ticks += static_cast<std::uint64_t>(missed);
+        skipped_since_log_ += static_cast<std::uint64_t>(missed);
+        skipping_ = true;
+        if (first || now - last_skip_log_ >= std::chrono::seconds(10)) {
+            spdlog::warn("tick loop behind: skipped {} tick(s) in the last {:.1f} s ({} in all); "
+                         "ticks take longer than the {:.1f} ms period",
+                         skipped_since_log_,
+                         std::chrono::duration<double>(now - last_skip_log_).count(),
+                         stats_.skipped_ticks,
+                         std::chrono::duration<double, std::milli>(tick_period_).count());
+            last_skip_log_ = now;
+            skipped_since_log_ = 0;
+        }
+    }
+    tick_timer_.expires_at(next_tick_due_);
     tick_timer_.async_wait([this](const boost::system::error_code& ec) {
         if (ec || shutting_down_) {
             return;
@@ -113,16 +135,19 @@ void Server::schedule_tick() {
 
 void Server::run_tick() {
     const auto start = Clock::now();
-    const auto due = tick_epoch_ + tick_period_ * static_cast<std::int64_t>(tick_ + 1);
-    if (start - due > tick_period_) {
+    // Late: it runs in place of skipped ones, or its timer fired a period late.
+    if (skipping_ || start - next_tick_due_ > tick_period_) {
         ++stats_.late_ticks;
     }
+    skipping_ = false;
+    next_tick_due_ += tick_period_;
     ++tick_;
     const float dt = 1.0f / static_cast<float>(config_.tick_rate);
     world_.step(dt);
     prepare_client_ticks(); // serial: may disconnect slow clients
     const auto culling_start = Clock::now();
     policy_->begin_tick(world_, tick_);
+    shared_poses_.compute(world_, quantization(config_));
     run_client_ticks(world_, *policy_, tick_, client_ticks_, pool_); // all threads
     stats_.culling_duration.observe(
         std::chrono::duration<double>(Clock::now() - culling_start).count());
@@ -161,6 +186,8 @@ void Server::prepare_client_ticks() {
         job.replication = &client.replication;
         job.interest = &client.interest;
         job.envelope = &client.envelope;
+        job.frame = &client.frame;
+        job.poses = &shared_poses_;
         job.build = build;
         job.audit = client.audit_every > 0 && tick_ % client.audit_every == 0;
         job.network_lod = config_.network_lod;
@@ -178,7 +205,7 @@ void Server::send_snapshots() {
         stats_.entity_updates_sent +=
             static_cast<std::uint64_t>(snapshot.enter_size() + snapshot.update_id_size());
         ++stats_.snapshots_sent;
-        client.session->send_snapshot(*job.envelope);
+        client.session->send_snapshot_frame(client.frame);
     }
 }
 
@@ -254,7 +281,7 @@ void Server::on_hello(Session& session, const pb::ClientHello& client_hello) {
     Client& client =
         clients_
             .try_emplace(session.client_id(),
-                         Client{it->second, ReplicationState(quantization(config_)), {}, {}, 0})
+                         Client{it->second, ReplicationState(quantization(config_)), {}, {}, 0, {}})
             .first->second;
     client.audit_every = client_hello.audit_every_ticks();
     spdlog::debug("client {} '{}' from {} joined as entity {}", session.client_id(), session.name(),

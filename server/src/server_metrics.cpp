@@ -31,8 +31,12 @@ std::string Server::render_metrics() const {
                   "for all clients, on the worker pool.",
                   stats_.culling_duration);
     out.counter("dsoc_ticks_total", "Ticks run.", d(stats_.ticks));
-    out.counter("dsoc_late_ticks_total", "Ticks that started more than one period late.",
+    out.counter("dsoc_late_ticks_total",
+                "Ticks that started more than one period late, or in place of skipped ones.",
                 d(stats_.late_ticks));
+    out.counter("dsoc_skipped_ticks_total",
+                "Ticks dropped because the loop fell a whole period or more behind.",
+                d(stats_.skipped_ticks));
     out.gauge("dsoc_clients", "Clients in the game (after a valid hello).", d(clients_.size()));
     out.gauge("dsoc_connections", "Open connections, including those still in the handshake.",
               d(sessions_.size()));

@@ -152,7 +152,7 @@ void Session::handle_client_message(const pb::Envelope& message) {
     case InputRateLimiter::Decision::drop:
         return;
     case InputRateLimiter::Decision::flood:
-        disconnect(pb::DISCONNECT_REASON_INVALID_INPUT,
+        disconnect(pb::DISCONNECT_REASON_INPUT_FLOOD,
                    "input flood: more than twice the cap of " +
                        std::to_string(config_.max_inputs_per_second) + " messages per second");
         return;
@@ -238,6 +238,13 @@ void Session::send_snapshot(const pb::Envelope& message) {
     }
     std::vector<std::uint8_t> frame;
     protocol::encode_frame(message, frame);
+    send_snapshot_frame(frame);
+}
+
+void Session::send_snapshot_frame(std::vector<std::uint8_t>& frame) {
+    if (state_ != State::active || snapshot_queued_) {
+        return;
+    }
     if (queued_bytes_ + frame.size() > config_.max_send_queue_bytes) {
         disconnect(pb::DISCONNECT_REASON_TOO_SLOW,
                    "a snapshot of " + std::to_string(frame.size()) + " bytes on top of " +
@@ -247,7 +254,11 @@ void Session::send_snapshot(const pb::Envelope& message) {
     }
     snapshot_queued_ = true;
     snapshot_queued_at_ = Clock::now();
-    enqueue(std::move(frame), true);
+    std::vector<std::uint8_t> bytes;
+    bytes.swap(frame);
+    frame.swap(spare_frame_); // empty, with the capacity of an earlier snapshot
+    frame.clear();
+    enqueue(std::move(bytes), true);
 }
 
 void Session::disconnect(pb::DisconnectReason reason, const std::string& text) {
@@ -299,6 +310,7 @@ void Session::write_next() {
             self->queued_bytes_ -= self->write_queue_.front().bytes.size();
             if (self->write_queue_.front().snapshot) {
                 self->snapshot_queued_ = false;
+                self->spare_frame_.swap(self->write_queue_.front().bytes);
             }
             self->write_queue_.pop_front();
             if (!self->write_queue_.empty()) {

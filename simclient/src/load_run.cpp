@@ -111,9 +111,9 @@ LoadReport LoadRun::report() const {
     r.clients = config_.clients;
     const auto end = stopping_ ? stopped_ : Clock::now();
     r.wall_seconds = std::chrono::duration<double>(end - started_).count();
-    std::vector<double> known;
-    std::vector<double> interarrival;
-    std::vector<double> rtt;
+    SampleHistogram known;
+    SampleHistogram interarrival;
+    SampleHistogram rtt;
     double down_rate_sum = 0.0;
     double up_rate_sum = 0.0;
     double update_rate_sum = 0.0;
@@ -146,18 +146,18 @@ LoadReport LoadRun::report() const {
         r.entity_updates += s.entity_updates;
         r.audited_poses += s.audited_poses;
         r.max_audit_error = std::max(r.max_audit_error, s.max_audit_error);
-        known.insert(known.end(), s.known_samples.begin(), s.known_samples.end());
-        interarrival.insert(interarrival.end(), s.interarrival_ms.begin(), s.interarrival_ms.end());
-        rtt.insert(rtt.end(), s.rtt_ms.begin(), s.rtt_ms.end());
+        known.merge(s.known_samples);
+        interarrival.merge(s.interarrival_ms);
+        rtt.merge(s.rtt_ms);
     }
     if (r.connected > 0) {
         r.bytes_down_per_client_s = down_rate_sum / r.connected;
         r.bytes_up_per_client_s = up_rate_sum / r.connected;
         r.entity_updates_per_client_s = update_rate_sum / r.connected;
     }
-    r.entities_known = common::summarize(std::move(known));
-    r.snapshot_interarrival_ms = common::summarize(std::move(interarrival));
-    r.rtt_ms = common::summarize(std::move(rtt));
+    r.entities_known = known.summary();
+    r.snapshot_interarrival_ms = interarrival.summary();
+    r.rtt_ms = rtt.summary();
     return r;
 }
 

@@ -150,9 +150,9 @@ void SimClient::handle(const pb::Envelope& message) {
         const auto now_us =
             std::chrono::duration_cast<std::chrono::microseconds>(Clock::now().time_since_epoch())
                 .count();
-        stats_.rtt_ms.push_back(static_cast<double>(now_us - static_cast<std::int64_t>(
-                                                                 message.pong().client_time_us())) /
-                                1000.0);
+        stats_.rtt_ms.add(static_cast<double>(
+                              now_us - static_cast<std::int64_t>(message.pong().client_time_us())) /
+                          1000.0);
         return;
     }
     case pb::Envelope::kDisconnect:
@@ -175,7 +175,7 @@ void SimClient::apply_snapshot(const pb::Snapshot& s) {
         if (s.server_tick() <= last_snapshot_tick_) {
             error("snapshot_tick_not_increasing");
         }
-        stats_.interarrival_ms.push_back(ms_between(last_snapshot_at_, now));
+        stats_.interarrival_ms.add(ms_between(last_snapshot_at_, now));
     }
     last_snapshot_tick_ = s.server_tick();
     last_snapshot_at_ = now;
@@ -195,7 +195,7 @@ void SimClient::apply_snapshot(const pb::Snapshot& s) {
     if (replica_.knows(stats_.entity_id)) {
         stats_.saw_own_entity = true;
     }
-    stats_.known_samples.push_back(static_cast<double>(replica_.size()));
+    stats_.known_samples.add(static_cast<double>(replica_.size()));
 }
 
 void SimClient::schedule_input() {
@@ -224,39 +224,41 @@ void SimClient::send_input() {
     input.set_move_x(std::cos(wish_yaw_deg_ * kPi / 180.0f));
     input.set_move_y(std::sin(wish_yaw_deg_ * kPi / 180.0f));
     input.set_view_yaw(wish_yaw_deg_);
-    send(message);
+    protocol::encode_frame(message, pending_);
     if (input_seq_ % static_cast<std::uint64_t>(tick_rate_) == 0) {
         pb::Envelope ping;
         ping.mutable_ping()->set_nonce(input_seq_);
         ping.mutable_ping()->set_client_time_us(static_cast<std::uint64_t>(
             std::chrono::duration_cast<std::chrono::microseconds>(Clock::now().time_since_epoch())
                 .count()));
-        send(ping);
+        protocol::encode_frame(ping, pending_); // same write as the input
     }
+    write_next();
 }
 
 void SimClient::send(const pb::Envelope& message) {
-    std::vector<std::uint8_t> frame;
-    protocol::encode_frame(message, frame);
-    write_queue_.push_back(std::move(frame));
+    // Frames queued while a write is in flight go out together in the next write:
+    // one send() per batch, and no allocation once the two buffers have grown.
+    protocol::encode_frame(message, pending_);
     write_next();
 }
 
 void SimClient::write_next() {
-    if (writing_ || write_queue_.empty() || state_ == State::closed) {
+    if (writing_ || pending_.empty() || state_ == State::closed) {
         return;
     }
     writing_ = true;
+    in_flight_.swap(pending_);
     asio::async_write(
-        socket_, asio::buffer(write_queue_.front()),
+        socket_, asio::buffer(in_flight_),
         [self = shared_from_this()](const boost::system::error_code& ec, std::size_t n) {
             self->writing_ = false;
             if (ec || self->state_ == State::closed) {
                 return; // the read side reports the loss
             }
             self->stats_.bytes_up += n;
-            self->write_queue_.pop_front();
-            if (!self->write_queue_.empty()) {
+            self->in_flight_.clear();
+            if (!self->pending_.empty()) {
                 self->write_next();
             } else if (self->goodbye_sent_) {
                 boost::system::error_code ignored;

@@ -136,7 +136,7 @@ TEST(ClientAbuse, InputFloodIsCappedThenDisconnected) {
         protocol::encode_frame(input, burst);
     }
     flood.send_bytes(burst);
-    expect_reason(flood, pb::DISCONNECT_REASON_INVALID_INPUT, "input flood");
+    expect_reason(flood, pb::DISCONNECT_REASON_INPUT_FLOOD, "input flood");
     expect_served(good);
     server.stop();
     // 60 accepted (the burst allowance), then 61 drops make a flood.

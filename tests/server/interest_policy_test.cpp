@@ -67,13 +67,29 @@ TEST(InterestPolicy, PvsKeepsTheViewersClusterAndCullsOthers) {
         world.step(1.0f / 30.0f);
     }
     PvsPolicy policy(map->pvs);
+    policy.begin_tick(world, 1);
     std::size_t total = 0;
+    std::vector<std::int32_t> clusters;
+    std::vector<std::int32_t> scratch;
+    std::vector<std::uint8_t> rows;
     for (int v = 0; v < 20; ++v) {
         const Entity& viewer = world.entities()[static_cast<std::size_t>(v)];
         std::vector<Interest> out;
         policy.select(world, Viewer{1, viewer.id, world.eye_of(viewer)}, out);
         EXPECT_TRUE(contains(out, viewer.id)) << "own cluster";
         total += out.size();
+        // The clusters cached per tick give exactly the answer of asking the PVS about
+        // every entity's box directly (what the policy did before the cache).
+        const glm::vec3 eye = world.eye_of(viewer);
+        ASSERT_TRUE(map->pvs->clusters_of(visibility::Aabb{eye, eye}, clusters));
+        map->pvs->union_of_rows(clusters, rows);
+        std::vector<Interest> direct;
+        for (const Entity& e : world.entities()) {
+            if (map->pvs->may_see(rows, world.box_of(e), scratch)) {
+                direct.push_back({e.id, 0});
+            }
+        }
+        EXPECT_EQ(out, direct) << "viewer " << viewer.id;
     }
     // The map's vis data culls a good share on oa_dm4 (latency-safety.md: ~45% pass).
     EXPECT_LT(total, 20u * world.entities().size() * 8 / 10);

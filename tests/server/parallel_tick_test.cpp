@@ -1,6 +1,7 @@
 // The per-client half of a tick on 1 and on N threads: every snapshot byte for byte
 // the same, for the culling policy (InterestManager::update_client in parallel) and
-// a plain one; and the WorkerPool itself.
+// a plain one, with and without the server's shared per-tick quantization and frame
+// encoding on the pool; and the WorkerPool itself.
 
 #include "dsoc/protocol/compact_snapshot.hpp"
 #include "dsoc/server/client_tick.hpp"
@@ -23,13 +24,18 @@ struct TestClient {
     ReplicationState replication;
     std::vector<Interest> interest;
     protocol::pb::Envelope envelope;
+    std::vector<std::uint8_t> frame;
     protocol::SnapshotDecoder decoder;
 };
 
 /// Every snapshot of every client over `ticks` ticks, serialized, in client order.
 /// Players join at staggered ticks and steer by a seeded random intent; one leaves.
+/// `as_server`: as the server runs it - poses quantized once per tick (SharedPoses)
+/// and each snapshot encoded into its frame on the pool; the payload of that frame
+/// is returned.
 std::vector<std::string> run_server_ticks(const std::string& policy, int threads, int ticks,
-                                          std::uint64_t& enters, std::uint64_t& updates) {
+                                          bool as_server, std::uint64_t& enters,
+                                          std::uint64_t& updates) {
     ServerConfig config;
     config.bots = 120;
     config.policy = policy;
@@ -66,6 +72,8 @@ std::vector<std::string> run_server_ticks(const std::string& policy, int threads
         }
         world.step(1.0f / 30.0f);
         interest_policy->begin_tick(world, tick);
+        SharedPoses poses;
+        poses.compute(world, quantization(config));
         std::vector<ClientTick> jobs;
         for (auto& c : clients) {
             const Entity* self = world.find(c->entity_id);
@@ -76,6 +84,10 @@ std::vector<std::string> run_server_ticks(const std::string& policy, int threads
             job.envelope = &c->envelope;
             job.build = (t + static_cast<int>(c->client_id)) % 7 != 0; // some dropped ticks
             job.audit = t % 5 == 0;
+            if (as_server) {
+                job.frame = &c->frame;
+                job.poses = &poses;
+            }
             jobs.push_back(job);
         }
         run_client_ticks(world, *interest_policy, tick, jobs, pool);
@@ -85,7 +97,13 @@ std::vector<std::string> run_server_ticks(const std::string& policy, int threads
                 continue;
             }
             const auto& snapshot = clients[i]->envelope.snapshot();
-            out.push_back(clients[i]->envelope.SerializeAsString());
+            if (as_server) {
+                const auto& frame = clients[i]->frame;
+                EXPECT_EQ(frame.size(), 4 + clients[i]->envelope.ByteSizeLong());
+                out.emplace_back(frame.begin() + 4, frame.end());
+            } else {
+                out.push_back(clients[i]->envelope.SerializeAsString());
+            }
             enters += static_cast<std::uint64_t>(snapshot.enter_size());
             updates += static_cast<std::uint64_t>(snapshot.update_id_size());
             // What the client decodes is within half a quantum of the server's world.
@@ -103,14 +121,15 @@ std::vector<std::string> run_server_ticks(const std::string& policy, int threads
 void expect_same_bytes_for_any_thread_count(const std::string& policy) {
     std::uint64_t enters = 0;
     std::uint64_t updates = 0;
-    const auto serial = run_server_ticks(policy, 1, 90, enters, updates);
+    const auto serial = run_server_ticks(policy, 1, 90, false, enters, updates);
     // The run must exercise something: entities entering and moving.
     EXPECT_GT(enters, 100u);
     EXPECT_GT(updates, 2000u);
     for (const int threads : {2, 4, 7}) {
         std::uint64_t e = 0;
         std::uint64_t u = 0;
-        const auto parallel = run_server_ticks(policy, threads, 90, e, u);
+        // Threads, shared poses and frames: none of them may change a byte.
+        const auto parallel = run_server_ticks(policy, threads, 90, threads != 4, e, u);
         ASSERT_EQ(parallel.size(), serial.size());
         for (std::size_t i = 0; i < serial.size(); ++i) {
             ASSERT_EQ(parallel[i], serial[i])

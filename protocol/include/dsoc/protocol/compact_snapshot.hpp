@@ -10,6 +10,7 @@
 // Threading: neither class is thread-safe; one per connection. Distinct instances
 // may be used concurrently (the server builds snapshots of many clients in parallel).
 
+#include "dsoc/protocol/flat_id_map.hpp"
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/protocol/quantization.hpp"
 
@@ -17,7 +18,6 @@
 #include <cstdint>
 #include <optional>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 namespace dsoc::protocol {
@@ -51,6 +51,11 @@ public:
     /// fields whose quantized value changed, or nothing when none did. Within one
     /// snapshot, update() ids must increase. Returns whether an entry was written.
     bool update(std::uint32_t id, const Pose& pose, std::uint8_t tier, pb::Snapshot& out);
+    /// The same with the pose already quantized on `tier` (quantize(pose,
+    /// settings().position_quantum[tier], settings().angle_steps)): a server quantizes
+    /// each entity once per tick for all its clients. Same bytes as update(pose).
+    bool update_quantized(std::uint32_t id, const QuantizedPose& quantized, std::uint8_t tier,
+                          pb::Snapshot& out);
     /// `id` (known) leaves; the connection forgets it.
     void leave(std::uint32_t id, pb::Snapshot& out);
 
@@ -64,7 +69,7 @@ private:
         std::uint8_t tier = 0;
     };
     QuantizationSettings settings_;
-    std::unordered_map<std::uint32_t, Baseline> baseline_;
+    FlatIdMap<Baseline> baseline_;
     std::uint32_t last_update_id_ = 0;
     bool any_update_ = false;
 };
@@ -105,13 +110,12 @@ public:
     [[nodiscard]] std::size_t size() const { return replica_.size(); }
     /// The replica's pose of `id`, or nothing when the entity is not known.
     [[nodiscard]] std::optional<Pose> pose(std::uint32_t id) const;
-    [[nodiscard]] const std::unordered_map<std::uint32_t, ReplicaEntity>& entities() const {
-        return replica_;
-    }
+    /// Every known entity (iterate with for_each(f(id, entity))).
+    [[nodiscard]] const FlatIdMap<ReplicaEntity>& entities() const { return replica_; }
 
 private:
     QuantizationSettings settings_;
-    std::unordered_map<std::uint32_t, ReplicaEntity> replica_;
+    FlatIdMap<ReplicaEntity> replica_;
 };
 
 } // namespace dsoc::protocol

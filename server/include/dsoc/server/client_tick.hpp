@@ -24,6 +24,11 @@ struct ClientTick {
     ReplicationState* replication = nullptr;
     std::vector<Interest>* interest = nullptr;  ///< receives the interest set
     protocol::pb::Envelope* envelope = nullptr; ///< receives the snapshot when `build`
+    /// When not null and `build`: receives the snapshot encoded as one wire frame
+    /// (cleared first; its capacity is reused), so serialization runs on the pool too.
+    std::vector<std::uint8_t>* frame = nullptr;
+    /// Optional: this tick's poses quantized once for all clients (same bytes).
+    const SharedPoses* poses = nullptr;
     /// false: select() still runs (the culler keeps its per-tick state) but no
     /// snapshot is built - the client could not take one (latest wins), and its
     /// replica stays what was really sent.
@@ -33,8 +38,8 @@ struct ClientTick {
 };
 
 /// For every job: policy.select() (plus the viewer's own entity), then, when
-/// `build`, the snapshot of `tick`. policy.begin_tick(world, tick) must have run;
-/// `world` and the policy's shared state are only read meanwhile.
+/// `build`, the snapshot of `tick` (and its frame when `frame` is set). policy.begin_tick(world,
+/// tick) must have run; `world` and the policy's shared state are only read meanwhile.
 void run_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
                       std::span<const ClientTick> jobs, WorkerPool& pool);
 

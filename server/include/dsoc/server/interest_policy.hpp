@@ -77,14 +77,25 @@ private:
 /// What the Quake 3 server does: an entity is sent when its box touches a leaf whose
 /// cluster is in the map's PVS row of the viewer's eye cluster (areaportals left out).
 /// Everything passes on maps without vis data and for eyes in solid.
+/// Each entity's clusters are looked up once per tick (begin_tick) for all clients;
+/// a client's select() then only tests bits of its eye cluster's row.
 class PvsPolicy final : public InterestPolicy {
 public:
     explicit PvsPolicy(std::shared_ptr<const maps::Pvs> pvs) : pvs_(std::move(pvs)) {}
     [[nodiscard]] std::string_view name() const override { return "pvs"; }
+    void begin_tick(const GameWorld& world, std::uint64_t tick) override;
     void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
 
 private:
     std::shared_ptr<const maps::Pvs> pvs_; ///< read-only after construction
+    // This tick's entities (world order) and their clusters: entity i's are
+    // clusters_[first_[i] .. first_[i + 1]); kAlwaysSent when no clustered leaf (or
+    // no vis data) - the entity passes for every client. Read-only during select().
+    static constexpr std::int32_t kAlwaysSent = -1;
+    std::vector<std::uint32_t> ids_;
+    std::vector<std::uint32_t> first_;
+    std::vector<std::int32_t> clusters_;
+    std::vector<std::int32_t> scratch_;
 };
 
 /// The policy named by config.policy, for `world`; config must have passed validate().

@@ -20,6 +20,27 @@ namespace dsoc::server {
 /// The wire pose of a world entity.
 [[nodiscard]] protocol::Pose pose_of(const Entity& e);
 
+/// Every entity's wire pose this tick, quantized on each network level-of-detail
+/// tier once for all clients (instead of once per client that is sent it).
+/// Threading: compute() serial; at() may be read concurrently afterwards.
+class SharedPoses {
+public:
+    /// For every entity of `world` (in its order) and every tier of `quantization`.
+    void compute(const GameWorld& world, const protocol::QuantizationSettings& quantization);
+    /// The pose of world.entities()[index] on `tier`, as of the last compute().
+    [[nodiscard]] const protocol::QuantizedPose& at(std::size_t index, std::uint8_t tier) const {
+        return poses_[index * protocol::kLodTiers + tier];
+    }
+    [[nodiscard]] const protocol::QuantizationSettings& quantization() const {
+        return quantization_;
+    }
+    [[nodiscard]] std::size_t size() const { return poses_.size() / protocol::kLodTiers; }
+
+private:
+    protocol::QuantizationSettings quantization_;
+    std::vector<protocol::QuantizedPose> poses_;
+};
+
 class ReplicationState {
 public:
     /// `quantization` must have passed protocol::validate().
@@ -33,9 +54,12 @@ public:
     /// on ticks where (tick + id) is a multiple of 2^t (staggered, so tiers 1 and 2
     /// cost a half and a quarter of the updates); known ones not in `interest` leave.
     /// Afterwards the client knows exactly `interest`. `audit`: also fill
-    /// snapshot.audit with the exact pose of every entity made current.
+    /// snapshot.audit with the exact pose of every entity made current. `poses`
+    /// (optional): this tick's SharedPoses of `world`, computed with this state's
+    /// quantization; the bytes are the same with or without it.
     void build_snapshot(const GameWorld& world, std::span<const Interest> interest,
-                        std::uint64_t tick, bool audit, protocol::pb::Snapshot& snapshot);
+                        std::uint64_t tick, bool audit, protocol::pb::Snapshot& snapshot,
+                        const SharedPoses* poses = nullptr);
 
     [[nodiscard]] std::size_t known_count() const { return known_.size(); }
     [[nodiscard]] const std::vector<std::uint32_t>& known() const { return known_; }

@@ -34,7 +34,12 @@ namespace dsoc::server {
 /// Totals since start; read them on the io_context thread or after run() returned.
 struct ServerStats {
     std::uint64_t ticks = 0;
-    std::uint64_t late_ticks = 0;     ///< ticks that started more than one period late
+    /// Ticks that started more than one period after they were due, or in place of
+    /// skipped ones.
+    std::uint64_t late_ticks = 0;
+    /// Ticks never run: when a tick starts a whole period or more after it was due, the
+    /// missed ones are dropped (not run back to back) and counted here.
+    std::uint64_t skipped_ticks = 0;
     std::uint64_t bytes_sent = 0;     ///< to clients, frame headers included
     std::uint64_t bytes_received = 0; ///< from clients, frame headers included
     std::uint64_t snapshots_sent = 0;
@@ -87,6 +92,7 @@ private:
         std::vector<Interest> interest;  // this tick's set, written by the worker pool
         protocol::pb::Envelope envelope; // this tick's snapshot, written by the worker pool
         std::uint32_t audit_every = 0;   // ClientHello.audit_every_ticks
+        std::vector<std::uint8_t> frame; // this tick's snapshot frame, written by the pool
     };
 
     void accept_next();
@@ -105,8 +111,13 @@ private:
     ServerConfig config_;
     boost::asio::ip::tcp::acceptor acceptor_;
     boost::asio::steady_timer tick_timer_;
-    std::chrono::steady_clock::time_point tick_epoch_;
+    /// When the next tick is due: the previous one's due time plus a period, moved
+    /// forward over whole periods already missed (those ticks are skipped).
+    std::chrono::steady_clock::time_point next_tick_due_;
     std::chrono::nanoseconds tick_period_;
+    std::chrono::steady_clock::time_point last_skip_log_; // skips are logged every 10 s at most
+    std::uint64_t skipped_since_log_ = 0;
+    bool skipping_ = false; // ticks were skipped just before the next one
     std::uint64_t tick_ = 0;
     GameWorld world_;
     std::unique_ptr<InterestPolicy> policy_;
@@ -120,6 +131,7 @@ private:
     ServerStats stats_;
     WorkerPool pool_;
     std::vector<ClientTick> client_ticks_; // this tick's jobs, in client id order
+    SharedPoses shared_poses_;             // this tick's quantized poses, for every job
     std::unique_ptr<trace::TraceWriter> trace_;
     trace::TraceTick trace_tick_;
 };

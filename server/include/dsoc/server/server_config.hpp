@@ -83,7 +83,7 @@ struct ServerConfig {
     /// Messages (inputs and pings) a client may send per second; a burst of one
     /// second's worth is allowed. Beyond it messages are dropped, and a client whose
     /// dropped messages within one second exceed this cap again is disconnected with
-    /// invalid_input. [Units: 1/s] [Limit: tick_rate + 2..10000]
+    /// input_flood. [Units: 1/s] [Limit: tick_rate + 2..10000]
     int max_inputs_per_second = 120;
     /// Accept clients without a connect token. For local tests and demos only.
     bool insecure = false;

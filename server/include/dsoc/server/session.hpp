@@ -72,6 +72,11 @@ public:
 
     /// Queues a snapshot; call only after offer_snapshot() returned true.
     void send_snapshot(const protocol::pb::Envelope& message);
+    /// The same for a snapshot already encoded as one frame (encode_frame()): takes
+    /// the bytes of `frame` and leaves in it an empty buffer with spare capacity
+    /// (a previous snapshot's, once written), so a client's snapshots cycle between
+    /// two buffers without allocating.
+    void send_snapshot_frame(std::vector<std::uint8_t>& frame);
 
     /// Queues a Disconnect with `reason`, stops reading, and closes the socket once
     /// the queue has drained (or after a 1 s grace period).
@@ -124,6 +129,7 @@ private:
         bool snapshot = false;
     };
     std::deque<QueuedFrame> write_queue_;
+    std::vector<std::uint8_t> spare_frame_; ///< a written snapshot's buffer, for reuse
     std::size_t queued_bytes_ = 0;
     std::size_t peak_queued_bytes_ = 0;
     bool snapshot_queued_ = false; ///< a snapshot frame is in write_queue_

@@ -1,10 +1,11 @@
 #pragma once
 // What one simulated client saw, for the report.
 
+#include "dsoc/simclient/sample_histogram.hpp"
+
 #include <cstdint>
 #include <map>
 #include <string>
-#include <vector>
 
 namespace dsoc::simclient {
 
@@ -24,10 +25,10 @@ struct ClientStats {
     /// Largest audit error: distance of a replica pose from the server's, in quanta
     /// (positions) or angle steps; at most 0.5 when the deltas decode right.
     double max_audit_error = 0.0;
-    double active_seconds = 0.0;       ///< from server hello to stop
-    std::vector<double> known_samples; ///< entities known after each snapshot
-    std::vector<double> interarrival_ms;
-    std::vector<double> rtt_ms;
+    double active_seconds = 0.0;   ///< from server hello to stop
+    SampleHistogram known_samples; ///< entities known after each snapshot
+    SampleHistogram interarrival_ms;
+    SampleHistogram rtt_ms;
     std::map<std::string, std::uint64_t> protocol_errors; ///< by kind
 };
 

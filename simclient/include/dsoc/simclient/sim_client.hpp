@@ -15,7 +15,6 @@
 
 #include <array>
 #include <chrono>
-#include <deque>
 #include <memory>
 #include <random>
 #include <unordered_map>
@@ -64,7 +63,8 @@ private:
     protocol::FrameDecoder decoder_;
     std::array<std::uint8_t, 64 * 1024> read_buffer_{};
     protocol::pb::Envelope incoming_;
-    std::deque<std::vector<std::uint8_t>> write_queue_;
+    std::vector<std::uint8_t> pending_;   // frames not yet handed to the socket
+    std::vector<std::uint8_t> in_flight_; // the frames of the write in progress
     bool writing_ = false;
     bool goodbye_sent_ = false;
     protocol::SnapshotDecoder replica_;

@@ -1,0 +1,216 @@
+// dsoc-tick-bench: the server's tick for N connected players, in one process and
+// without sockets, split into its phases, so that a capacity question ("what does
+// a tick cost with 500 players?") has an answer that does not depend on a load
+// generator sharing the machine. Each player steers like dsoc-simclient (a heading
+// held 1-3 s); every tick runs what Server::run_tick runs - movement, the policy's
+// begin_tick, per client select() plus the viewer's own entity, the compact
+// snapshot and its frame - and, apart, the client's decoding of that frame.
+//
+// Phases are timed with the thread's CPU clock (CLOCK_THREAD_CPUTIME_ID) on one
+// thread, so other processes on the machine inflate them little; `perf stat -e
+// instructions:u` around the program gives a count that does not depend on load.
+// The output is deterministic for a seed except the times (entity updates and
+// bytes are a checksum of the run).
+
+#include "dsoc/maps/map_source.hpp"
+#include "dsoc/protocol/codec.hpp"
+#include "dsoc/protocol/compact_snapshot.hpp"
+#include "dsoc/server/game_world.hpp"
+#include "dsoc/server/interest_policy.hpp"
+#include "dsoc/server/replication_state.hpp"
+#include "dsoc/server/server_config.hpp"
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <ctime>
+#include <memory>
+#include <random>
+#include <span>
+#include <vector>
+
+namespace {
+
+using namespace dsoc;
+
+double thread_cpu_ms() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
+struct Player {
+    std::uint32_t client_id = 0;
+    std::uint32_t entity_id = 0;
+    server::ReplicationState replication;
+    std::vector<server::Interest> interest;
+    protocol::pb::Envelope envelope;
+    std::vector<std::uint8_t> frame;
+    protocol::SnapshotDecoder decoder; // the client's side
+    protocol::pb::Envelope received;
+    float heading_deg = 0.0f;
+    int ticks_until_turn = 0;
+};
+
+struct Phases {
+    double movement = 0.0;   // world step and inputs
+    double begin_tick = 0.0; // the policy's serial part
+    double select = 0.0;     // per-client interest (InterestPolicy::select)
+    double snapshot = 0.0;   // SharedPoses::compute, ReplicationState::build_snapshot
+    double encode = 0.0;     // the frame
+    double decode = 0.0;     // client side: parse + SnapshotDecoder::apply
+};
+
+} // namespace
+
+int main(int argc, char** argv) {
+    server::ServerConfig config;
+    int players = 500;
+    int ticks = 90;
+    int warm_up = 30;
+    CLI::App app{"dsoc-tick-bench: CPU per server tick for N players, by phase, no sockets"};
+    app.add_option("--map", config.map, "Map")->capture_default_str();
+    app.add_option("--policy", config.policy, "dsoc | occlusion | pvs | distance | broadcast")
+        ->capture_default_str();
+    app.add_option("--bots", config.bots, "Wandering bots")->capture_default_str();
+    app.add_option("--players", players, "Connected players (viewers)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 100000));
+    app.add_option("--tick-rate", config.tick_rate, "[Hz]")->capture_default_str();
+    app.add_option("--ticks", ticks, "Measured ticks")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 1000000));
+    app.add_option("--warm-up", warm_up, "Ticks run before measuring (players join over them)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 1000000));
+    app.add_option("--seed", config.seed, "Seed of bots and players")->capture_default_str();
+    CLI11_PARSE(app, argc, argv);
+    config.insecure = true; // no connections here: the token settings do not matter
+    if (const auto problems = server::validate(config); !problems.empty()) {
+        for (const auto& p : problems) {
+            fmt::print(stderr, "invalid setting: {}\n", p);
+        }
+        return 2;
+    }
+    auto loaded = maps::load_map(config.map, maps::MapSearch::from_environment());
+    if (!loaded) {
+        fmt::print(stderr, "cannot load map '{}': {}\n", config.map, loaded.error().message());
+        return 2;
+    }
+    const auto map = std::make_shared<const maps::Map>(std::move(loaded).value());
+    server::GameWorld world(config, map);
+    auto policy = server::make_policy(config, world);
+    std::vector<std::unique_ptr<Player>> clients;
+    server::SharedPoses poses;
+    std::mt19937_64 rng(config.seed);
+    const float dt = 1.0f / static_cast<float>(config.tick_rate);
+    Phases total;
+    std::uint64_t updates = 0;
+    std::uint64_t bytes = 0;
+    std::uint64_t decode_problems = 0;
+    for (int t = 1; t <= warm_up + ticks; ++t) {
+        const auto tick = static_cast<std::uint64_t>(t);
+        const bool measured = t > warm_up;
+        Phases p;
+        double at = thread_cpu_ms();
+        const auto lap = [&](double& phase) {
+            const double now = thread_cpu_ms();
+            phase += now - at;
+            at = now;
+        };
+        // Players join evenly over the warm-up.
+        while (static_cast<int>(clients.size()) < players &&
+               static_cast<long>(clients.size()) * warm_up < static_cast<long>(players) * t) {
+            auto c = std::make_unique<Player>();
+            c->client_id = static_cast<std::uint32_t>(clients.size() + 1);
+            c->entity_id = world.spawn_player();
+            c->replication = server::ReplicationState(server::quantization(config));
+            c->decoder.set_settings(server::quantization(config));
+            policy->add_viewer(c->client_id, c->entity_id);
+            clients.push_back(std::move(c));
+        }
+        for (auto& c : clients) {
+            if (--c->ticks_until_turn <= 0) {
+                c->heading_deg = std::uniform_real_distribution<float>(-180.0f, 180.0f)(rng);
+                c->ticks_until_turn =
+                    std::uniform_int_distribution<int>(config.tick_rate, 3 * config.tick_rate)(rng);
+            }
+            const float rad = c->heading_deg * 3.14159265f / 180.0f;
+            world.set_player_input(c->entity_id, glm::vec3(std::cos(rad), std::sin(rad), 0.0f),
+                                   false, c->heading_deg, 0.0f);
+        }
+        world.step(dt);
+        lap(p.movement);
+        policy->begin_tick(world, tick);
+        lap(p.begin_tick);
+        poses.compute(world, server::quantization(config));
+        lap(p.snapshot);
+        for (auto& c : clients) {
+            const server::Entity* self = world.find(c->entity_id);
+            const server::Viewer viewer{c->client_id, c->entity_id, world.eye_of(*self)};
+            // As run_client_ticks: the policy's set plus the viewer's own entity.
+            policy->select(world, viewer, c->interest);
+            const auto own = std::lower_bound(
+                c->interest.begin(), c->interest.end(), c->entity_id,
+                [](const server::Interest& a, std::uint32_t id) { return a.id < id; });
+            if (own == c->interest.end() || own->id != c->entity_id) {
+                c->interest.insert(own, server::Interest{c->entity_id, 0});
+            } else {
+                own->tier = 0;
+            }
+            lap(p.select);
+            c->replication.build_snapshot(world, c->interest, tick, false,
+                                          *c->envelope.mutable_snapshot(), &poses);
+            lap(p.snapshot);
+            c->frame.clear();
+            protocol::encode_frame(c->envelope, c->frame);
+            lap(p.encode);
+            const std::span<const std::uint8_t> payload(c->frame.data() + 4, c->frame.size() - 4);
+            if (protocol::decode_payload(payload, c->received) != protocol::DecodeError::none) {
+                ++decode_problems;
+            }
+            decode_problems += c->decoder.apply(c->received.snapshot()).size();
+            lap(p.decode);
+            if (measured) {
+                const auto& s = c->envelope.snapshot();
+                updates += static_cast<std::uint64_t>(s.enter_size() + s.update_id_size());
+                bytes += c->frame.size();
+            }
+        }
+        if (measured) {
+            total.movement += p.movement;
+            total.begin_tick += p.begin_tick;
+            total.select += p.select;
+            total.snapshot += p.snapshot;
+            total.encode += p.encode;
+            total.decode += p.decode;
+        }
+    }
+    const double n = ticks;
+    const double server_ms =
+        (total.movement + total.begin_tick + total.select + total.snapshot + total.encode) / n;
+    const double client_tick = static_cast<double>(clients.size()) * n;
+    fmt::print("dsoc-tick-bench: map {} policy {} bots {} players {} tick rate {} Hz, {} ticks "
+               "measured after {}\n",
+               map->name, config.policy, config.bots, clients.size(), config.tick_rate, ticks,
+               warm_up);
+    fmt::print("  server CPU per tick  {:8.2f} ms (one thread; budget {:.1f} ms per core)\n",
+               server_ms, 1000.0 / config.tick_rate);
+    const auto row = [&](const char* name, double ms) {
+        fmt::print("    {:<18} {:8.2f} ms  {:5.1f}%  {:6.2f} us per client-tick\n", name, ms / n,
+                   100.0 * ms / n / server_ms, 1000.0 * ms / client_tick);
+    };
+    row("movement", total.movement);
+    row("begin_tick", total.begin_tick);
+    row("select (interest)", total.select);
+    row("build_snapshot", total.snapshot);
+    row("encode frame", total.encode);
+    fmt::print("  client decode        {:8.2f} ms per tick for all clients, {:.2f} us per "
+               "snapshot\n",
+               total.decode / n, 1000.0 * total.decode / client_tick);
+    fmt::print("  checksum             {} entity updates, {} bytes, {} decode problems\n", updates,
+               bytes, decode_problems);
+    return decode_problems == 0 ? 0 : 1;
+}
