@@ -33,20 +33,17 @@ void DistancePolicy::select(const GameWorld& world, const Viewer& viewer,
 }
 
 void PvsPolicy::begin_tick(const GameWorld& world, std::uint64_t /*tick*/) {
-    ids_.clear();
-    first_.clear();
-    clusters_.clear();
-    const bool vis = pvs_ != nullptr && pvs_->has_visibility();
-    for (const Entity& e : world.entities()) {
-        ids_.push_back(e.id);
-        first_.push_back(static_cast<std::uint32_t>(clusters_.size()));
-        if (vis && pvs_->clusters_of(world.box_of(e), scratch_)) {
-            clusters_.insert(clusters_.end(), scratch_.begin(), scratch_.end());
-        } else {
-            clusters_.push_back(kAlwaysSent);
-        }
+    const auto& entities = world.entities();
+    ids_.resize(entities.size());
+    always_sent_.resize(entities.size());
+    if (clusters_.size() < entities.size()) {
+        clusters_.resize(entities.size());
     }
-    first_.push_back(static_cast<std::uint32_t>(clusters_.size()));
+    const bool vis = pvs_ != nullptr && pvs_->has_visibility();
+    for (std::size_t i = 0; i < entities.size(); ++i) {
+        ids_[i] = entities[i].id;
+        always_sent_[i] = !vis || !pvs_->clusters_of(world.box_of(entities[i]), clusters_[i]);
+    }
 }
 
 void PvsPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
@@ -55,21 +52,13 @@ void PvsPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
     // Per-thread scratch: select() runs concurrently for distinct viewers.
     thread_local std::vector<std::int32_t> eye_clusters;
     thread_local std::vector<std::uint8_t> rows;
-    thread_local std::vector<std::int32_t> entity_clusters;
     const bool known = pvs_ != nullptr && pvs_->has_visibility() &&
                        pvs_->clusters_of(visibility::Aabb{viewer.eye, viewer.eye}, eye_clusters);
     if (known) {
         pvs_->union_of_rows(eye_clusters, rows);
     }
     for (std::size_t i = 0; i < ids_.size(); ++i) {
-        const std::int32_t* begin = clusters_.data() + first_[i];
-        const std::int32_t* end = clusters_.data() + first_[i + 1];
-        bool send = !known || *begin == kAlwaysSent;
-        if (!send) {
-            entity_clusters.assign(begin, end);
-            send = pvs_->may_see_clusters(rows, entity_clusters);
-        }
-        if (send) {
+        if (!known || always_sent_[i] || pvs_->may_see_clusters(rows, clusters_[i])) {
             out.push_back({ids_[i], 0});
         }
     }

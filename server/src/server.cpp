@@ -165,6 +165,7 @@ void Server::run_tick() {
 
 void Server::prepare_client_ticks() {
     client_ticks_.clear();
+    tick_clients_.clear();
     const auto now = Clock::now();
     for (auto& [id, client] : clients_) {
         Session& session = *client.session;
@@ -192,15 +193,17 @@ void Server::prepare_client_ticks() {
         job.audit = client.audit_every > 0 && tick_ % client.audit_every == 0;
         job.network_lod = config_.network_lod;
         client_ticks_.push_back(job);
+        tick_clients_.push_back(&client);
     }
 }
 
 void Server::send_snapshots() {
-    for (const ClientTick& job : client_ticks_) {
+    for (std::size_t i = 0; i < client_ticks_.size(); ++i) {
+        const ClientTick& job = client_ticks_[i];
         if (!job.build) {
             continue;
         }
-        Client& client = clients_.at(job.viewer.client_id);
+        Client& client = *tick_clients_[i];
         const pb::Snapshot& snapshot = job.envelope->snapshot();
         stats_.entity_updates_sent +=
             static_cast<std::uint64_t>(snapshot.enter_size() + snapshot.update_id_size());

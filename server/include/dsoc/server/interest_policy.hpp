@@ -88,14 +88,12 @@ public:
 
 private:
     std::shared_ptr<const maps::Pvs> pvs_; ///< read-only after construction
-    // This tick's entities (world order) and their clusters: entity i's are
-    // clusters_[first_[i] .. first_[i + 1]); kAlwaysSent when no clustered leaf (or
-    // no vis data) - the entity passes for every client. Read-only during select().
-    static constexpr std::int32_t kAlwaysSent = -1;
+    // This tick's entities (world order) and their clusters (Pvs::clusters_of); an
+    // entity in no clustered leaf (or any, without vis data) is always sent. Written
+    // by begin_tick(), read-only during select(); the vectors keep their capacity.
     std::vector<std::uint32_t> ids_;
-    std::vector<std::uint32_t> first_;
-    std::vector<std::int32_t> clusters_;
-    std::vector<std::int32_t> scratch_;
+    std::vector<std::vector<std::int32_t>> clusters_;
+    std::vector<bool> always_sent_;
 };
 
 /// The policy named by config.policy, for `world`; config must have passed validate().

@@ -131,6 +131,7 @@ private:
     ServerStats stats_;
     WorkerPool pool_;
     std::vector<ClientTick> client_ticks_; // this tick's jobs, in client id order
+    std::vector<Client*> tick_clients_;    // the client of each job (clients_ is a std::map)
     SharedPoses shared_poses_;             // this tick's quantized poses, for every job
     std::unique_ptr<trace::TraceWriter> trace_;
     trace::TraceTick trace_tick_;

@@ -61,7 +61,7 @@ private:
     boost::asio::steady_timer input_timer_;
     boost::asio::steady_timer close_timer_;
     protocol::FrameDecoder decoder_;
-    std::array<std::uint8_t, 64 * 1024> read_buffer_{};
+    std::array<std::uint8_t, 16 * 1024> read_buffer_{}; // a read may hold several frames
     protocol::pb::Envelope incoming_;
     std::vector<std::uint8_t> pending_;   // frames not yet handed to the socket
     std::vector<std::uint8_t> in_flight_; // the frames of the write in progress
