@@ -426,6 +426,28 @@ TEST_P(DsocStateMachine, ACrowdBehindTheWallIsHiddenByOneClusterTest) {
     EXPECT_EQ(plain->stats(100)->box_tests, 8u);
 }
 
+TEST_P(DsocStateMachine, CurrentBoxesAreJudgedFromThisTicksRegionNotTheReusedOne) {
+    // The eye 2 units left of the wall: its region is on the left, but the reused
+    // buffer region (grown by 16 units) reaches into the wall, from where nothing
+    // is hidden. The entity's current box is judged from the region itself.
+    for (const bool exact : {true, false}) {
+        auto c = config();
+        c.region_reuse_margin = 16.0f;
+        c.exact_region_tests = exact;
+        auto m = make(c);
+        add_viewer(*m, -10.0f, 0);
+        ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
+        step(*m, 1);
+        if (exact) {
+            EXPECT_FALSE(replicated(*m, 2));
+            // Its TBV would have to hold for the whole buffer region: none was made.
+            EXPECT_EQ(m->state(100, 2), PairState::hidden_expired);
+        } else {
+            EXPECT_TRUE(replicated(*m, 2));
+        }
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(Culler, DsocStateMachine, ::testing::Bool(),
                          [](const ::testing::TestParamInfo<bool>& param) {
                              return param.param ? std::string("PreparedStage")

@@ -134,6 +134,9 @@ std::string set_field(DSOCConfig& c, std::string_view key, std::string_view valu
                    ? ""
                    : bad + " (explicit, adaptive or fuzzy)";
     }
+    if (key == "exact_region_tests") {
+        return set_field_flag(c.exact_region_tests, value) ? "" : bad + " (true or false)";
+    }
     if (key == "validate_state") {
         return set_field_flag(c.validate_state, value) ? "" : bad + " (true or false)";
     }

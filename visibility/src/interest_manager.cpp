@@ -128,7 +128,10 @@ struct InterestManager::ClientSlot {
     glm::vec3 eye{0.0f}; ///< at the last update
     glm::vec3 spectator_eye{0.0f};
     bool has_spectator_eye = false;
-    std::unique_ptr<RegionVisibility> visibility;
+    std::unique_ptr<RegionVisibility> visibility; ///< built for buffer_region (TBVs)
+    /// Built every tick for `region` alone, for the current boxes (exact_region_tests);
+    /// made on first use.
+    std::unique_ptr<RegionVisibility> exact;
     Aabb buffer_region;
     Aabb region;
     std::vector<Pair> pairs; // by entity slot
@@ -489,6 +492,18 @@ void InterestManager::update_client(std::size_t index) {
         rebuilt = true;
     }
 
+    // The current boxes need only be hidden from this tick's region: with a reused
+    // (larger) buffer region, test them against a culler built for exactly it.
+    RegionVisibility* now = c.visibility.get();
+    if (config_.exact_region_tests &&
+        (c.buffer_region.min != c.region.min || c.buffer_region.max != c.region.max)) {
+        if (!c.exact) {
+            c.exact = make_visibility_();
+        }
+        c.exact->build(c.region);
+        now = c.exact.get();
+    }
+
     // 2. Expired TBV groups: their entities must be tested again.
     while (!c.expiries.empty() && c.expiries.top().tick < tick_) {
         c.stats.tbvs_expired += expire_earliest_group(c);
@@ -567,7 +582,7 @@ void InterestManager::update_client(std::size_t index) {
             continue;
         }
         ++c.stats.cluster_tests;
-        if (c.visibility->test_prepared(cluster.prepared) == Visibility::occluded) {
+        if (now->test_prepared(cluster.prepared) == Visibility::occluded) {
             c.cluster_hidden[k] = 1;
             ++c.stats.cluster_hits;
         }
@@ -600,9 +615,8 @@ void InterestManager::update_client(std::size_t index) {
         ++c.stats.box_tests;
         const bool quick = quick_test(slot);
         const Visibility v =
-            fresh ? (quick ? c.visibility->test_prepared_quick(e.prepared)
-                           : c.visibility->test_prepared(e.prepared))
-                  : (quick ? c.visibility->test_box_quick(e.box) : c.visibility->test_box(e.box));
+            fresh ? (quick ? now->test_prepared_quick(e.prepared) : now->test_prepared(e.prepared))
+                  : (quick ? now->test_box_quick(e.box) : now->test_box(e.box));
         if (v == Visibility::visible) {
             pair.state = PairState::visible;
         } else {

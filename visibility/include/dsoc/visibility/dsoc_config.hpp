@@ -82,6 +82,13 @@ struct DSOCConfig {
     bool tbvs_enabled = true;
     /// false: rebuild every client's culler every tick (no region reuse). [Units: flag]
     bool reuse_buffers = true;
+    /// true: entities' current boxes are tested against a culler built every tick for
+    /// exactly this tick's reachable region (what they must be hidden from), while TBVs
+    /// are proven against the reused, larger buffer region (what they must stay hidden
+    /// from while it is reused): tighter sets for one more culler build per client-tick
+    /// (with the PVS and shaft stages, a few µs). false: everything against the buffer
+    /// region. [Units: flag]
+    bool exact_region_tests = true;
     /// Temporal coherence: an entity visible last tick gets the culler's full test only
     /// every this many ticks (staggered) and its quick test otherwise; 1 = full test
     /// every tick. Both tests are conservative. [Units: ticks] [Limit: 1..64]
