@@ -82,6 +82,7 @@ std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const Ga
         dsoc.tbvs_enabled = false;
         dsoc.reuse_buffers = false;
         dsoc.full_test_interval = 1;
+        dsoc.blocker_hints = false; // no temporal coherence at all
     }
     visibility::RegionCullerConfig culler;
     culler.pyramid = config.culler != "shaft";

@@ -107,6 +107,29 @@ TEST(ShaftOcclusion, TheBoxFastPathNeverClaimsMoreThanThePlanes) {
     EXPECT_GT(agreed, 19900); // it differs only within the 1/64-unit shrink
 }
 
+TEST(ShaftOcclusion, AHintNamesTheBlockerAndIsTriedFirst) {
+    OccluderWorld world;
+    world.add(ConvexPolyhedron::from_aabb({{-8, -500, -500}, {8, 500, 500}})); // wall
+    world.add(ConvexPolyhedron::from_aabb({{300, 300, -10}, {320, 320, 10}})); // crate
+    const OccluderGrid grid(world, 128.0f);
+    const ShaftOcclusion shaft(world, grid);
+    ShaftOcclusion::Scratch scratch;
+    const Aabb region{{-100, -40, -40}, {-50, 40, 40}};
+    const Aabb hidden{{50, -20, -20}, {80, 20, 20}};
+    std::uint32_t hint = 0;
+    EXPECT_EQ(shaft.test(region, hidden, scratch, &hint), Visibility::occluded);
+    EXPECT_EQ(hint, 1u); // occluder 0, the wall
+    EXPECT_EQ(shaft.test(region, hidden, scratch, &hint), Visibility::occluded);
+    hint = 2; // the crate: blocks nothing here; the full test still finds the wall
+    EXPECT_EQ(shaft.test(region, hidden, scratch, &hint), Visibility::occluded);
+    EXPECT_EQ(hint, 1u);
+    // A box the wall does not hide: the hint is dropped.
+    hint = 1;
+    EXPECT_EQ(shaft.test(region, Aabb{{50, 900, -20}, {80, 940, 20}}, scratch, &hint),
+              Visibility::visible);
+    EXPECT_EQ(hint, 0u);
+}
+
 TEST(ShaftOcclusion, RandomRegionsNeverHideWhatAnEyeSees) {
     std::mt19937 rng(11);
     int configurations = 0;
@@ -133,7 +156,10 @@ TEST(ShaftOcclusion, RandomRegionsNeverHideWhatAnEyeSees) {
             const glm::vec3 b(ux(rng), uy(rng), uz(rng));
             const Aabb box{b - glm::vec3(15, 15, 28), b + glm::vec3(15, 15, 28)};
             ++configurations;
-            if (shaft.test(region, box, scratch) != Visibility::occluded) {
+            // A stale or random blocker hint changes the work, never the guarantee.
+            std::uint32_t hint = static_cast<std::uint32_t>(rng() % (tw.world.size() + 1));
+            const bool hinted = shaft.test(region, box, scratch, &hint) == Visibility::occluded;
+            if (shaft.test(region, box, scratch) != Visibility::occluded && !hinted) {
                 continue;
             }
             ++culled;

@@ -119,6 +119,26 @@ bool CutPlaneFusion::covers(const Aabb& region, const Aabb& box, CutPlane plane,
     const int v = (a + 2) % 3;
     const double c = plane.offset;
 
+    // Necessary, and cheap before gathering: each corner of S lies in the bounds of an
+    // occluder the plane cuts (a cross-section lies within its occluder's bounds).
+    for (int k = 0; k < 4; ++k) {
+        glm::vec3 corner;
+        corner[a] = plane.offset;
+        corner[u] = static_cast<float>((k & 1) ? hi.x : lo.x);
+        corner[v] = static_cast<float>((k & 2) ? hi.y : lo.y);
+        bool inside = false;
+        for (const OccluderId id : grid_->items_at(corner)) {
+            const Aabb& ob = world_->occluder(id).bounds();
+            if (ob.min[a] < plane.offset && ob.max[a] > plane.offset && ob.min[u] <= corner[u] &&
+                ob.max[u] >= corner[u] && ob.min[v] <= corner[v] && ob.max[v] >= corner[v]) {
+                inside = true;
+                break;
+            }
+        }
+        if (!inside) {
+            return false;
+        }
+    }
     // Occluders the plane cuts (strictly: their bounds straddle it) over S.
     Aabb query;
     query.min[a] = query.max[a] = plane.offset;

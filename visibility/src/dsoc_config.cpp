@@ -134,6 +134,9 @@ std::string set_field(DSOCConfig& c, std::string_view key, std::string_view valu
                    ? ""
                    : bad + " (explicit, adaptive or fuzzy)";
     }
+    if (key == "blocker_hints") {
+        return set_field_flag(c.blocker_hints, value) ? "" : bad + " (true or false)";
+    }
     if (key == "exact_region_tests") {
         return set_field_flag(c.exact_region_tests, value) ? "" : bad + " (true or false)";
     }

@@ -109,6 +109,8 @@ struct InterestManager::ClientSlot {
     struct Pair {
         PairState state = PairState::unknown;
         std::uint32_t group = kNoGroup;
+        /// The culler's hint for this box (test_prepared_hinted): e.g. its last blocker.
+        std::uint32_t hint = 0;
         /// No TBV is tried before this tick (back-off after a rejected TBV).
         std::uint64_t next_tbv_tick = 0;
     };
@@ -615,8 +617,11 @@ void InterestManager::update_client(std::size_t index) {
         ++c.stats.box_tests;
         const bool quick = quick_test(slot);
         const Visibility v =
-            fresh ? (quick ? now->test_prepared_quick(e.prepared) : now->test_prepared(e.prepared))
-                  : (quick ? now->test_box_quick(e.box) : now->test_box(e.box));
+            quick ? (fresh ? now->test_prepared_quick(e.prepared) : now->test_box_quick(e.box))
+            : !config_.blocker_hints
+                ? (fresh ? now->test_prepared(e.prepared) : now->test_box(e.box))
+            : fresh ? now->test_prepared_hinted(e.prepared, pair.hint)
+                    : now->test_box_hinted(e.box, pair.hint);
         if (v == Visibility::visible) {
             pair.state = PairState::visible;
         } else {

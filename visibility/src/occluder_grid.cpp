@@ -91,6 +91,20 @@ void OccluderGrid::query(const Aabb& box, Scratch& scratch) const {
     }
 }
 
+std::span<const OccluderId> OccluderGrid::items_at(glm::vec3 p) const {
+    if (bounds_.is_empty()) {
+        return {};
+    }
+    int cell[3];
+    for (int a = 0; a < 3; ++a) {
+        cell[a] = std::clamp(static_cast<int>(std::floor((p[a] - bounds_.min[a]) / cell_size_)), 0,
+                             dims_[a] - 1);
+    }
+    const std::size_t index =
+        static_cast<std::size_t>((cell[2] * dims_[1] + cell[1]) * dims_[0] + cell[0]);
+    return {cell_items_.data() + cell_start_[index], cell_start_[index + 1] - cell_start_[index]};
+}
+
 void OccluderGrid::query_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch) const {
     scratch.found.clear();
     if (bounds_.is_empty()) {

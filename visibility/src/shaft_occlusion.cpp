@@ -122,9 +122,23 @@ bool shaft_blocked_by(const Aabb& region, const Aabb& box, std::span<const Plane
     return true;
 }
 
-Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& scratch) const {
+Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& scratch,
+                                std::uint32_t* hint) const {
     if (region.is_empty() || box.is_empty() || region.overlaps(box)) {
         return Visibility::visible;
+    }
+    const auto blocks_shaft = [&](OccluderId id) {
+        const Aabb& solid = world_->solid_box(id);
+        return solid.is_empty() ? shaft_blocked_by(region, box, world_->solid_planes(id))
+                                : shaft_blocked_by_box(region, box, solid);
+    };
+    // Temporal coherence: the occluder that hid this box last time usually still does.
+    if (hint != nullptr && *hint != 0) {
+        const OccluderId id = *hint - 1;
+        if (id < world_->size() && blocks_shaft(id)) {
+            return Visibility::occluded;
+        }
+        *hint = 0;
     }
     const glm::vec3 from = region.center();
     const glm::vec3 to = box.center();
@@ -164,8 +178,10 @@ Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& sc
                                : segment_through_box(from, to, solid))) {
             continue;
         }
-        if (solid.is_empty() ? shaft_blocked_by(region, box, planes)
-                             : shaft_blocked_by_box(region, box, solid)) {
+        if (blocks_shaft(id)) {
+            if (hint != nullptr) {
+                *hint = id + 1;
+            }
             return Visibility::occluded;
         }
         ++full_tests;

@@ -276,6 +276,7 @@ std::unique_ptr<Policy> make_policy(std::string_view name, const PolicyEnv& env)
         config.tbvs_enabled = false;
         config.reuse_buffers = false;
         config.full_test_interval = 1;
+        config.blocker_hints = false; // no temporal coherence at all
         if (name == "occlusion-k0") {
             point_env.lookahead_ticks = 0; // diagnostic: the present eye only
             return std::make_unique<CullingPolicy>(std::string(name), config, point_env);

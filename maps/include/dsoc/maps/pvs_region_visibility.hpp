@@ -67,6 +67,23 @@ public:
         }
         return next_->test_box_quick(p.box);
     }
+    [[nodiscard]] visibility::Visibility test_box_hinted(const visibility::Aabb& box,
+                                                         std::uint32_t& hint) const override {
+        if (active_ && !pvs_->may_see(visible_clusters_, box, scratch_)) {
+            return visibility::Visibility::occluded;
+        }
+        return next_->test_box_hinted(box, hint);
+    }
+    [[nodiscard]] visibility::Visibility test_prepared_hinted(const visibility::PreparedBox& p,
+                                                              std::uint32_t& hint) const override {
+        if (!p.prepared) {
+            return test_box_hinted(p.box, hint);
+        }
+        if (active_ && !pvs_->may_see_clusters(visible_clusters_, p.keys)) {
+            return visibility::Visibility::occluded;
+        }
+        return next_->test_box_hinted(p.box, hint);
+    }
     /// The PVS alone: `visible` whenever the PVS passes the box (the next stage is skipped).
     [[nodiscard]] visibility::Visibility
     test_prepared_coarse(const visibility::PreparedBox& p) const override {

@@ -89,6 +89,10 @@ struct DSOCConfig {
     /// (with the PVS and shaft stages, a few µs). false: everything against the buffer
     /// region. [Units: flag]
     bool exact_region_tests = true;
+    /// Temporal coherence for hidden entities: the culler may remember per (client,
+    /// entity) what proved the box hidden (the shaft stage: the occluder) and try it
+    /// first next time. Same guarantee; cheaper re-tests. [Units: flag]
+    bool blocker_hints = true;
     /// Temporal coherence: an entity visible last tick gets the culler's full test only
     /// every this many ticks (staggered) and its quick test otherwise; 1 = full test
     /// every tick. Both tests are conservative. [Units: ticks] [Limit: 1..64]

@@ -5,6 +5,7 @@
 #include "dsoc/visibility/occluder_world.hpp"
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace dsoc::visibility {
@@ -26,6 +27,10 @@ public:
 
     /// Occluders whose bounds overlap `box`, each once, into scratch.found.
     void query(const Aabb& box, Scratch& scratch) const;
+
+    /// The occluders listed in the cell that holds `p` (clamped to the grid): every
+    /// occluder whose bounds contain `p` is among them. Empty for an empty world.
+    [[nodiscard]] std::span<const OccluderId> items_at(glm::vec3 p) const;
 
     /// Occluders in the cells the segment `from`-`to` passes through (a 3D DDA walk),
     /// each once, into scratch.found: every occluder that intersects the segment is

@@ -66,6 +66,17 @@ public:
         return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion)
             .test(region_, box, scratch_);
     }
+    /// test_box() trying first the occluder that hid the box last time (ShaftOcclusion).
+    [[nodiscard]] Visibility test_box_hinted(const Aabb& box, std::uint32_t& hint) const override {
+        if (config_.pyramid && buffer_.test_box(box) == Visibility::occluded) {
+            return Visibility::occluded;
+        }
+        if (!config_.shaft || scene_->grid == nullptr) {
+            return Visibility::visible;
+        }
+        return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion)
+            .test(region_, box, scratch_, &hint);
+    }
     /// The z-pyramid alone; without it, no test at all (`visible`, which is always
     /// allowed): an entity visible last tick stays replicated until its next full test.
     [[nodiscard]] Visibility test_box_quick(const Aabb& box) const override {

@@ -51,6 +51,19 @@ public:
     [[nodiscard]] virtual Visibility test_prepared_quick(const PreparedBox& p) const {
         return test_box_quick(p.box);
     }
+    /// test_box() / test_prepared() with a hint: `hint` is an opaque value this culler
+    /// wrote on an earlier call (0: none), e.g. the occluder that hid the box last tick,
+    /// to try first; the culler may update it. The guarantee is test_box()'s
+    /// (`occluded` only when hidden from every point of the region); the answer may
+    /// prove more or less than without the hint. Defaults ignore the hint.
+    [[nodiscard]] virtual Visibility test_box_hinted(const Aabb& box,
+                                                     std::uint32_t& /*hint*/) const {
+        return test_box(box);
+    }
+    [[nodiscard]] virtual Visibility test_prepared_hinted(const PreparedBox& p,
+                                                          std::uint32_t& hint) const {
+        return p.prepared ? test_prepared(p) : test_box_hinted(p.box, hint);
+    }
     /// The cheap first stage alone (for long-lived TBVs, re-proven after every rebuild):
     /// `occluded` only when that stage proves it, so it proves less than test_prepared().
     /// Without a prepared stage this is test_prepared().

@@ -61,7 +61,10 @@ public:
         std::vector<CutPlane> planes;
     };
 
-    [[nodiscard]] Visibility test(const Aabb& region, const Aabb& box, Scratch& scratch) const;
+    /// `hint` (optional, in/out): 0, or 1 + the id of an occluder to try first (written
+    /// here when a single occluder proves the box hidden; reset to 0 otherwise).
+    [[nodiscard]] Visibility test(const Aabb& region, const Aabb& box, Scratch& scratch,
+                                  std::uint32_t* hint = nullptr) const;
 
     /// Occluders given the full 64-segment test per query at most (those that block
     /// the centre-to-centre segment); past it no further single occluder is tried.
