@@ -48,16 +48,18 @@ class OccluderRegionVisibility final : public RegionVisibility {
 public:
     OccluderRegionVisibility(std::shared_ptr<const OccluderScene> scene,
                              const RegionCullerConfig& config = {})
-        : scene_(std::move(scene)), config_(config), buffer_(config.buffer) {}
+        : scene_(std::move(scene)), config_(config),
+          buffer_(config.pyramid ? std::make_unique<RegionOcclusionBuffer>(config.buffer)
+                                 : nullptr) {}
 
     void build(const Aabb& region) override {
         region_ = region;
-        if (config_.pyramid) {
-            buffer_.build(region, scene_->world, scene_->bsp);
+        if (buffer_) {
+            buffer_->build(region, scene_->world, scene_->bsp);
         }
     }
     [[nodiscard]] Visibility test_box(const Aabb& box) const override {
-        if (config_.pyramid && buffer_.test_box(box) == Visibility::occluded) {
+        if (buffer_ && buffer_->test_box(box) == Visibility::occluded) {
             return Visibility::occluded;
         }
         if (!config_.shaft || scene_->grid == nullptr) {
@@ -68,7 +70,7 @@ public:
     }
     /// test_box() trying first the occluder that hid the box last time (ShaftOcclusion).
     [[nodiscard]] Visibility test_box_hinted(const Aabb& box, std::uint32_t& hint) const override {
-        if (config_.pyramid && buffer_.test_box(box) == Visibility::occluded) {
+        if (buffer_ && buffer_->test_box(box) == Visibility::occluded) {
             return Visibility::occluded;
         }
         if (!config_.shaft || scene_->grid == nullptr) {
@@ -80,14 +82,16 @@ public:
     /// The z-pyramid alone; without it, no test at all (`visible`, which is always
     /// allowed): an entity visible last tick stays replicated until its next full test.
     [[nodiscard]] Visibility test_box_quick(const Aabb& box) const override {
-        return config_.pyramid ? buffer_.test_box(box) : Visibility::visible;
+        return buffer_ ? buffer_->test_box(box) : Visibility::visible;
     }
-    [[nodiscard]] const RegionOcclusionBuffer& buffer() const { return buffer_; }
+    /// The z-pyramid; nullptr without the pyramid stage (no memory is taken for it:
+    /// about 130 KB per culler at the default 64 x 64 faces).
+    [[nodiscard]] const RegionOcclusionBuffer* buffer() const { return buffer_.get(); }
 
 private:
     std::shared_ptr<const OccluderScene> scene_;
     RegionCullerConfig config_;
-    RegionOcclusionBuffer buffer_;
+    std::unique_ptr<RegionOcclusionBuffer> buffer_;
     Aabb region_;
     mutable ShaftOcclusion::Scratch scratch_;
 };
