@@ -23,8 +23,8 @@ constexpr std::size_t kMaxTickSamples = 4'000'000;
 Server::Server(asio::io_context& io, ServerConfig config, std::shared_ptr<const maps::Map> map)
     : io_(io), config_(std::move(config)), acceptor_(io), tick_timer_(io),
       tick_period_(std::chrono::nanoseconds(1'000'000'000LL / config_.tick_rate)),
-      world_(config_, std::move(map)), policy_(make_policy(config_, world_)),
-      pool_(config_.threads) {}
+      schedule_(Clock::now(), tick_period_), world_(config_, std::move(map)),
+      policy_(make_policy(config_, world_)), pool_(config_.threads) {}
 
 Server::~Server() = default;
 
@@ -69,7 +69,7 @@ std::uint16_t Server::start() {
     }
     accept_next();
     last_skip_log_ = Clock::now();
-    next_tick_due_ = last_skip_log_ + tick_period_;
+    schedule_ = TickSchedule(last_skip_log_, tick_period_);
     schedule_tick();
     return port;
 }
@@ -100,18 +100,13 @@ void Server::accept_next() {
 }
 
 void Server::schedule_tick() {
-    // A fixed grid of due times (no drift), but a server that fell behind by a whole
-    // period or more drops the ticks it missed instead of running them back to back:
-    // a burst of catch-up ticks would only delay every client further. The tick that
-    // runs next is the latest one already due; it runs at once.
+    // Ticks missed by a whole period or more are dropped, counted and logged (see
+    // TickSchedule); the next tick then runs at once.
     const auto now = Clock::now();
-    if (now - next_tick_due_ >= tick_period_) {
-        const auto missed = (now - next_tick_due_) / tick_period_;
-        next_tick_due_ += tick_period_ * missed;
+    if (const std::uint64_t missed = schedule_.skip_missed(now); missed > 0) {
         const bool first = stats_.skipped_ticks == 0;
-        stats_.skipped_ticks += static_cast<std::uint64_t>(missed);
-        skipped_since_log_ += static_cast<std::uint64_t>(missed);
-        skipping_ = true;
+        stats_.skipped_ticks += missed;
+        skipped_since_log_ += missed;
         if (first || now - last_skip_log_ >= std::chrono::seconds(10)) {
             spdlog::warn("tick loop behind: skipped {} tick(s) in the last {:.1f} s ({} in all); "
                          "ticks take longer than the {:.1f} ms period",
@@ -123,7 +118,7 @@ void Server::schedule_tick() {
             skipped_since_log_ = 0;
         }
     }
-    tick_timer_.expires_at(next_tick_due_);
+    tick_timer_.expires_at(schedule_.next_due());
     tick_timer_.async_wait([this](const boost::system::error_code& ec) {
         if (ec || shutting_down_) {
             return;
@@ -135,12 +130,9 @@ void Server::schedule_tick() {
 
 void Server::run_tick() {
     const auto start = Clock::now();
-    // Late: it runs in place of skipped ones, or its timer fired a period late.
-    if (skipping_ || start - next_tick_due_ > tick_period_) {
+    if (schedule_.start_tick(start)) {
         ++stats_.late_ticks;
     }
-    skipping_ = false;
-    next_tick_due_ += tick_period_;
     ++tick_;
     const float dt = 1.0f / static_cast<float>(config_.tick_rate);
     world_.step(dt);

@@ -16,6 +16,7 @@
 #include "dsoc/server/replication_state.hpp"
 #include "dsoc/server/server_config.hpp"
 #include "dsoc/server/session.hpp"
+#include "dsoc/server/tick_schedule.hpp"
 #include "dsoc/trace/trace_writer.hpp"
 
 #include <boost/asio/io_context.hpp>
@@ -111,13 +112,10 @@ private:
     ServerConfig config_;
     boost::asio::ip::tcp::acceptor acceptor_;
     boost::asio::steady_timer tick_timer_;
-    /// When the next tick is due: the previous one's due time plus a period, moved
-    /// forward over whole periods already missed (those ticks are skipped).
-    std::chrono::steady_clock::time_point next_tick_due_;
     std::chrono::nanoseconds tick_period_;
+    TickSchedule schedule_; // when ticks are due; missed ones are dropped, not burst
     std::chrono::steady_clock::time_point last_skip_log_; // skips are logged every 10 s at most
     std::uint64_t skipped_since_log_ = 0;
-    bool skipping_ = false; // ticks were skipped just before the next one
     std::uint64_t tick_ = 0;
     GameWorld world_;
     std::unique_ptr<InterestPolicy> policy_;
