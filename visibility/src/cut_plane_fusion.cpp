@@ -167,19 +167,6 @@ bool CutPlaneFusion::covers(const Aabb& region, const Aabb& box, CutPlane plane,
     if (overlap_sum + 2.0 * kNoiseWidth * (extent.x + extent.y) < extent.x * extent.y) {
         return false;
     }
-    // Each corner of S must lie in some cut occluder's bounds (a cross-section lies
-    // within its occluder's bounds): a cheap necessary condition.
-    for (int k = 0; k < 4; ++k) {
-        const glm::dvec2 corner((k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y);
-        const bool inside = std::any_of(scratch.cut.begin(), scratch.cut.end(), [&](const auto& e) {
-            const Aabb& ob = world_->occluder(e.second).bounds();
-            return corner.x >= ob.min[u] && corner.x <= ob.max[u] && corner.y >= ob.min[v] &&
-                   corner.y <= ob.max[v];
-        });
-        if (!inside) {
-            return false;
-        }
-    }
     // Largest first: a wall's big brushes leave few pieces for the small ones.
     std::sort(scratch.cut.begin(), scratch.cut.end(),
               [](const auto& x, const auto& y) { return x.first > y.first; });

@@ -86,6 +86,12 @@ struct InterestManager::EntitySlot {
     /// cap reads this, not the live counter, so decisions do not depend on the order
     /// in which parallel update_client() calls run.
     std::int32_t tbvs_at_tick_start = 0;
+
+    /// `prepared` (and the entity's cluster box) is current: the box was not set after
+    /// begin_update().
+    [[nodiscard]] bool prepared_is_current() const {
+        return prepared.box.min == box.min && prepared.box.max == box.max;
+    }
 };
 
 struct InterestManager::TbvGroup {
@@ -562,8 +568,7 @@ void InterestManager::update_client(std::size_t index) {
     // e.prepared (and its cluster's box) is current unless the box was set after
     // begin_update().
     const auto fresh_box = [&](std::uint32_t slot) {
-        const EntitySlot& e = entities_[slot];
-        return e.prepared.box.min == e.box.min && e.prepared.box.max == e.box.max;
+        return entities_[slot].prepared_is_current();
     };
 
     // 5a. Clusters with at least two members due a full test: one test of the union
@@ -788,7 +793,7 @@ void InterestManager::hide_cluster(ClientSlot& c, std::uint32_t cluster,
     for (const std::uint32_t slot : clusters_[cluster].members) {
         const EntitySlot& e = entities_[slot];
         if (e.alive && slot != viewer_slot && c.pairs[slot].state != PairState::hidden_with_tbv &&
-            e.prepared.box.min == e.box.min && e.prepared.box.max == e.box.max) {
+            e.prepared_is_current()) {
             members.push_back(slot);
         }
     }

@@ -133,11 +133,13 @@ Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& sc
                                 : shaft_blocked_by_box(region, box, solid);
     };
     // Temporal coherence: the occluder that hid this box last time usually still does.
+    OccluderId tried = OccluderWorld::kInvalid; // already tested: skipped below
     if (hint != nullptr && *hint != 0) {
         const OccluderId id = *hint - 1;
         if (id < world_->size() && blocks_shaft(id)) {
             return Visibility::occluded;
         }
+        tried = id;
         *hint = 0;
     }
     const glm::vec3 from = region.center();
@@ -178,7 +180,7 @@ Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& sc
                                : segment_through_box(from, to, solid))) {
             continue;
         }
-        if (blocks_shaft(id)) {
+        if (id != tried && blocks_shaft(id)) {
             if (hint != nullptr) {
                 *hint = id + 1;
             }
