@@ -42,4 +42,13 @@ void run_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint6
     pool.run(jobs.size(), [&](std::size_t i) { run_one(world, policy, tick, jobs[i]); });
 }
 
+void start_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
+                        std::span<const ClientTick> jobs, WorkerPool& pool,
+                        std::function<void(std::exception_ptr)> done) {
+    pool.start(
+        jobs.size(),
+        [&world, &policy, tick, jobs](std::size_t i) { run_one(world, policy, tick, jobs[i]); },
+        std::move(done));
+}
+
 } // namespace dsoc::server

@@ -4,6 +4,7 @@
 #include <glm/trigonometric.hpp>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 
 namespace dsoc::server {
@@ -27,28 +28,47 @@ GameWorld::GameWorld(const ServerConfig& config, std::shared_ptr<const maps::Map
     bots_ = sim::spawn_wander_bots(collision_, move_, map_->spawn_points,
                                    static_cast<std::size_t>(config.bots), config.seed);
     for (std::size_t i = 0; i < bots_.size(); ++i) {
-        Entity& bot = add(EntityKind::bot);
+        Entity& bot = add(EntityKind::bot, next_id_++);
         bot.bot = static_cast<std::int32_t>(i);
         bot.move = bots_[i].state;
     }
     next_spawn_ = static_cast<std::uint32_t>(config.seed % map_->spawn_points.size());
 }
 
-Entity& GameWorld::add(EntityKind kind) {
+Entity& GameWorld::add(EntityKind kind, std::uint32_t id) {
     Entity e;
-    e.id = next_id_++;
+    e.id = id;
     e.kind = kind;
-    entities_.push_back(e);
-    index_[e.id] = entities_.size() - 1;
-    return entities_.back();
+    if (entities_.empty() || entities_.back().id < id) {
+        entities_.push_back(e);
+        index_[e.id] = entities_.size() - 1;
+        return entities_.back();
+    }
+    // A reserved id spawned after a later one: insert in id order.
+    const auto at = std::lower_bound(entities_.begin(), entities_.end(), id,
+                                     [](const Entity& a, std::uint32_t b) { return a.id < b; });
+    const auto index = at - entities_.begin();
+    entities_.insert(at, e);
+    rebuild_index();
+    return entities_[static_cast<std::size_t>(index)];
+}
+
+std::uint32_t GameWorld::reserve_player() {
+    return next_id_++;
 }
 
 std::uint32_t GameWorld::spawn_player() {
+    const std::uint32_t id = reserve_player();
+    spawn_reserved(id);
+    return id;
+}
+
+void GameWorld::spawn_reserved(std::uint32_t id) {
+    assert(id != 0 && id < next_id_ && find(id) == nullptr); // reserved, not spawned yet
     const auto& spawn = map_->spawn_points[next_spawn_++ % map_->spawn_points.size()];
-    Entity& p = add(EntityKind::player);
+    Entity& p = add(EntityKind::player, id);
     p.move = sim::spawn_state(collision_, move_, spawn.origin);
     p.yaw_deg = wrap_degrees(spawn.yaw_degrees);
-    return p.id;
 }
 
 void GameWorld::rebuild_index() {

@@ -62,8 +62,8 @@ void add_options(CLI::App& app, dsoc::server::ServerConfig& config, ProgramOptio
                    "Radius of the distance policy [units]")
         ->capture_default_str();
     app.add_option("--threads", config.threads,
-                   "Threads for the per-client tick work, the tick thread included; 0: one per "
-                   "core")
+                   "Worker threads for the per-client tick work, beside the I/O thread; 0: one "
+                   "per core")
         ->capture_default_str();
     app.add_option("--position-quantum-near", config.position_quantum_near,
                    "Snapshot position precision, entities updated every tick [units]")

@@ -24,9 +24,13 @@ Server::Server(asio::io_context& io, ServerConfig config, std::shared_ptr<const 
     : io_(io), config_(std::move(config)), acceptor_(io), tick_timer_(io),
       tick_period_(std::chrono::nanoseconds(1'000'000'000LL / config_.tick_rate)),
       schedule_(Clock::now(), tick_period_), world_(config_, std::move(map)),
-      policy_(make_policy(config_, world_)), pool_(config_.threads) {}
+      policy_(make_policy(config_, world_)), pool_(config_.threads, WorkerPool::Caller::stays_out) {
+}
 
-Server::~Server() = default;
+Server::~Server() {
+    // The jobs of a phase in flight point into this server's members.
+    pool_.wait_idle();
+}
 
 std::uint16_t Server::start() {
     const asio::ip::tcp::endpoint endpoint(asio::ip::make_address(config_.bind_address),
@@ -123,35 +127,91 @@ void Server::schedule_tick() {
         if (ec || shutting_down_) {
             return;
         }
-        run_tick();
-        schedule_tick();
+        start_tick();
     });
 }
 
-void Server::run_tick() {
-    const auto start = Clock::now();
-    if (schedule_.start_tick(start)) {
+void Server::start_tick() {
+    // Serial, on the I/O thread: nothing of the previous tick is in flight.
+    tick_start_ = Clock::now();
+    if (schedule_.start_tick(tick_start_)) {
         ++stats_.late_ticks;
     }
     ++tick_;
+    apply_joins();
+    apply_inputs();
     const float dt = 1.0f / static_cast<float>(config_.tick_rate);
     world_.step(dt);
-    prepare_client_ticks(); // serial: may disconnect slow clients
-    const auto culling_start = Clock::now();
+    prepare_client_ticks(); // may disconnect slow clients
+    culling_start_ = Clock::now();
     policy_->begin_tick(world_, tick_);
     shared_poses_.compute(world_, quantization(config_));
-    run_client_ticks(world_, *policy_, tick_, client_ticks_, pool_); // all threads
+    // The parallel phase: on the pool's threads; this thread goes back to the sockets.
+    phase_running_ = true;
+    phase_work_.emplace(io_.get_executor());
+    start_client_ticks(
+        world_, *policy_, tick_, client_ticks_, pool_, [this](std::exception_ptr error) {
+            const auto phase_end = Clock::now();
+            asio::post(io_, [this, phase_end, error] { finish_tick(phase_end, error); });
+        });
+}
+
+void Server::finish_tick(Clock::time_point phase_end, std::exception_ptr error) {
+    const auto handover_start = Clock::now();
+    phase_running_ = false;
+    phase_work_.reset();
+    if (error) {
+        std::rethrow_exception(error); // a bug in a policy: out of io_context::run()
+    }
     stats_.culling_duration.observe(
-        std::chrono::duration<double>(Clock::now() - culling_start).count());
+        std::chrono::duration<double>(phase_end - culling_start_).count());
     send_snapshots();
-    if (trace_ && tick_ % static_cast<std::uint64_t>(config_.trace_every) == 0) {
+    if (trace_ && !shutting_down_ && tick_ % static_cast<std::uint64_t>(config_.trace_every) == 0) {
         write_trace_tick();
     }
+    tbvs_alive_ = policy_->tbvs_alive();
+    apply_leaves();
     ++stats_.ticks;
-    const double cost_s = std::chrono::duration<double>(Clock::now() - start).count();
+    const auto handover_end = Clock::now();
+    const double cost_s =
+        std::chrono::duration<double>((phase_end - tick_start_) + (handover_end - handover_start))
+            .count();
     stats_.tick_duration.observe(cost_s);
     if (stats_.tick_cost_us.size() < kMaxTickSamples) {
         stats_.tick_cost_us.push_back(cost_s * 1e6);
+    }
+    if (shutting_down_) {
+        maybe_finish_shutdown();
+    } else {
+        schedule_tick();
+    }
+}
+
+void Server::apply_joins() {
+    // In hello order, so entity ids (reserved at hello) stay increasing in the world.
+    for (const std::uint32_t id : pending_joins_) {
+        const auto it = clients_.find(id);
+        if (it == clients_.end() || !it->second.session->active()) {
+            continue; // left before its first tick: its id is never spawned
+        }
+        const std::uint32_t entity = it->second.session->entity_id();
+        world_.spawn_reserved(entity);
+        policy_->add_viewer(id, entity);
+    }
+    pending_joins_.clear();
+}
+
+void Server::apply_inputs() {
+    // Each client's latest input since the last tick start (what the step would have
+    // seen had it been applied on arrival).
+    for (auto& [id, client] : clients_) {
+        if (client.input_pending) {
+            const pb::ClientInput& input = client.input;
+            world_.set_player_input(client.session->entity_id(),
+                                    glm::vec3(input.move_x(), input.move_y(), input.move_z()),
+                                    input.jump(), input.view_yaw(), input.view_pitch());
+            client.input_pending = false;
+        }
     }
 }
 
@@ -196,12 +256,32 @@ void Server::send_snapshots() {
             continue;
         }
         Client& client = *tick_clients_[i];
+        if (!client.session->active()) {
+            continue; // left or kicked during the phase
+        }
         const pb::Snapshot& snapshot = job.envelope->snapshot();
         stats_.entity_updates_sent +=
             static_cast<std::uint64_t>(snapshot.enter_size() + snapshot.update_id_size());
         ++stats_.snapshots_sent;
         client.session->send_snapshot_frame(client.frame);
     }
+}
+
+void Server::apply_leaves() {
+    if (phase_running_) {
+        return; // the jobs still read the world and the policy: at the hand-over
+    }
+    for (const std::uint32_t id : pending_leaves_) {
+        const auto it = sessions_.find(id);
+        if (it != sessions_.end() && it->second->entity_id() != 0) {
+            world_.remove(it->second->entity_id()); // not spawned yet: nothing to remove
+        }
+        policy_->remove_viewer(id);
+        clients_.erase(id);
+        sessions_.erase(id);
+    }
+    pending_leaves_.clear();
+    maybe_finish_shutdown();
 }
 
 void Server::write_trace_tick() {
@@ -257,9 +337,10 @@ void Server::on_hello(Session& session, const pb::ClientHello& client_hello) {
                                " clients at most");
         return;
     }
-    const std::uint32_t entity = world_.spawn_player();
+    // The entity is spawned (and the policy told) at the next tick start: a phase may
+    // be reading the world now. The client learns its id at once.
+    const std::uint32_t entity = world_.reserve_player();
     session.set_entity_id(entity);
-    policy_->add_viewer(session.client_id(), entity);
     pb::Envelope reply;
     auto& hello = *reply.mutable_server_hello();
     hello.set_protocol_version(protocol::kProtocolVersion);
@@ -275,18 +356,24 @@ void Server::on_hello(Session& session, const pb::ClientHello& client_hello) {
     auto it = sessions_.find(session.client_id());
     Client& client =
         clients_
-            .try_emplace(session.client_id(),
-                         Client{it->second, ReplicationState(quantization(config_)), {}, {}, 0, {}})
+            .try_emplace(
+                session.client_id(),
+                Client{
+                    it->second, ReplicationState(quantization(config_)), {}, {}, 0, {}, {}, false})
             .first->second;
     client.audit_every = client_hello.audit_every_ticks();
+    pending_joins_.push_back(session.client_id());
     spdlog::debug("client {} '{}' from {} joined as entity {}", session.client_id(), session.name(),
                   session.remote(), entity);
 }
 
 void Server::on_input(Session& session, const pb::ClientInput& input) {
-    world_.set_player_input(session.entity_id(),
-                            glm::vec3(input.move_x(), input.move_y(), input.move_z()), input.jump(),
-                            input.view_yaw(), input.view_pitch());
+    // Kept until the next tick start: a phase may be reading the world now.
+    const auto it = clients_.find(session.client_id());
+    if (it != clients_.end()) {
+        it->second.input = input;
+        it->second.input_pending = true;
+    }
 }
 
 void Server::on_closed(Session& session) {
@@ -304,16 +391,10 @@ void Server::on_closed(Session& session) {
             token_clients_.erase(it);
         }
     }
-    if (session.entity_id() != 0) {
-        world_.remove(session.entity_id());
-    }
-    policy_->remove_viewer(id);
-    // Erase later: we may be inside a loop over the maps, or inside the session.
-    asio::post(io_, [this, id] {
-        clients_.erase(id);
-        sessions_.erase(id);
-        maybe_finish_shutdown();
-    });
+    // The entity, the policy's state and the client's buffers go when no phase runs:
+    // a job may be using them now.
+    pending_leaves_.push_back(id);
+    asio::post(io_, [this] { apply_leaves(); }); // not from inside the session's handler
 }
 
 void Server::shutdown(std::function<void()> on_done) {

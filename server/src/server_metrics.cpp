@@ -27,8 +27,8 @@ std::string Server::render_metrics() const {
                   "Work time of each server tick (movement, interest, snapshots).",
                   stats_.tick_duration);
     out.histogram("dsoc_culling_duration_seconds",
-                  "Wall time per tick of interest evaluation (culling) and snapshot building "
-                  "for all clients, on the worker pool.",
+                  "Wall time per tick of the policy's begin_tick and the parallel phase: interest "
+                  "evaluation (culling) and snapshot building for all clients, on the worker pool.",
                   stats_.culling_duration);
     out.counter("dsoc_ticks_total", "Ticks run.", d(stats_.ticks));
     out.counter("dsoc_late_ticks_total",
@@ -42,8 +42,9 @@ std::string Server::render_metrics() const {
               d(sessions_.size()));
     out.gauge("dsoc_entities", "Entities in the world (bots and players).",
               d(world_.entities().size()));
+    // As of the last hand-over: during a phase the jobs are changing them.
     out.gauge("dsoc_tbvs_alive", "Live Temporal Bounding Volume groups over all clients.",
-              d(policy_->tbvs_alive()));
+              d(tbvs_alive_));
     out.gauge("dsoc_send_queue_bytes", "Unsent bytes queued for all clients.", d(queued));
     out.counter("dsoc_clients_accepted_total", "Connections accepted.", d(stats_.clients_accepted));
     out.counter("dsoc_bytes_sent_total", "Bytes sent to clients, frame headers included.",

@@ -2,9 +2,10 @@
 // without sockets, split into its phases, so that a capacity question ("what does
 // a tick cost with 500 players?") has an answer that does not depend on a load
 // generator sharing the machine. Each player steers like dsoc-simclient (a heading
-// held 1-3 s); every tick runs what Server::run_tick runs - movement, the policy's
-// begin_tick, per client select() plus the viewer's own entity, the compact
-// snapshot and its frame - and, apart, the client's decoding of that frame.
+// held 1-3 s); every tick runs what a server tick runs (Server::start_tick and the
+// parallel phase) - movement, the policy's begin_tick, per client select() plus the
+// viewer's own entity, the compact snapshot and its frame - and, apart, the client's
+// decoding of that frame.
 //
 // Phases are timed with the thread's CPU clock (CLOCK_THREAD_CPUTIME_ID) on one
 // thread, so other processes on the machine inflate them little; `perf stat -e

@@ -1,7 +1,9 @@
 // The per-client half of a tick on 1 and on N threads: every snapshot byte for byte
 // the same, for the culling policy (InterestManager::update_client in parallel) and
 // a plain one, with and without the server's shared per-tick quantization and frame
-// encoding on the pool; and the WorkerPool itself.
+// encoding on the pool, run in the caller (WorkerPool::run) or, as the server runs
+// it, on the pool's own threads while the caller waits elsewhere (start()); and the
+// WorkerPool itself.
 
 #include "dsoc/protocol/compact_snapshot.hpp"
 #include "dsoc/server/client_tick.hpp"
@@ -10,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <future>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -30,9 +33,9 @@ struct TestClient {
 
 /// Every snapshot of every client over `ticks` ticks, serialized, in client order.
 /// Players join at staggered ticks and steer by a seeded random intent; one leaves.
-/// `as_server`: as the server runs it - poses quantized once per tick (SharedPoses)
-/// and each snapshot encoded into its frame on the pool; the payload of that frame
-/// is returned.
+/// `as_server`: as the server runs it - poses quantized once per tick (SharedPoses),
+/// each snapshot encoded into its frame, all on the pool's own threads
+/// (start_client_ticks, Caller::stays_out); the payload of that frame is returned.
 std::vector<std::string> run_server_ticks(const std::string& policy, int threads, int ticks,
                                           bool as_server, std::uint64_t& enters,
                                           std::uint64_t& updates) {
@@ -43,7 +46,8 @@ std::vector<std::string> run_server_ticks(const std::string& policy, int threads
     config.seed = 9;
     GameWorld world(config, testing::rooms_map());
     auto interest_policy = make_policy(config, world);
-    WorkerPool pool(threads);
+    WorkerPool pool(threads,
+                    as_server ? WorkerPool::Caller::stays_out : WorkerPool::Caller::takes_part);
     std::vector<std::unique_ptr<TestClient>> clients;
     std::mt19937 rng(4);
     std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
@@ -90,7 +94,20 @@ std::vector<std::string> run_server_ticks(const std::string& policy, int threads
             }
             jobs.push_back(job);
         }
-        run_client_ticks(world, *interest_policy, tick, jobs, pool);
+        if (as_server) {
+            std::promise<void> finished;
+            start_client_ticks(world, *interest_policy, tick, jobs, pool,
+                               [&finished](std::exception_ptr error) {
+                                   if (error) {
+                                       finished.set_exception(error);
+                                   } else {
+                                       finished.set_value();
+                                   }
+                               });
+            finished.get_future().get();
+        } else {
+            run_client_ticks(world, *interest_policy, tick, jobs, pool);
+        }
         for (std::size_t i = 0; i < jobs.size(); ++i) {
             if (!jobs[i].build) {
                 out.emplace_back("dropped");
@@ -125,10 +142,11 @@ void expect_same_bytes_for_any_thread_count(const std::string& policy) {
     // The run must exercise something: entities entering and moving.
     EXPECT_GT(enters, 100u);
     EXPECT_GT(updates, 2000u);
-    for (const int threads : {2, 4, 7}) {
+    for (const int threads : {1, 2, 4, 7}) {
         std::uint64_t e = 0;
         std::uint64_t u = 0;
-        // Threads, shared poses and frames: none of them may change a byte.
+        // Threads, shared poses, frames and the pool's own threads: none of them may
+        // change a byte.
         const auto parallel = run_server_ticks(policy, threads, 90, threads != 4, e, u);
         ASSERT_EQ(parallel.size(), serial.size());
         for (std::size_t i = 0; i < serial.size(); ++i) {
@@ -176,6 +194,85 @@ TEST(WorkerPool, RethrowsABodysExceptionAndStaysUsable) {
     pool.run(10, [&](std::size_t) { again.fetch_add(1); });
     EXPECT_EQ(again.load(), 10);
     EXPECT_GE(WorkerPool::resolve(0), 1);
+}
+
+/// Starts a loop and waits for its `done`; returns the error `done` received.
+std::exception_ptr start_and_wait(WorkerPool& pool, std::size_t count,
+                                  const WorkerPool::Body& body) {
+    std::promise<std::exception_ptr> finished;
+    pool.start(count, body, [&](std::exception_ptr error) { finished.set_value(error); });
+    return finished.get_future().get();
+}
+
+TEST(WorkerPool, StartedLoopsRunEveryIndexOnceBeforeDone) {
+    for (const int threads : {1, 3}) {
+        WorkerPool pool(threads, WorkerPool::Caller::stays_out);
+        EXPECT_EQ(pool.threads(), threads);
+        const std::thread::id caller = std::this_thread::get_id();
+        for (std::size_t count : {0u, 1u, 5u, 1000u}) {
+            std::vector<std::atomic<int>> hits(count);
+            for (int run = 0; run < 20; ++run) {
+                std::atomic<bool> on_caller{false};
+                std::promise<std::size_t> seen_at_done;
+                pool.start(
+                    count,
+                    [&](std::size_t i) {
+                        hits[i].fetch_add(1);
+                        on_caller = on_caller || std::this_thread::get_id() == caller;
+                    },
+                    [&](std::exception_ptr error) {
+                        EXPECT_FALSE(error);
+                        std::size_t total = 0; // every body has returned by now
+                        for (const auto& h : hits) {
+                            total += static_cast<std::size_t>(h.load());
+                        }
+                        seen_at_done.set_value(total);
+                    });
+                EXPECT_EQ(seen_at_done.get_future().get(),
+                          count * static_cast<std::size_t>(run + 1));
+                pool.wait_idle();
+                EXPECT_FALSE(pool.in_flight());
+                EXPECT_FALSE(on_caller) << "a body ran on the caller";
+            }
+        }
+    }
+}
+
+TEST(WorkerPool, StartedLoopReportsABodysExceptionToDone) {
+    WorkerPool pool(2, WorkerPool::Caller::stays_out);
+    std::atomic<int> ran{0};
+    const auto error = start_and_wait(pool, 40, [&](std::size_t i) {
+        ran.fetch_add(1);
+        if (i == 7) {
+            throw std::runtime_error("index 7");
+        }
+    });
+    ASSERT_TRUE(error);
+    EXPECT_THROW(std::rethrow_exception(error), std::runtime_error);
+    EXPECT_EQ(ran.load(), 40);
+    EXPECT_FALSE(start_and_wait(pool, 3, [](std::size_t) {})); // usable again
+}
+
+TEST(WorkerPool, StartIsRefusedWhileALoopIsInFlightOrWithoutOwnThreads) {
+    WorkerPool pool(2, WorkerPool::Caller::stays_out);
+    std::promise<void> release;
+    std::shared_future<void> released = release.get_future().share();
+    std::promise<void> finished;
+    pool.start(
+        2, [&](std::size_t) { released.wait(); },
+        [&](std::exception_ptr) { finished.set_value(); });
+    EXPECT_TRUE(pool.in_flight());
+    EXPECT_THROW(pool.start(
+                     1, [](std::size_t) {}, [](std::exception_ptr) {}),
+                 std::logic_error);
+    EXPECT_THROW(pool.run(1, [](std::size_t) {}), std::logic_error);
+    release.set_value();
+    finished.get_future().get();
+
+    WorkerPool caller_only(1); // Caller::takes_part with one thread: no thread of its own
+    EXPECT_THROW(caller_only.start(
+                     1, [](std::size_t) {}, [](std::exception_ptr) {}),
+                 std::logic_error);
 }
 
 } // namespace

@@ -12,6 +12,8 @@
 #include "dsoc/server/worker_pool.hpp"
 
 #include <cstdint>
+#include <exception>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -42,5 +44,15 @@ struct ClientTick {
 /// tick) must have run; `world` and the policy's shared state are only read meanwhile.
 void run_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
                       std::span<const ClientTick> jobs, WorkerPool& pool);
+
+/// The same jobs, on the pool's own threads (WorkerPool::start): returns at once, and
+/// `done(error)` runs on a pool thread once every job has returned (error: the first
+/// exception a job threw, or null). Until then the jobs own `world`, `policy`, the
+/// span's memory and everything the jobs point to: the caller must neither write nor
+/// destroy any of it (reading `world` is fine), and must keep all of it alive. The
+/// bytes are the same as run_client_ticks() gives.
+void start_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
+                        std::span<const ClientTick> jobs, WorkerPool& pool,
+                        std::function<void(std::exception_ptr)> done);
 
 } // namespace dsoc::server

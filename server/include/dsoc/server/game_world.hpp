@@ -41,7 +41,15 @@ public:
     GameWorld(const ServerConfig& config, std::shared_ptr<const maps::Map> map);
 
     /// Adds a player entity at a spawn point; returns its id (never 0, never reused).
+    /// The same as spawn_reserved(reserve_player()).
     std::uint32_t spawn_player();
+    /// An id for a player entity not in the world yet (never 0, never reused), so that
+    /// a client can be told its entity before it is spawned (the server answers hellos
+    /// while the world is being read by the tick's jobs). Does not touch entities().
+    [[nodiscard]] std::uint32_t reserve_player();
+    /// Adds the player entity `id` (from reserve_player(), not spawned yet) at the next
+    /// spawn point, keeping entities() in increasing id order.
+    void spawn_reserved(std::uint32_t id);
     /// Removes an entity; unknown ids are ignored.
     void remove(std::uint32_t id);
     /// Sets a player's intent: `wish` horizontal, clamped to length <= 1; angles are
@@ -65,7 +73,7 @@ public:
     [[nodiscard]] const std::shared_ptr<const maps::Map>& map_ptr() const { return map_; }
 
 private:
-    Entity& add(EntityKind kind);
+    Entity& add(EntityKind kind, std::uint32_t id);
     void rebuild_index();
 
     std::shared_ptr<const maps::Map> map_;

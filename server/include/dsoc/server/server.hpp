@@ -1,11 +1,31 @@
 #pragma once
 // The dsoc game server: accepts clients, runs a fixed-rate tick loop, moves every
 // entity authoritatively and sends each client the snapshot its interest policy
-// allows. Threading: sockets, sessions and the world live on the io_context given to
-// it (run it on one thread). Each tick, the per-client work - interest evaluation
-// and snapshot building - runs on a WorkerPool of config.threads threads (the
-// io_context thread among them), so no I/O is served while that part runs;
-// snapshots go to the sockets afterwards, on the io_context thread.
+// allows.
+//
+// Thread model. Two kinds of thread, and who may touch what:
+// - The I/O thread: the one thread that runs the io_context given to the server (run
+//   it on exactly one thread). It owns sockets, sessions, the client tables, the
+//   world, the policy and the statistics, and does all I/O: accepts, reads, hellos
+//   and connect-token checks, pings, writes, the /metrics endpoint on the same
+//   io_context. It also runs the serial ends of each tick: the tick start (joins,
+//   inputs, movement, choosing which clients get a snapshot, the policy's
+//   begin_tick, this tick's quantized poses) and the hand-over (queueing the finished
+//   snapshot frames, the trace, leaves).
+// - The worker pool: config.threads threads of its own (0: one per core). Between
+//   tick start and hand-over it runs the parallel phase - every client's interest
+//   evaluation and snapshot (client_tick.hpp) - while the I/O thread keeps serving
+//   sockets. The jobs read the world, the policy's per-tick state and this tick's
+//   poses, and write only their own client's replication state, interest set,
+//   envelope and frame.
+// While a phase is in flight the I/O thread therefore never writes what the jobs
+// read: a hello reserves an entity id and is answered at once, but the entity is
+// spawned and the policy told at the next tick start; an input is kept as the
+// client's latest and handed to the world at the next tick start; a closed client
+// (quit, kicked as too slow, anything) keeps its entity, its policy state and its
+// per-client buffers until the hand-over (or at once when no phase runs). /metrics
+// reads only I/O-thread state (the TBV count is the one taken at the last hand-over).
+// One tick at a time: the next tick is scheduled at the hand-over.
 
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/server/client_tick.hpp"
@@ -23,10 +43,14 @@
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/steady_timer.hpp>
 
+#include <boost/asio/executor_work_guard.hpp>
+
 #include <chrono>
+#include <exception>
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,10 +76,14 @@ struct ServerStats {
     std::uint64_t inputs_dropped = 0;    ///< client messages over max_inputs_per_second
     std::uint64_t inputs_clamped = 0;    ///< inputs with an out-of-range field clamped
     std::size_t peak_queued_bytes = 0;   ///< largest send queue of any client
-    std::vector<double> tick_cost_us;    ///< per tick, work time (not waiting), microseconds
-    DurationHistogram tick_duration;     ///< the same work time, for /metrics
-    /// Per tick, wall time of the policy's begin_tick and the per-client work on the
-    /// pool: interest evaluation (culling) and snapshot building of every client.
+    /// Per tick, work time in microseconds: the tick start on the I/O thread, the
+    /// parallel phase's wall time and the hand-over (not the wait for the timer, nor
+    /// for the I/O thread to take the hand-over up).
+    std::vector<double> tick_cost_us;
+    DurationHistogram tick_duration; ///< the same work time, for /metrics
+    /// Per tick, wall time of the policy's begin_tick and the parallel phase (until the
+    /// last job returns): interest evaluation (culling) and snapshot building of every
+    /// client on the worker pool.
     DurationHistogram culling_duration;
 };
 
@@ -63,6 +91,8 @@ class Server final : private SessionHost {
 public:
     /// `config` must have passed validate(); `map` is the loaded config.map.
     Server(boost::asio::io_context& io, ServerConfig config, std::shared_ptr<const maps::Map> map);
+    /// Waits for a parallel phase in flight (destroy the server after io_context::run()
+    /// returned, or from the I/O thread).
     ~Server() override;
     Server(const Server&) = delete;
     Server& operator=(const Server&) = delete;
@@ -89,18 +119,24 @@ public:
 private:
     struct Client {
         std::shared_ptr<Session> session;
-        ReplicationState replication;
-        std::vector<Interest> interest;  // this tick's set, written by the worker pool
-        protocol::pb::Envelope envelope; // this tick's snapshot, written by the worker pool
+        ReplicationState replication;    // written by this client's job during a phase
+        std::vector<Interest> interest;  // this tick's set, written by the job
+        protocol::pb::Envelope envelope; // this tick's snapshot, written by the job
         std::uint32_t audit_every = 0;   // ClientHello.audit_every_ticks
-        std::vector<std::uint8_t> frame; // this tick's snapshot frame, written by the pool
+        std::vector<std::uint8_t> frame; // this tick's snapshot frame, written by the job
+        protocol::pb::ClientInput input; // the latest input, for the next tick start
+        bool input_pending = false;      // `input` not handed to the world yet
     };
 
     void accept_next();
     void schedule_tick();
-    void run_tick();
+    void start_tick();
+    void finish_tick(std::chrono::steady_clock::time_point phase_end, std::exception_ptr error);
+    void apply_joins();
+    void apply_inputs();
     void prepare_client_ticks();
     void send_snapshots();
+    void apply_leaves();
     void maybe_finish_shutdown();
     void write_trace_tick();
 
@@ -127,12 +163,22 @@ private:
     bool shutting_down_ = false;
     std::function<void()> on_shutdown_done_;
     ServerStats stats_;
-    WorkerPool pool_;
+    std::vector<std::uint32_t> pending_joins_;  // clients whose entity spawns next tick start
+    std::vector<std::uint32_t> pending_leaves_; // closed clients to remove when no phase runs
+    std::size_t tbvs_alive_ = 0;                // policy_->tbvs_alive() at the last hand-over
+    // This tick, from its start to its hand-over. While phase_running_, the jobs own
+    // world_, policy_, shared_poses_, client_ticks_ and what the jobs point to.
+    bool phase_running_ = false;
+    std::optional<boost::asio::executor_work_guard<boost::asio::io_context::executor_type>>
+        phase_work_; // keeps io_context::run() going until the hand-over
+    std::chrono::steady_clock::time_point tick_start_;
+    std::chrono::steady_clock::time_point culling_start_;
     std::vector<ClientTick> client_ticks_; // this tick's jobs, in client id order
     std::vector<Client*> tick_clients_;    // the client of each job (clients_ is a std::map)
     SharedPoses shared_poses_;             // this tick's quantized poses, for every job
     std::unique_ptr<trace::TraceWriter> trace_;
     trace::TraceTick trace_tick_;
+    WorkerPool pool_; // last: its threads stop first (after ~Server waited for a phase)
 };
 
 } // namespace dsoc::server

@@ -48,9 +48,9 @@ struct ServerConfig {
     int trace_every = 1;
     /// Radius of the distance policy, from the viewer's eye. [Units: world units] [Limit: > 0]
     float distance_radius = 1500.0f;
-    /// Threads for the per-client work of a tick (interest evaluation and snapshot
-    /// building), the tick thread included; 0: one per core. Results do not depend on
-    /// it. [Limit: 0..256]
+    /// Worker threads for the per-client work of a tick (interest evaluation and
+    /// snapshot building); 0: one per core. The I/O thread is not one of them: it keeps
+    /// serving sockets while they work. Results do not depend on it. [Limit: 0..256]
     int threads = 0;
     /// Position quantum of compact snapshots per network level-of-detail tier: near
     /// (updated every tick), mid (every 2nd) and far (every 4th); the dsoc and

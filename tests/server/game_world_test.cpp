@@ -1,0 +1,52 @@
+// GameWorld's reserved player ids: the server tells a client its entity id at hello
+// and spawns it at the next tick start, possibly after later-reserved ones.
+
+#include "dsoc/server/game_world.hpp"
+#include "support/test_maps.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+namespace dsoc::server {
+namespace {
+
+bool ids_increasing(const GameWorld& world) {
+    return std::is_sorted(world.entities().begin(), world.entities().end(),
+                          [](const Entity& a, const Entity& b) { return a.id < b.id; }) &&
+           std::adjacent_find(world.entities().begin(), world.entities().end(),
+                              [](const Entity& a, const Entity& b) { return a.id == b.id; }) ==
+               world.entities().end();
+}
+
+TEST(GameWorld, ReservedPlayersSpawnInIdOrderWhateverOrderTheySpawnIn) {
+    ServerConfig config;
+    config.bots = 5;
+    GameWorld world(config, testing::rooms_map());
+    const std::size_t bots = world.entities().size();
+    const std::uint32_t first = world.reserve_player();
+    const std::uint32_t second = world.reserve_player();
+    EXPECT_LT(first, second);
+    EXPECT_EQ(world.entities().size(), bots); // reserving touches no entity
+    EXPECT_EQ(world.find(first), nullptr);
+
+    world.spawn_reserved(second); // the later one first
+    const std::uint32_t third = world.spawn_player();
+    world.spawn_reserved(first);
+    EXPECT_GT(third, second);
+    ASSERT_EQ(world.entities().size(), bots + 3);
+    EXPECT_TRUE(ids_increasing(world));
+    for (const std::uint32_t id : {first, second, third}) {
+        const Entity* e = world.find(id);
+        ASSERT_NE(e, nullptr) << id;
+        EXPECT_EQ(e->id, id);
+        EXPECT_EQ(e->kind, EntityKind::player);
+    }
+    world.remove(second);
+    EXPECT_EQ(world.find(second), nullptr);
+    EXPECT_NE(world.find(first), nullptr);
+    EXPECT_TRUE(ids_increasing(world));
+}
+
+} // namespace
+} // namespace dsoc::server
