@@ -1,10 +1,13 @@
 #include "dsoc/server/config_file.hpp"
 
 #include "dsoc/server/config_fields.hpp"
+#include "dsoc/server/dsoc_settings.hpp"
 
 #include <toml++/toml.h>
 
+#include <array>
 #include <cerrno>
+#include <charconv>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -88,6 +91,75 @@ std::string read_value(const toml::node& node, T& field) {
     }
 }
 
+/// A [dsoc] value as the text DSOCConfig's set_field() reads, if `node` has the type of
+/// a field holding T; returns why not, or an empty string.
+template <class T>
+std::string dsoc_value_text(const toml::node& node, std::string& text) {
+    if constexpr (std::is_same_v<T, bool>) {
+        if (const auto* b = node.as_boolean()) {
+            text = b->get() ? "true" : "false";
+            return {};
+        }
+        return std::string("expected true or false, got ") + type_name(node.type());
+    } else if constexpr (std::is_same_v<T, visibility::TbvStrategy>) {
+        if (const auto* s = node.as_string()) {
+            text = s->get();
+            return {};
+        }
+        return std::string("expected \"explicit\", \"adaptive\" or \"fuzzy\", got ") +
+               type_name(node.type());
+    } else if constexpr (std::is_floating_point_v<T>) {
+        if (const auto* i = node.as_integer()) {
+            text = std::to_string(i->get());
+            return {};
+        }
+        if (const auto* f = node.as_floating_point()) {
+            std::array<char, 64> chars{};
+            const auto [end, ec] =
+                std::to_chars(chars.data(), chars.data() + chars.size(), f->get());
+            text.assign(chars.data(), ec == std::errc() ? end : chars.data());
+            return {};
+        }
+        return std::string("expected a number, got ") + type_name(node.type());
+    } else {
+        static_assert(std::is_integral_v<T>);
+        if (const auto* i = node.as_integer()) {
+            text = std::to_string(i->get()); // set_field() refuses what does not fit
+            return {};
+        }
+        return std::string("expected an integer, got ") + type_name(node.type());
+    }
+}
+
+/// The [dsoc] table into `settings`; each problem names the place, the field and why.
+void read_dsoc_table(const toml::node& node, std::string_view source,
+                     std::vector<DsocSetting>& settings, std::vector<std::string>& problems) {
+    const auto* table = node.as_table();
+    if (table == nullptr) {
+        problems.push_back(where(source, node.source()) +
+                           ": dsoc: expected a table ([dsoc]), got " + type_name(node.type()));
+        return;
+    }
+    for (const auto& [key, value] : *table) {
+        const std::string name(key.str());
+        const std::string at = where(source, value.source());
+        std::string why = "unknown setting: not a visibility::DSOCConfig field (see "
+                          "dsoc-server --print-config)";
+        std::string text;
+        visit_dsoc_fields(visibility::DSOCConfig{}, [&](const char* field, auto field_value) {
+            if (name == field) {
+                why = dsoc_value_text<decltype(field_value)>(value, text);
+            }
+        });
+        if (why.empty()) {
+            why = set_dsoc_setting(settings, name, text, at);
+        }
+        if (!why.empty()) {
+            problems.push_back(at + ": dsoc." + name + ": " + why);
+        }
+    }
+}
+
 } // namespace
 
 std::vector<std::string> apply_config_toml(std::string_view text, std::string_view source,
@@ -107,7 +179,9 @@ std::vector<std::string> apply_config_toml(std::string_view text, std::string_vi
         if (node == nullptr) {
             return;
         }
-        if (auto why = read_value(*node, field); !why.empty()) {
+        if constexpr (std::is_same_v<std::decay_t<decltype(field)>, std::vector<DsocSetting>>) {
+            read_dsoc_table(*node, source, field, problems);
+        } else if (auto why = read_value(*node, field); !why.empty()) {
             problems.push_back(where(source, node->source()) + ": " + name + ": " + why);
         }
     });
@@ -136,7 +210,9 @@ std::string format_config_toml(const ServerConfig& config) {
     visit_config_fields(config, [&](const char* name, const auto& field) {
         using T = std::decay_t<decltype(field)>;
         toml::table line; // one key per table keeps the declaration order
-        if constexpr (std::is_same_v<T, std::string> || std::is_same_v<T, bool>) {
+        if constexpr (std::is_same_v<T, std::vector<DsocSetting>>) {
+            return; // a table: after every flat key (below)
+        } else if constexpr (std::is_same_v<T, std::string> || std::is_same_v<T, bool>) {
             line.insert(name, field);
         } else if constexpr (std::is_floating_point_v<T>) {
             line.insert(name, static_cast<double>(field));
@@ -146,6 +222,7 @@ std::string format_config_toml(const ServerConfig& config) {
         }
         out << line << "\n";
     });
+    out << format_dsoc_table(config);
     return out.str();
 }
 

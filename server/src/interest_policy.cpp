@@ -2,6 +2,7 @@
 
 #include "dsoc/maps/pvs_region_visibility.hpp"
 #include "dsoc/server/culling_policy.hpp"
+#include "dsoc/server/dsoc_settings.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
 
 #include <glm/common.hpp>
@@ -74,20 +75,11 @@ std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const Ga
     if (config.policy == "pvs") {
         return std::make_unique<PvsPolicy>(world.map().pvs);
     }
-    visibility::DSOCConfig dsoc;
-    dsoc.tick_rate = config.tick_rate;
-    [[maybe_unused]] const bool known =
-        visibility::parse_tbv_strategy(config.tbv_strategy, dsoc.strategy);
-    if (config.policy == "occlusion") { // every entity's current box, every tick
-        dsoc.tbvs_enabled = false;
-        dsoc.reuse_buffers = false;
-        dsoc.full_test_interval = 1;
-        dsoc.blocker_hints = false; // no temporal coherence at all
-    }
+    // Flat keys, the occlusion policy's presets, then the [dsoc] table (dsoc_settings.hpp).
+    const visibility::DSOCConfig dsoc = dsoc_config(config);
     visibility::RegionCullerConfig culler;
     culler.pyramid = config.culler != "shaft";
     culler.shaft = config.culler != "pyramid";
-    dsoc.region_reuse_margin = config.region_reuse_margin;
     auto scene = visibility::OccluderScene::build(world.map().occluders);
     auto make_culler = visibility::occluder_region_visibility(scene, culler);
     if (config.pvs_stage) { // the map's PVS over the reachable clusters first

@@ -2,6 +2,7 @@
 
 #include "dsoc/maps/map_source.hpp"
 #include "dsoc/server/config_file.hpp"
+#include "dsoc/server/dsoc_settings.hpp"
 #include "dsoc/server/metrics_endpoint.hpp"
 #include "dsoc/server/server.hpp"
 #include "dsoc/server/stats_report.hpp"
@@ -15,6 +16,8 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <string>
+#include <vector>
 
 namespace {
 
@@ -22,6 +25,7 @@ struct ProgramOptions {
     std::string config_file;
     std::string stats_json;
     bool print_config = false;
+    std::vector<std::string> dsoc; ///< --dsoc KEY=VALUE, in order
 };
 
 /// Every flag, bound to `config` and `options`. Flags given on the command line
@@ -117,6 +121,11 @@ void add_options(CLI::App& app, dsoc::server::ServerConfig& config, ProgramOptio
         ->capture_default_str();
     app.add_option("--log-level", config.log_level, "trace|debug|info|warn|error|critical|off")
         ->capture_default_str();
+    app.add_option("--dsoc", options.dsoc,
+                   "A dsoc/occlusion culler setting, KEY=VALUE with KEY a field of "
+                   "visibility::DSOCConfig (the [dsoc] table; --print-config lists them); "
+                   "repeatable, overrides the file's [dsoc] entry")
+        ->allow_extra_args(false);
     app.add_option("--stats-json", options.stats_json,
                    "Write the end-of-run figures as JSON to this file");
 }
@@ -149,7 +158,15 @@ int main(int argc, char** argv) {
         add_options(app, config, options);
         CLI11_PARSE(app, argc, argv);
     }
-    const auto problems = dsoc::server::validate(config);
+    std::vector<std::string> flag_problems;
+    for (const auto& key_value : options.dsoc) { // over the file's [dsoc] entries
+        if (auto why = dsoc::server::set_dsoc_setting_from_flag(config.dsoc, key_value);
+            !why.empty()) {
+            flag_problems.push_back(std::move(why));
+        }
+    }
+    auto problems = dsoc::server::validate(config);
+    problems.insert(problems.begin(), flag_problems.begin(), flag_problems.end());
     if (options.print_config) {
         std::fputs(dsoc::server::format_config_toml(config).c_str(), stdout);
     }

@@ -1,5 +1,7 @@
 #include "dsoc/server/server_config.hpp"
 
+#include "dsoc/server/dsoc_settings.hpp"
+
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -89,6 +91,9 @@ std::vector<std::string> validate(const ServerConfig& c) {
           "must be a finite number > 0");
     check(p, !c.map.empty(), "map", "must name a map");
     check(p, std::isfinite(c.duration_s) && c.duration_s >= 0.0, "duration_s", "must be >= 0");
+    for (auto& problem : validate_dsoc_settings(c)) {
+        p.push_back(std::move(problem));
+    }
     return p;
 }
 

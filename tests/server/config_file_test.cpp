@@ -1,5 +1,6 @@
 #include "dsoc/server/config_fields.hpp"
 #include "dsoc/server/config_file.hpp"
+#include "dsoc/server/dsoc_settings.hpp"
 
 #include <gtest/gtest.h>
 
@@ -35,7 +36,10 @@ ServerConfig all_changed() {
     ServerConfig c;
     visit_config_fields(c, [](const char*, auto& field) {
         using T = std::decay_t<decltype(field)>;
-        if constexpr (std::is_same_v<T, std::string>) {
+        if constexpr (std::is_same_v<T, std::vector<DsocSetting>>) {
+            field.push_back({"full_test_interval", "7", "test"});
+            field.push_back({"tbv_merge_distance", "80.5", "test"});
+        } else if constexpr (std::is_same_v<T, std::string>) {
             field += "-x";
         } else if constexpr (std::is_same_v<T, bool>) {
             field = !field;
@@ -57,7 +61,20 @@ TEST(ConfigFile, PrintedConfigReadsBackToTheSameValues) {
     std::size_t compared = 0;
     visit_config_fields(read, [&](const char* name, const auto& field) {
         visit_config_fields(changed, [&](const char* other, const auto& expected) {
-            if constexpr (std::is_same_v<decltype(field), decltype(expected)>) {
+            using T = std::decay_t<decltype(field)>;
+            if constexpr (std::is_same_v<T, std::vector<DsocSetting>>) {
+                if constexpr (std::is_same_v<decltype(field), decltype(expected)>) {
+                    ASSERT_EQ(std::string_view(name), other);
+                    // Where each entry came from differs (the printed text's lines).
+                    ASSERT_EQ(field.size(), expected.size());
+                    for (std::size_t i = 0; i < field.size(); ++i) {
+                        EXPECT_EQ(field[i].key, expected[i].key);
+                        EXPECT_EQ(field[i].value, expected[i].value);
+                        EXPECT_EQ(field[i].origin.rfind("printed:", 0), 0u) << field[i].origin;
+                    }
+                    ++compared;
+                }
+            } else if constexpr (std::is_same_v<decltype(field), decltype(expected)>) {
                 if (std::string_view(name) == other) {
                     EXPECT_EQ(field, expected) << name;
                     ++compared;

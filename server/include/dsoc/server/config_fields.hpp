@@ -1,6 +1,7 @@
 #pragma once
 // The one list of ServerConfig's fields by their TOML name. The config file loader,
-// --print-config and the tests walk it, so a new setting is one line here.
+// --print-config and the tests walk it, so a new setting is one line here. All are
+// flat keys except `dsoc`, the [dsoc] table (dsoc_settings.hpp).
 
 #include "dsoc/server/server_config.hpp"
 
@@ -45,6 +46,7 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("max_speed", config.max_speed);
     visit("seed", config.seed);
     visit("duration_s", config.duration_s);
+    visit("dsoc", config.dsoc); // the [dsoc] table (dsoc_settings.hpp), printed last
 }
 
 } // namespace dsoc::server

@@ -1,10 +1,14 @@
 #pragma once
-// ServerConfig <-> TOML (toml++). The file is flat: one key per ServerConfig field,
-// named as in the struct (see config_fields.hpp), e.g.
+// ServerConfig <-> TOML (toml++). One key per ServerConfig field, named as in the
+// struct (see config_fields.hpp), and a [dsoc] table holding any field of
+// visibility::DSOCConfig by its name (dsoc_settings.hpp says which value wins), e.g.
 //
 //   tick_rate = 30
 //   policy = "dsoc"
 //   token_key_file = "/etc/dsoc/token.key"
+//
+//   [dsoc]
+//   full_test_interval = 2
 //
 // Keys absent from the file keep the value already in the config, so a file can
 // hold only what differs from the defaults; command-line flags are applied after

@@ -9,6 +9,15 @@
 
 namespace dsoc::server {
 
+/// One [dsoc] entry (dsoc_settings.hpp): a visibility::DSOCConfig field by name, its
+/// value as text, and where it was set ("server.toml:12:1", "--dsoc"), for messages.
+struct DsocSetting {
+    std::string key;
+    std::string value;
+    std::string origin;
+    friend bool operator==(const DsocSetting&, const DsocSetting&) = default;
+};
+
 struct ServerConfig {
     /// Address to listen on. Loopback by default: expose deliberately.
     std::string bind_address = "127.0.0.1";
@@ -104,6 +113,10 @@ struct ServerConfig {
     std::uint64_t seed = 1;
     /// Stop by itself after this long; 0 runs until SIGINT/SIGTERM. [Units: s] [Limit: >= 0]
     double duration_s = 0.0;
+    /// The [dsoc] table: visibility::DSOCConfig fields set by name (each at most once, in
+    /// the order set), applied over the flat keys and the policy's presets; see
+    /// dsoc_settings.hpp. Each value is checked by DSOCConfig's validate(). Empty: none.
+    std::vector<DsocSetting> dsoc;
 };
 
 /// Every problem with the settings, each naming the field and why; empty when usable.
