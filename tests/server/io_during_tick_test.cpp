@@ -1,10 +1,13 @@
 // The server keeps serving I/O while a tick's parallel phase (every client's interest
 // evaluation and snapshot) runs on the worker pool: a ping is answered, a new
 // client's hello is answered and /metrics answers, each within a fraction of the
-// phase's length, through real sockets against a real server on a real map.
+// phase's length, through real sockets against a real server on a real map. The
+// probe also sends inputs, and the hello connections leave at once, so joins, inputs
+// and leaves all arrive while phases run (the sanitizer builds check that the I/O
+// thread then writes nothing the jobs read).
 //
 // The server is made to spend nearly all its time in the parallel phase: oa_dm4 with
-// the dsoc policy, one pool thread and ~150 joined clients that never read (their
+// the dsoc policy, one pool thread and 250 joined clients that never read (their
 // culling still runs every tick), at a tick rate the phase cannot keep up with, so
 // ticks run back to back. A server whose I/O thread is blocked during the phase
 // answers a request arriving at a random time only when the phase ends: the median
@@ -215,7 +218,7 @@ TEST(IoDuringTick, PingsHellosAndMetricsAreAnsweredWhileTheParallelPhaseRuns) {
     if (!loaded) {
         GTEST_SKIP() << "OpenArena maps not installed (scripts/setup installs openarena-081-maps)";
     }
-    constexpr int kSilentClients = 150;
+    constexpr int kSilentClients = 250;
     server::ServerConfig config;
     config.port = 0;
     config.insecure = true;
@@ -224,7 +227,7 @@ TEST(IoDuringTick, PingsHellosAndMetricsAreAnsweredWhileTheParallelPhaseRuns) {
     config.bots = 300;
     config.threads = 1;    // one pool thread: long phases on any machine
     config.tick_rate = 60; // more than the phase allows: ticks run back to back
-    config.max_clients = 400;
+    config.max_clients = 500;
     config.slow_client_timeout_ms = 60000; // the silent clients stay
     config.max_inputs_per_second = 5000;   // the probe pings often
     ServerWithMetrics server(config, std::make_shared<const maps::Map>(std::move(loaded).value()));
@@ -239,8 +242,12 @@ TEST(IoDuringTick, PingsHellosAndMetricsAreAnsweredWhileTheParallelPhaseRuns) {
     probe.send(client_hello());
     ASSERT_TRUE(probe.read_until([](const pb::Envelope& m) { return m.has_server_hello(); },
                                  kReplyTimeout));
-    // Wait until every silent client is in the ticks (a few phases have run with them).
-    std::this_thread::sleep_for(std::chrono::seconds(1));
+    // Every hello before the probe's has been answered; the next tick start spawns
+    // them, so two more phases and every silent client is being culled.
+    const auto joined_at = server.phases().first;
+    while (server.phases().first < joined_at + 2) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
 
     std::mt19937 rng(7);
     std::uniform_int_distribution<int> pause_ms(0, 15); // requests at random points of a tick
@@ -248,9 +255,21 @@ TEST(IoDuringTick, PingsHellosAndMetricsAreAnsweredWhileTheParallelPhaseRuns) {
     std::vector<double> hellos;
     std::vector<double> scrapes;
     const auto [phases_before, phase_s_before] = server.phases();
+    // At least 3 s, 12 rounds and 3 whole phases (a sanitizer build's phases take
+    // seconds), at most 120 s.
     const auto start = Clock::now();
-    for (std::uint64_t round = 1; Clock::now() - start < std::chrono::seconds(3) || round <= 12;
-         ++round) {
+    const auto enough = [&](std::uint64_t rounds) {
+        const auto elapsed = Clock::now() - start;
+        return elapsed > std::chrono::seconds(120) ||
+               (elapsed >= std::chrono::seconds(3) && rounds >= 12 &&
+                server.phases().first >= phases_before + 3);
+    };
+    for (std::uint64_t round = 1; !enough(round - 1); ++round) {
+        pb::Envelope input; // read during the phase, handed to the world at the next tick
+        input.mutable_client_input()->set_tick(round);
+        input.mutable_client_input()->set_move_x(round % 2 == 0 ? 1.0f : -1.0f);
+        input.mutable_client_input()->set_view_yaw(static_cast<float>(round % 360) - 180.0f);
+        probe.send(input);
         pings.push_back(ping_ms(probe, round));
         std::this_thread::sleep_for(std::chrono::milliseconds(pause_ms(rng)));
         if (round % 3 == 0) {
@@ -273,7 +292,7 @@ TEST(IoDuringTick, PingsHellosAndMetricsAreAnsweredWhileTheParallelPhaseRuns) {
         std::to_string(median(hellos)) + " ms (" + std::to_string(hellos.size()) + "), metrics " +
         std::to_string(median(scrapes)) + " ms (" + std::to_string(scrapes.size()) + ")";
     // The phase must be long enough to tell "answered during it" from "after it".
-    ASSERT_GE(phase_ms, 8.0) << "the load is too light to observe anything: " << figures;
+    ASSERT_GE(phase_ms, 5.0) << "the load is too light to observe anything: " << figures;
     EXPECT_LT(median(pings), phase_ms / 4) << figures;
     EXPECT_LT(median(hellos), phase_ms / 4) << figures;
     EXPECT_LT(median(scrapes), phase_ms / 4) << figures;
