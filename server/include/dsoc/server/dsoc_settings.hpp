@@ -19,15 +19,18 @@
 
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 namespace dsoc::server {
 
-/// Calls `visit(name, value)` for every field of `config`, in the order of
-/// dsoc_config.hpp, with the name DSOCConfig's set_field() takes. `value` is int,
-/// float, bool or visibility::TbvStrategy. A test fails when a field is missing.
-template <class Visitor>
-void visit_dsoc_fields(const visibility::DSOCConfig& config, Visitor&& visit) {
+/// Calls `visit(name, value)` for every field of `config` (a visibility::DSOCConfig),
+/// in the order of dsoc_config.hpp, with the name DSOCConfig's set_field() takes.
+/// `value` is int, float, bool or visibility::TbvStrategy. A test fails when a field
+/// is missing.
+template <class Config, class Visitor>
+void visit_dsoc_fields(const Config& config, Visitor&& visit) {
+    static_assert(std::is_same_v<Config, visibility::DSOCConfig>);
     visit("tick_rate", config.tick_rate);
     visit("strategy", config.strategy);
     visit("default_tbv_duration", config.default_tbv_duration);
@@ -46,6 +49,11 @@ void visit_dsoc_fields(const visibility::DSOCConfig& config, Visitor&& visit) {
     visit("tbvs_enabled", config.tbvs_enabled);
     visit("reuse_buffers", config.reuse_buffers);
     visit("exact_region_tests", config.exact_region_tests);
+    // Being added to DSOCConfig by the culler's work in progress (2026-11-22); the
+    // condition can go once it is in every tree that builds this.
+    if constexpr (requires { config.full_tbv_proofs; }) {
+        visit("full_tbv_proofs", config.full_tbv_proofs);
+    }
     visit("blocker_hints", config.blocker_hints);
     visit("full_test_interval", config.full_test_interval);
     visit("validate_state", config.validate_state);
