@@ -4,6 +4,7 @@
 #include "dsoc/visibility/reference_visibility.hpp"
 #include "dsoc/visibility/shaft_occlusion.hpp"
 #include "dsoc/visibility/test_worlds.hpp"
+#include "region_test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -13,21 +14,9 @@
 namespace dsoc::visibility {
 namespace {
 
-OccluderId add_box(OccluderWorld& world, glm::vec3 lo, glm::vec3 hi) {
-    return world.add(ConvexPolyhedron::from_aabb({lo, hi}));
-}
-
-/// True when some eye of a 5x5x5 lattice over `region` sees `box` (5x5 samples per
-/// face): a certificate that the box is visible from the region.
-bool seen_from_lattice(const ReferenceVisibility& ref, const Aabb& region, const Aabb& box) {
-    for (int k = 0; k < 125; ++k) {
-        const glm::vec3 f = glm::vec3(k % 5, (k / 5) % 5, k / 25) / 4.0f;
-        if (ref.test_box(region.min + region.size() * f, box, 5) == Visibility::visible) {
-            return true;
-        }
-    }
-    return false;
-}
+using testing::add_box;
+using testing::fragmented_corridor_world;
+using testing::seen_from_lattice;
 
 TEST(CutPlaneFusion, AWallOfTwoBrushesHidesWhatNeitherHidesAlone) {
     // A wall across x = 0 made of two brushes meeting at y = 7, of different thickness.
@@ -109,45 +98,6 @@ TEST(CutPlaneFusion, TheCrossingRectangleHoldsEveryCrossing) {
     EXPECT_GT(checked, 10000);
 }
 
-/// The corridor world with every box brush cut into 2-4 pieces along its longest axis,
-/// some pieces thickened on one side: the same kind of walls a level designer builds
-/// from many brushes, which single-occluder tests cannot fuse.
-TestWorld fragmented_corridor_world(std::uint32_t seed) {
-    const TestWorld base = make_corridor_world(seed, 4, 4);
-    std::mt19937 rng(seed);
-    TestWorld out;
-    out.play_area = base.play_area;
-    for (OccluderId id = 0; id < base.world.size(); ++id) {
-        const ConvexPolyhedron& o = base.world.occluder(id);
-        if (o.planes().size() != 6 || base.world.face_planes(id).size() != 6 ||
-            o.vertices().size() != 8) {
-            out.world.add(o);
-            continue;
-        }
-        const Aabb b = o.bounds();
-        const glm::vec3 s = b.size();
-        const int axis = s.x >= s.y && s.x >= s.z ? 0 : (s.y >= s.z ? 1 : 2);
-        const int thin = s.x <= s.y && s.x <= s.z ? 0 : (s.y <= s.z ? 1 : 2);
-        const int pieces = 2 + static_cast<int>(rng() % 3);
-        for (int p = 0; p < pieces; ++p) {
-            Aabb piece = b;
-            piece.min[axis] = b.min[axis] + s[axis] * static_cast<float>(p) / pieces;
-            piece.max[axis] = b.min[axis] + s[axis] * static_cast<float>(p + 1) / pieces;
-            if (thin != axis && rng() % 2 == 0) {
-                (rng() % 2 == 0 ? piece.min[thin] : piece.max[thin]) +=
-                    (rng() % 2 == 0 ? -1.0f : 1.0f) * 4.0f;
-                if (piece.min[thin] >= piece.max[thin]) {
-                    piece = b; // never thinner than nothing
-                    piece.min[axis] = b.min[axis] + s[axis] * static_cast<float>(p) / pieces;
-                    piece.max[axis] = b.min[axis] + s[axis] * static_cast<float>(p + 1) / pieces;
-                }
-            }
-            add_box(out.world, piece.min, piece.max);
-        }
-    }
-    return out;
-}
-
 TEST(CutPlaneFusion, RandomRegionsNeverHideWhatAnEyeSeesAndFusionCullsMore) {
     std::mt19937 rng(17);
     int configurations = 0;
@@ -160,7 +110,7 @@ TEST(CutPlaneFusion, RandomRegionsNeverHideWhatAnEyeSeesAndFusionCullsMore) {
                                       : make_city_world(3, 4, 4);
         const OccluderGrid grid(tw.world);
         const ShaftOcclusion single(tw.world, grid, false);
-        const ShaftOcclusion fused(tw.world, grid, true);
+        const ShaftOcclusion fused(tw.world, grid, true, 0); // fusion alone, no portals
         ShaftOcclusion::Scratch scratch;
         const ReferenceVisibility ref(tw.world);
         std::uniform_real_distribution<float> ux(tw.play_area.min.x, tw.play_area.max.x);

@@ -4,6 +4,7 @@
 #include "dsoc/visibility/reference_visibility.hpp"
 #include "dsoc/visibility/shaft_occlusion.hpp"
 #include "dsoc/visibility/test_worlds.hpp"
+#include "region_test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -163,16 +164,7 @@ TEST(ShaftOcclusion, RandomRegionsNeverHideWhatAnEyeSees) {
                 continue;
             }
             ++culled;
-            // Every eye of a 4x4x4 lattice over the region, plus random ones.
-            std::uniform_real_distribution<float> t01(0.0f, 1.0f);
-            bool seen = false;
-            for (int k = 0; k < 64 + 16 && !seen; ++k) {
-                glm::vec3 f = k < 64 ? glm::vec3(k % 4, (k / 4) % 4, k / 16) / 3.0f
-                                     : glm::vec3(t01(rng), t01(rng), t01(rng));
-                const glm::vec3 eye = region.min + region.size() * f;
-                seen = ref.test_box(eye, box, 5) == Visibility::visible;
-            }
-            misses += seen ? 1 : 0;
+            misses += testing::seen_from_lattice(ref, region, box) ? 1 : 0;
         }
     }
     EXPECT_EQ(misses, 0) << "of " << culled << " culled";

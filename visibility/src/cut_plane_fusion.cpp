@@ -104,15 +104,22 @@ bool CutPlaneFusion::crossing_rectangle(const Aabb& region, const Aabb& box, Cut
     return true;
 }
 
-bool CutPlaneFusion::covers(const Aabb& region, const Aabb& box, CutPlane plane,
-                            OccluderGrid::Scratch& grid_scratch, Scratch& scratch) const {
+void CutPlaneFusion::bounds(const Polygon& poly, glm::dvec2& lo, glm::dvec2& hi) {
+    bounds_of(poly, lo, hi);
+}
+
+CutPlaneFusion::Coverage CutPlaneFusion::coverage(const Aabb& region, const Aabb& box,
+                                                  CutPlane plane,
+                                                  OccluderGrid::Scratch& grid_scratch,
+                                                  Scratch& scratch, bool quick) const {
+    scratch.pieces.clear();
     if (region.is_empty() || box.is_empty()) {
-        return false;
+        return Coverage::undecided;
     }
     glm::dvec2 lo;
     glm::dvec2 hi;
     if (!crossing_rectangle(region, box, plane, lo, hi)) {
-        return false;
+        return Coverage::undecided;
     }
     const int a = plane.axis;
     const int u = (a + 1) % 3;
@@ -121,7 +128,7 @@ bool CutPlaneFusion::covers(const Aabb& region, const Aabb& box, CutPlane plane,
 
     // Necessary, and cheap before gathering: each corner of S lies in the bounds of an
     // occluder the plane cuts (a cross-section lies within its occluder's bounds).
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; quick && k < 4; ++k) {
         glm::vec3 corner;
         corner[a] = plane.offset;
         corner[u] = static_cast<float>((k & 1) ? hi.x : lo.x);
@@ -136,7 +143,7 @@ bool CutPlaneFusion::covers(const Aabb& region, const Aabb& box, CutPlane plane,
             }
         }
         if (!inside) {
-            return false;
+            return Coverage::undecided;
         }
     }
     // Occluders the plane cuts (strictly: their bounds straddle it) over S.
@@ -164,8 +171,8 @@ bool CutPlaneFusion::covers(const Aabb& region, const Aabb& box, CutPlane plane,
     }
     // The union cannot cover S when even the bounds' overlaps add up to less.
     const glm::dvec2 extent = hi - lo;
-    if (overlap_sum + 2.0 * kNoiseWidth * (extent.x + extent.y) < extent.x * extent.y) {
-        return false;
+    if (quick && overlap_sum + 2.0 * kNoiseWidth * (extent.x + extent.y) < extent.x * extent.y) {
+        return Coverage::undecided;
     }
     // Largest first: a wall's big brushes leave few pieces for the small ones.
     std::sort(scratch.cut.begin(), scratch.cut.end(),
@@ -225,7 +232,7 @@ bool CutPlaneFusion::covers(const Aabb& region, const Aabb& box, CutPlane plane,
             for (std::size_t i = 0; i < count && rest.n > 0; ++i) {
                 const HalfPlane flipped{-halves[i].n, -halves[i].d};
                 if (!clip(rest, flipped, outside) || !clip(rest, halves[i], inside)) {
-                    return false;
+                    return Coverage::undecided;
                 }
                 if (!negligible(outside)) {
                     scratch.next.push_back(outside);
@@ -233,15 +240,15 @@ bool CutPlaneFusion::covers(const Aabb& region, const Aabb& box, CutPlane plane,
                 rest = inside;
             }
             if (scratch.next.size() > kMaxPieces) {
-                return false;
+                return Coverage::undecided;
             }
         }
         scratch.pieces.swap(scratch.next);
         if (scratch.pieces.empty()) {
-            return true;
+            return Coverage::covered;
         }
     }
-    return scratch.pieces.empty();
+    return scratch.pieces.empty() ? Coverage::covered : Coverage::partial;
 }
 
 } // namespace dsoc::visibility

@@ -124,6 +124,82 @@ bool shaft_blocked_by(const Aabb& region, const Aabb& box, std::span<const Plane
 
 Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& scratch,
                                 std::uint32_t* hint) const {
+    scratch.portal_budget = kPortalBudget;
+    return test_at(region, box, scratch, hint, portal_depth_);
+}
+
+int ShaftOcclusion::hidden_through_portals(const Aabb& region, const Aabb& box, Scratch& scratch,
+                                           int depth) const {
+    const auto level = static_cast<std::size_t>(depth - 1);
+    std::vector<CutPlane>& planes = scratch.portal_planes[level];
+    std::vector<Aabb>& portals = scratch.portals[level];
+    planes = scratch.planes; // the tests below reuse scratch.planes
+    scratch.portal_sources[level] = scratch.plane_sources;
+    const CutPlaneFusion fusion(*world_, *grid_);
+    for (std::size_t pi = 0; pi < planes.size(); ++pi) {
+        const CutPlane& plane = planes[pi];
+        if (fusion.coverage(region, box, plane, scratch.grid, scratch.fusion, false) !=
+                CutPlaneFusion::Coverage::partial ||
+            scratch.fusion.pieces.size() > kMaxPortals) {
+            continue; // covered (then the cheap test proved it), undecided, or too many
+        }
+        const int a = plane.axis;
+        const int u = (a + 1) % 3;
+        const int v = (a + 2) % 3;
+        portals.clear();
+        for (const CutPlaneFusion::Polygon& piece : scratch.fusion.pieces) {
+            glm::dvec2 lo;
+            glm::dvec2 hi;
+            CutPlaneFusion::bounds(piece, lo, hi);
+            Aabb portal;
+            portal.min[a] = portal.max[a] = plane.offset;
+            portal.min[u] = static_cast<float>(lo.x) - kPortalPad;
+            portal.min[v] = static_cast<float>(lo.y) - kPortalPad;
+            portal.max[u] = static_cast<float>(hi.x) + kPortalPad;
+            portal.max[v] = static_cast<float>(hi.y) + kPortalPad;
+            portals.push_back(portal);
+        }
+        // Largest openings first: a box seen through one fails fastest there.
+        std::sort(portals.begin(), portals.end(), [a](const Aabb& x, const Aabb& y) {
+            const glm::vec3 sx = x.size();
+            const glm::vec3 sy = y.size();
+            return sx[(a + 1) % 3] * sx[(a + 2) % 3] > sy[(a + 1) % 3] * sy[(a + 2) % 3];
+        });
+        const auto closed = [&](const Aabb& portal, int sub_depth) {
+            for (int side = 0; side < 2; ++side) {
+                if (scratch.portal_budget <= 0) {
+                    return false;
+                }
+                --scratch.portal_budget;
+                // At sub_depth > 0 the cheap tests of this side already failed.
+                const bool cheap_done = sub_depth > 0;
+                const Visibility seen =
+                    side == 0 ? test_at(region, portal, scratch, nullptr, sub_depth, cheap_done)
+                              : test_at(portal, box, scratch, nullptr, sub_depth, cheap_done);
+                if (seen == Visibility::occluded) {
+                    return true;
+                }
+            }
+            return false;
+        };
+        bool all_closed = true;
+        for (const Aabb& portal : portals) {
+            // The cheap tests of both sides before the deeper ones.
+            if (closed(portal, 0) || (depth > 1 && closed(portal, depth - 1))) {
+                continue;
+            }
+            all_closed = false;
+            break;
+        }
+        if (all_closed) {
+            return static_cast<int>(pi);
+        }
+    }
+    return -1;
+}
+
+Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch& scratch,
+                                   std::uint32_t* hint, int depth, bool cheap_done) const {
     if (region.is_empty() || box.is_empty() || region.overlaps(box)) {
         return Visibility::visible;
     }
@@ -132,9 +208,33 @@ Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& sc
         return solid.is_empty() ? shaft_blocked_by(region, box, world_->solid_planes(id))
                                 : shaft_blocked_by_box(region, box, solid);
     };
+    const auto separates = [&](const CutPlane& plane) {
+        const int axis = plane.axis;
+        return (region.max[axis] < plane.offset && box.min[axis] > plane.offset) ||
+               (region.min[axis] > plane.offset && box.max[axis] < plane.offset);
+    };
+    const auto mid_plane = [&](OccluderId id, int axis) {
+        const Aabb& ob = world_->occluder(id).bounds();
+        return CutPlane{axis, 0.5f * (ob.min[axis] + ob.max[axis])};
+    };
+    // Temporal coherence: a portal proof on the same plane as last time.
+    if (hint != nullptr && (*hint & kPortalHint) != 0 && depth > 0 && !cheap_done) {
+        const OccluderId id = *hint & ((1u << 29) - 1);
+        const int axis = static_cast<int>((*hint >> 29) & 3u);
+        *hint = 0;
+        if (id < world_->size() && axis < 3 && separates(mid_plane(id, axis))) {
+            scratch.planes.assign(1, mid_plane(id, axis));
+            scratch.plane_sources.assign(1, id);
+            if (hidden_through_portals(region, box, scratch, depth) >= 0) {
+                *hint = kPortalHint | static_cast<std::uint32_t>(axis) << 29 | id;
+                return Visibility::occluded;
+            }
+            scratch.portal_budget = kPortalBudget; // the full test below gets its own
+        }
+    }
     // Temporal coherence: the occluder that hid this box last time usually still does.
     OccluderId tried = OccluderWorld::kInvalid; // already tested: skipped below
-    if (hint != nullptr && *hint != 0) {
+    if (hint != nullptr && *hint != 0 && !cheap_done) {
         const OccluderId id = *hint - 1;
         if (id < world_->size() && blocks_shaft(id)) {
             return Visibility::occluded;
@@ -149,19 +249,19 @@ Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& sc
     grid_->query_segment(from, to, scratch.grid);
     int full_tests = 0;
     scratch.planes.clear();
+    scratch.plane_sources.clear();
     // Occluders that touch or cut into the region count too: the corner argument
     // holds for any convex solid (an eye inside a wall is no eye, and its segments
     // do pass through the wall's interior).
     const glm::vec3 dir = to - from;
     const glm::vec3 inv(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
-    const auto add_plane = [&](int axis, float offset) {
-        const CutPlane plane{axis, offset};
-        const bool separates = (region.max[axis] < offset && box.min[axis] > offset) ||
-                               (region.min[axis] > offset && box.max[axis] < offset);
-        if (separates && scratch.planes.size() < kMaxCutPlanes &&
+    const auto add_plane = [&](OccluderId id, int axis) {
+        const CutPlane plane = mid_plane(id, axis);
+        if (separates(plane) && scratch.planes.size() < kMaxCutPlanes &&
             std::find(scratch.planes.begin(), scratch.planes.end(), plane) ==
                 scratch.planes.end()) {
             scratch.planes.push_back(plane);
+            scratch.plane_sources.push_back(id);
         }
     };
     for (const OccluderId id : scratch.grid.found) {
@@ -180,7 +280,7 @@ Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& sc
                                : segment_through_box(from, to, solid))) {
             continue;
         }
-        if (id != tried && blocks_shaft(id)) {
+        if (!cheap_done && id != tried && blocks_shaft(id)) {
             if (hint != nullptr) {
                 *hint = id + 1;
             }
@@ -191,14 +291,32 @@ Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& sc
             // Through the wall's middle (planes just inside its faces as well were
             // measured: on oa_dm4 they add 1% culled for 50% more fusion time).
             for (int axis = 0; axis < 3; ++axis) {
-                add_plane(axis, 0.5f * (ob.min[axis] + ob.max[axis]));
+                add_plane(id, axis);
             }
         }
     }
     if (!scratch.planes.empty()) {
         const CutPlaneFusion fusion(*world_, *grid_);
-        for (const CutPlane& plane : scratch.planes) {
-            if (fusion.covers(region, box, plane, scratch.grid, scratch.fusion)) {
+        for (std::size_t i = 0; !cheap_done && i < scratch.planes.size(); ++i) {
+            if (fusion.covers(region, box, scratch.planes[i], scratch.grid, scratch.fusion)) {
+                return Visibility::occluded;
+            }
+        }
+        if (depth > 0) {
+            const int proved = hidden_through_portals(region, box, scratch, depth);
+            if (proved >= 0) {
+                if (hint != nullptr) {
+                    // plane_sources is this level's: the portal tests keep their own copy.
+                    *hint = kPortalHint |
+                            static_cast<std::uint32_t>(
+                                scratch
+                                    .portal_planes[static_cast<std::size_t>(depth - 1)]
+                                                  [static_cast<std::size_t>(proved)]
+                                    .axis)
+                                << 29 |
+                            scratch.portal_sources[static_cast<std::size_t>(depth - 1)]
+                                                  [static_cast<std::size_t>(proved)];
+                }
                 return Visibility::occluded;
             }
         }

@@ -114,6 +114,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
     env.lookahead_ticks = lookahead;
     env.dsoc_overrides = &options.dsoc_overrides;
     env.fusion = options.fusion;
+    env.portal_depth = options.portal_depth;
     env.entity_cluster_size = options.entity_cluster_size;
 
     std::vector<std::string> names = options.policies;
@@ -189,8 +190,9 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
     const auto stride = static_cast<std::size_t>(sc.oracle_client_stride());
     // The region bound: eyes over the reachable eye region exactly as the culling
     // policies compute it (motion limits over the allowance, clipped to the map and by
-    // sim::ReachClipper), a 3 x 3 x 3 lattice of them.
+    // sim::ReachClipper), an n x n x n lattice of them.
     result.region_bound = options.region_bound;
+    result.region_lattice = options.region_lattice;
     VisibilityTruth::RegionEyes region_eyes;
     std::shared_ptr<const sim::ReachClipper> clipper;
     if (options.region_bound) {
@@ -198,8 +200,9 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
         const visibility::MotionLimits limits = sim::walking_limits(world.move());
         const float seconds = static_cast<float>(lookahead) / static_cast<float>(sc.tick_rate);
         const visibility::Aabb bounds = map.bounds.expanded(64.0f);
-        region_eyes = [&world, clipper, limits, seconds, bounds](std::size_t c,
-                                                                 std::vector<glm::vec3>& eyes) {
+        const int n = options.region_lattice;
+        region_eyes = [&world, clipper, limits, seconds, bounds, n](std::size_t c,
+                                                                    std::vector<glm::vec3>& eyes) {
             const WorldFrame& now = world.current();
             const glm::vec3 eye = world.eye(now, c);
             const float down = std::max(0.0f, -now.entities[c].velocity.z);
@@ -208,10 +211,11 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
             region = visibility::Aabb{glm::max(region.min, bounds.min),
                                       glm::min(region.max, bounds.max)};
             region = clipper->clip(eye, region);
-            for (int k = 0; k < 27; ++k) {
-                const glm::vec3 f(static_cast<float>(k % 3), static_cast<float>((k / 3) % 3),
-                                  static_cast<float>(k / 9));
-                eyes.push_back(region.min + region.size() * f * 0.5f);
+            const float step = 1.0f / static_cast<float>(n - 1);
+            for (int k = 0; k < n * n * n; ++k) {
+                const glm::vec3 f(static_cast<float>(k % n), static_cast<float>((k / n) % n),
+                                  static_cast<float>(k / (n * n)));
+                eyes.push_back(region.min + region.size() * f * step);
             }
         };
     }

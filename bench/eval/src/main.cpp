@@ -69,9 +69,17 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_flag("--fusion,!--no-fusion", options.fusion,
                  "occluder fusion across cut planes in the culler's shaft stage (default on)");
+    app.add_option("--portal-depth", options.portal_depth,
+                   "levels of portal tests in the culler's shaft stage (0 = off)")
+        ->check(CLI::Range(0, 4))
+        ->capture_default_str();
     app.add_flag("--region-bound", options.region_bound,
                  "also judge pairs from a lattice of eyes over each client's reachable region "
                  "(what any policy covering that region must send; slow)");
+    app.add_option("--region-lattice", options.region_lattice,
+                   "eyes per side of the region bound's lattice (n^3 eyes)")
+        ->check(CLI::Range(2, 9))
+        ->capture_default_str();
     app.add_option("--json", json_path, "write every figure as JSON to this file");
     app.add_flag("--quiet", quiet, "no progress line on stderr");
     CLI11_PARSE(app, argc, argv);

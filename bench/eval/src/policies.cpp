@@ -87,11 +87,12 @@ private:
 
 /// The server's culler: the exact shaft stage without a per-region z-pyramid build
 /// (see ServerConfig::culler).
-visibility::RegionCullerConfig culler_config(bool fusion) {
+visibility::RegionCullerConfig culler_config(bool fusion, int portal_depth) {
     visibility::RegionCullerConfig c;
     c.pyramid = false;
     c.shaft = true;
     c.fusion = fusion;
+    c.portal_depth = portal_depth;
     return c;
 }
 
@@ -102,8 +103,9 @@ public:
           clipper_(std::make_shared<const sim::ReachClipper>(env.map->collision_brushes,
                                                              env.world->move())),
           manager_(config, env.map->bounds.expanded(64.0f),
-                   maps::with_pvs_stage(env.map->pvs, visibility::occluder_region_visibility(
-                                                          env.scene, culler_config(env.fusion))),
+                   maps::with_pvs_stage(
+                       env.map->pvs, visibility::occluder_region_visibility(
+                                         env.scene, culler_config(env.fusion, env.portal_depth))),
                    [clipper = clipper_](glm::vec3 eye, const visibility::Aabb& region) {
                        return clipper->clip(eye, region);
                    }) {

@@ -135,7 +135,9 @@ void write_markdown(const EvalResult& r, const std::string& command, std::ostrea
     }
     out << "\n";
     if (r.region_bound) {
-        out << "*Region bound*: entities visible from some eye of a 3 x 3 x 3 lattice over "
+        out << "*Region bound*: entities visible from some eye of a " << r.region_lattice << " x "
+            << r.region_lattice << " x " << r.region_lattice
+            << " lattice over "
                "each client's reachable eye region (the box the culling policies cover), plus "
                "the real eyes: at least what any policy covering that region must send "
                "(updates scaled from the ideal's per-entity rate).\n\n";

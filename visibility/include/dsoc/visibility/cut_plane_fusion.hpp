@@ -62,12 +62,33 @@ public:
     /// `box` passes through an occluder's interior. False otherwise (which promises
     /// nothing). Const and thread-safe given per-thread scratches.
     [[nodiscard]] bool covers(const Aabb& region, const Aabb& box, CutPlane plane,
-                              OccluderGrid::Scratch& grid_scratch, Scratch& scratch) const;
+                              OccluderGrid::Scratch& grid_scratch, Scratch& scratch) const {
+        return coverage(region, box, plane, grid_scratch, scratch, true) == Coverage::covered;
+    }
+
+    enum class Coverage {
+        covered,   ///< the cut occluders cover S (what covers() answers true for)
+        partial,   ///< scratch.pieces holds the parts of S they leave uncovered
+        undecided, ///< a limit or a quick rejection: nothing is promised
+    };
+    /// What covers() decides, and when S is not covered the uncovered rest of S:
+    /// `partial` leaves in `scratch.pieces` convex polygons (in the plane's (u, v)
+    /// axes) whose union contains every point of S that no cut occluder's interior
+    /// holds, so every segment from `region` to `box` either passes through an
+    /// occluder at the plane or crosses it inside one of the pieces. `quick` allows
+    /// cheap rejections (S's corners, total overlap) that answer `undecided` early;
+    /// without it the pieces are computed whenever the limits allow.
+    [[nodiscard]] Coverage coverage(const Aabb& region, const Aabb& box, CutPlane plane,
+                                    OccluderGrid::Scratch& grid_scratch, Scratch& scratch,
+                                    bool quick) const;
 
     /// The rectangle S in the plane's (u, v) axes (u = (axis+1)%3, v = (axis+2)%3), or
     /// false when the plane does not strictly separate region and box.
     [[nodiscard]] static bool crossing_rectangle(const Aabb& region, const Aabb& box,
                                                  CutPlane plane, glm::dvec2& lo, glm::dvec2& hi);
+
+    /// The bounding rectangle of `poly` in its (u, v) axes.
+    static void bounds(const Polygon& poly, glm::dvec2& lo, glm::dvec2& hi);
 
     static constexpr double kNoiseWidth = 1e-3;
     static constexpr std::size_t kMaxPieces = 64;

@@ -38,6 +38,9 @@ struct RegionCullerConfig {
     /// the centre segment crosses (cut_plane_fusion.hpp), for boxes no single
     /// occluder hides.
     bool fusion = true;
+    /// Within fusion, levels of portal tests (shaft_occlusion.hpp): the open parts a
+    /// cut plane leaves are tested in turn. 0 turns them off. [Limit: 0..4]
+    int portal_depth = ShaftOcclusion::kDefaultPortalDepth;
     RegionOcclusionBufferConfig buffer;
 };
 
@@ -65,7 +68,7 @@ public:
         if (!config_.shaft || scene_->grid == nullptr) {
             return Visibility::visible;
         }
-        return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion)
+        return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion, config_.portal_depth)
             .test(region_, box, scratch_);
     }
     /// test_box() trying first the occluder that hid the box last time (ShaftOcclusion).
@@ -76,7 +79,7 @@ public:
         if (!config_.shaft || scene_->grid == nullptr) {
             return Visibility::visible;
         }
-        return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion)
+        return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion, config_.portal_depth)
             .test(region_, box, scratch_, &hint);
     }
     /// The z-pyramid alone; without it, no test at all (`visible`, which is always

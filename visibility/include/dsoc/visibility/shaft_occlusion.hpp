@@ -17,6 +17,8 @@
 #include "dsoc/visibility/occluder_grid.hpp"
 #include "dsoc/visibility/occluder_world.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -44,25 +46,46 @@ inline constexpr float kBoxShrink = 1.0f / 64.0f;
 /// Shaft stage over a world: `occluded` when some single occluder blocks every
 /// segment from `region` to `box` (exact per occluder, see above) or, with fusion on,
 /// when the occluders cut by one of a few axis-aligned planes through the walls the
-/// centre segment crosses cover every crossing together (cut_plane_fusion.hpp);
+/// centre segment crosses cover every crossing together (cut_plane_fusion.hpp), or,
+/// with portals on, when every part of such a plane the occluders leave open (a
+/// "portal": a doorway, the gap beside a wall) is itself hidden from the region or
+/// hides the box from itself (tested the same way, one level down);
 /// `visible` otherwise (may be a false positive). Occluders that cut into the region
 /// take part: the arguments need only convexity.
+///
+/// Why portals are conservative: a segment from a point of the region to a point of
+/// the box crosses the plane once, either inside a cut occluder (blocked) or at a
+/// point x of some open part P. If no segment from the region to P gets through, the
+/// part of the segment before x is blocked; if no segment from P to the box gets
+/// through, the part after x is. Either way the segment is blocked. This is what
+/// closes "a doorway, then a wall behind it", which no single plane shows.
 class ShaftOcclusion {
 public:
     /// `world` and `grid` (built over `world`) must outlive this.
+    /// `portal_depth`: levels of portal tests below the top one (0: none; needs fusion).
     explicit ShaftOcclusion(const OccluderWorld& world, const OccluderGrid& grid,
-                            bool fusion = true)
-        : world_(&world), grid_(&grid), fusion_(fusion) {}
+                            bool fusion = true, int portal_depth = kDefaultPortalDepth)
+        : world_(&world), grid_(&grid), fusion_(fusion),
+          portal_depth_(fusion ? std::min(portal_depth, kMaxPortalDepth) : 0) {}
 
     /// Per-thread memory, reused between tests.
     struct Scratch {
         OccluderGrid::Scratch grid;
         CutPlaneFusion::Scratch fusion;
         std::vector<CutPlane> planes;
+        std::vector<OccluderId> plane_sources; ///< the occluder each plane runs through
+        /// Per portal level: that level's cut planes and open parts (kept across the
+        /// tests one level down, which reuse the fields above).
+        std::array<std::vector<CutPlane>, 4> portal_planes;
+        std::array<std::vector<OccluderId>, 4> portal_sources;
+        std::array<std::vector<Aabb>, 4> portals;
+        int portal_budget = 0; ///< sub-tests left for the current top-level test
     };
 
-    /// `hint` (optional, in/out): 0, or 1 + the id of an occluder to try first (written
-    /// here when a single occluder proves the box hidden; reset to 0 otherwise).
+    /// `hint` (optional, in/out): what proved the box hidden last time, tried first:
+    /// 0 (nothing), 1 + the id of an occluder, or kPortalHint | axis << 29 | id for the
+    /// portal tests on the plane through the middle of occluder `id` across `axis`.
+    /// Written here when one of those proves the box hidden; reset to 0 otherwise.
     [[nodiscard]] Visibility test(const Aabb& region, const Aabb& box, Scratch& scratch,
                                   std::uint32_t* hint = nullptr) const;
 
@@ -73,11 +96,31 @@ public:
     /// middle of the occluders that block the centre segment, nearest the region
     /// first. (On oa_dm4, 3 planes prove 98% of what 6 do at 60% of the cost.)
     static constexpr std::size_t kMaxCutPlanes = 3;
+    static constexpr int kDefaultPortalDepth = 2;
+    static constexpr std::uint32_t kPortalHint = 0x80000000u;
+    static constexpr int kMaxPortalDepth = 4;
+    /// Open parts of a plane given sub-tests at most; a plane leaving more is skipped.
+    static constexpr std::size_t kMaxPortals = 8;
+    /// Sub-tests (two per open part at most) per top-level test, all levels together.
+    static constexpr int kPortalBudget = 24;
+    /// Open parts are widened by this in the plane (rounding from double). [Units: world units]
+    static constexpr float kPortalPad = 1.0f / 64.0f;
 
 private:
+    /// test() with `depth` portal levels left; `cheap_done`: the single-occluder and
+    /// fusion tests of this pair already failed, only the portal tests are left.
+    [[nodiscard]] Visibility test_at(const Aabb& region, const Aabb& box, Scratch& scratch,
+                                     std::uint32_t* hint, int depth, bool cheap_done = false) const;
+    /// True when, for one of scratch.planes, every open part is hidden from `region`
+    /// or hides `box` (sub-tests at `depth` - 1).
+    /// Returns the index in scratch.planes of the plane that proved it, or -1.
+    [[nodiscard]] int hidden_through_portals(const Aabb& region, const Aabb& box, Scratch& scratch,
+                                             int depth) const;
+
     const OccluderWorld* world_;
     const OccluderGrid* grid_;
     bool fusion_;
+    int portal_depth_;
 };
 
 } // namespace dsoc::visibility

@@ -6,6 +6,7 @@
 #include "dsoc/eval/metrics.hpp"
 #include "dsoc/eval/scenario.hpp"
 #include "dsoc/visibility/dsoc_config.hpp"
+#include "dsoc/visibility/shaft_occlusion.hpp"
 
 #include <cstdint>
 #include <iosfwd>
@@ -32,11 +33,15 @@ struct EvalOptions {
     std::vector<std::string> dsoc_overrides;
     /// Occluder fusion in the culling policies' shaft stage (RegionCullerConfig::fusion).
     bool fusion = true;
+    /// RegionCullerConfig::portal_depth for the culling policies.
+    int portal_depth = visibility::ShaftOcclusion::kDefaultPortalDepth;
     /// DSOCConfig::entity_cluster_size for every InterestManager policy. [Units: world units]
     float entity_cluster_size = visibility::DSOCConfig{}.entity_cluster_size;
-    /// Also judge every pair from a 3 x 3 x 3 lattice of eyes over the client's reachable
-    /// eye region (the region the culling policies cover): the region bound. Costly.
+    /// Also judge every pair from a lattice of eyes over the client's reachable eye region
+    /// (the region the culling policies cover): the region bound. Costly.
     bool region_bound = false;
+    /// Eyes per side of that lattice (n^3 eyes, corners included). [Limit: 2..9]
+    int region_lattice = 3;
     /// Concrete violations kept per policy for the report.
     std::size_t max_examples = 10;
 };
@@ -65,6 +70,7 @@ struct EvalResult {
     /// EvalOptions::region_bound.
     std::uint64_t region_visible_pairs = 0;
     bool region_bound = false;
+    int region_lattice = 3; ///< eyes per side of the region bound's lattice
 
     std::string trace_path;
     std::string trace_policy;

@@ -39,6 +39,8 @@ struct PolicyEnv {
     const std::vector<std::string>* dsoc_overrides = nullptr;
     /// RegionCullerConfig::fusion for the culling policies.
     bool fusion = true;
+    /// RegionCullerConfig::portal_depth for the culling policies.
+    int portal_depth = visibility::ShaftOcclusion::kDefaultPortalDepth;
     /// DSOCConfig::entity_cluster_size for the culling policies. [Units: world units]
     float entity_cluster_size = visibility::DSOCConfig{}.entity_cluster_size;
     /// The latency allowance the culling policies promise. [Units: ticks]

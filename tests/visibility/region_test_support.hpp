@@ -1,0 +1,72 @@
+#pragma once
+// Helpers shared by the from-region culling tests (shaft, fusion, portals): a
+// brute-force certificate of visibility from a region, and a world whose walls are
+// built from many brushes.
+
+#include "dsoc/visibility/reference_visibility.hpp"
+#include "dsoc/visibility/test_worlds.hpp"
+
+#include <random>
+
+namespace dsoc::visibility::testing {
+
+inline OccluderId add_box(OccluderWorld& world, glm::vec3 lo, glm::vec3 hi) {
+    return world.add(ConvexPolyhedron::from_aabb({lo, hi}));
+}
+
+/// True when some eye of an n x n x n lattice over `region` (corners included) sees
+/// `box` (5 x 5 samples per face): a certificate that the box is visible from the
+/// region. False is evidence, not proof, that it is hidden.
+inline bool seen_from_lattice(const ReferenceVisibility& ref, const Aabb& region, const Aabb& box,
+                              int n = 5) {
+    const float step = 1.0f / static_cast<float>(n - 1);
+    for (int k = 0; k < n * n * n; ++k) {
+        const glm::vec3 f(static_cast<float>(k % n), static_cast<float>((k / n) % n),
+                          static_cast<float>(k / (n * n)));
+        if (ref.test_box(region.min + region.size() * f * step, box, 5) == Visibility::visible) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/// The corridor world with every box brush cut into 2-4 pieces along its longest axis,
+/// some pieces thickened on one side: the same kind of walls a level designer builds
+/// from many brushes, which single-occluder tests cannot fuse.
+inline TestWorld fragmented_corridor_world(std::uint32_t seed) {
+    const TestWorld base = make_corridor_world(seed, 4, 4);
+    std::mt19937 rng(seed);
+    TestWorld out;
+    out.play_area = base.play_area;
+    for (OccluderId id = 0; id < base.world.size(); ++id) {
+        const ConvexPolyhedron& o = base.world.occluder(id);
+        if (o.planes().size() != 6 || base.world.face_planes(id).size() != 6 ||
+            o.vertices().size() != 8) {
+            out.world.add(o);
+            continue;
+        }
+        const Aabb b = o.bounds();
+        const glm::vec3 s = b.size();
+        const int axis = s.x >= s.y && s.x >= s.z ? 0 : (s.y >= s.z ? 1 : 2);
+        const int thin = s.x <= s.y && s.x <= s.z ? 0 : (s.y <= s.z ? 1 : 2);
+        const int pieces = 2 + static_cast<int>(rng() % 3);
+        for (int p = 0; p < pieces; ++p) {
+            Aabb piece = b;
+            piece.min[axis] = b.min[axis] + s[axis] * static_cast<float>(p) / pieces;
+            piece.max[axis] = b.min[axis] + s[axis] * static_cast<float>(p + 1) / pieces;
+            if (thin != axis && rng() % 2 == 0) {
+                (rng() % 2 == 0 ? piece.min[thin] : piece.max[thin]) +=
+                    (rng() % 2 == 0 ? -1.0f : 1.0f) * 4.0f;
+                if (piece.min[thin] >= piece.max[thin]) {
+                    piece = b; // never thinner than nothing
+                    piece.min[axis] = b.min[axis] + s[axis] * static_cast<float>(p) / pieces;
+                    piece.max[axis] = b.min[axis] + s[axis] * static_cast<float>(p + 1) / pieces;
+                }
+            }
+            add_box(out.world, piece.min, piece.max);
+        }
+    }
+    return out;
+}
+
+} // namespace dsoc::visibility::testing
