@@ -84,6 +84,28 @@ TEST(PortalOcclusion, APortalProofIsRememberedInTheHint) {
     EXPECT_EQ(hint, 0u);
 }
 
+TEST(PortalOcclusion, AfterFailedPortalTestsTheNextHintedQuerySkipsThem) {
+    const OccluderWorld world = doorway_then_wall();
+    const OccluderGrid grid(world, 64.0f);
+    const ShaftOcclusion shaft(world, grid, true, 2);
+    ShaftOcclusion::Scratch scratch;
+    const Aabb region{{-200, -24, 48}, {-150, 24, 80}};
+    const Aabb hidden{{300, 120, 8}, {330, 150, 64}};
+    // Seen through the doorway, off to the side: the centre segment hits the wall
+    // beside the doorway, so the portal tests run, and fail.
+    const Aabb seen{{90, -120, 8}, {120, -90, 64}};
+    ASSERT_TRUE(seen_from_lattice(ReferenceVisibility(world), region, seen, 3));
+    std::uint32_t hint = 0;
+    ASSERT_EQ(shaft.test(region, seen, scratch, &hint), Visibility::visible);
+    ASSERT_NE(hint, 0u) << "a failed portal test is remembered";
+    // The next hinted query skips the portal tests ("visible" is always allowed)...
+    EXPECT_EQ(shaft.test(region, hidden, scratch, &hint), Visibility::visible);
+    // ...and the one after runs them again.
+    EXPECT_EQ(shaft.test(region, hidden, scratch, &hint), Visibility::occluded);
+    // Without a hint nothing is skipped.
+    EXPECT_EQ(shaft.test(region, hidden, scratch), Visibility::occluded);
+}
+
 TEST(PortalOcclusion, UncoveredPiecesHoldEveryOpenCrossing) {
     // coverage(): every point of S outside every cut occluder lies in some piece.
     const OccluderWorld world = doorway_then_wall();

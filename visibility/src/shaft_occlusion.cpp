@@ -217,6 +217,15 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
         const Aabb& ob = world_->occluder(id).bounds();
         return CutPlane{axis, 0.5f * (ob.min[axis] + ob.max[axis])};
     };
+    // Temporal coherence for boxes the portal tests failed to hide last time (most of
+    // them visible): skip those tests for the next few queries (answering `visible` is
+    // always allowed), counting down in the hint.
+    std::uint32_t skips_left = 0;
+    if (hint != nullptr && (*hint & kPortalHint) != 0 && ((*hint >> 29) & 3u) == 3u) {
+        skips_left = std::min<std::uint32_t>(*hint & ((1u << 29) - 1), kPortalSkips);
+        *hint = 0;
+    }
+    const bool skip_portals = skips_left > 0;
     // Temporal coherence: a portal proof on the same plane as last time.
     if (hint != nullptr && (*hint & kPortalHint) != 0 && depth > 0 && !cheap_done) {
         const OccluderId id = *hint & ((1u << 29) - 1);
@@ -302,7 +311,7 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
                 return Visibility::occluded;
             }
         }
-        if (depth > 0) {
+        if (depth > 0 && !skip_portals) {
             const int proved = hidden_through_portals(region, box, scratch, depth);
             if (proved >= 0) {
                 if (hint != nullptr) {
@@ -319,7 +328,11 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
                 }
                 return Visibility::occluded;
             }
+            skips_left = kPortalSkips + 1; // the portal tests failed: skip the next ones
         }
+    }
+    if (hint != nullptr && skips_left > 1) {
+        *hint = kPortalHint | 3u << 29 | (skips_left - 1);
     }
     return Visibility::visible;
 }

@@ -98,6 +98,8 @@ public:
     static constexpr std::size_t kMaxCutPlanes = 3;
     static constexpr int kDefaultPortalDepth = 2;
     static constexpr std::uint32_t kPortalHint = 0x80000000u;
+    /// Hinted queries after a failed portal test that skip the portal tests.
+    static constexpr std::uint32_t kPortalSkips = 1;
     static constexpr int kMaxPortalDepth = 4;
     /// Open parts of a plane given sub-tests at most; a plane leaving more is skipped.
     static constexpr std::size_t kMaxPortals = 8;
