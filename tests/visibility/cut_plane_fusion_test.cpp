@@ -113,27 +113,19 @@ TEST(CutPlaneFusion, RandomRegionsNeverHideWhatAnEyeSeesAndFusionCullsMore) {
         const ShaftOcclusion fused(tw.world, grid, true, 0); // fusion alone, no portals
         ShaftOcclusion::Scratch scratch;
         const ReferenceVisibility ref(tw.world);
-        std::uniform_real_distribution<float> ux(tw.play_area.min.x, tw.play_area.max.x);
-        std::uniform_real_distribution<float> uy(tw.play_area.min.y, tw.play_area.max.y);
-        std::uniform_real_distribution<float> uz(tw.play_area.min.z, tw.play_area.max.z);
-        std::uniform_real_distribution<float> half(0.0f, 60.0f);
-        for (int i = 0; i < 600; ++i) {
-            const glm::vec3 c(ux(rng), uy(rng), uz(rng));
-            const Aabb region{c - glm::vec3(half(rng), half(rng), half(rng) * 0.5f),
-                              c + glm::vec3(half(rng), half(rng), half(rng) * 0.5f)};
-            const glm::vec3 b(ux(rng), uy(rng), uz(rng));
-            const Aabb box{b - glm::vec3(15, 15, 28), b + glm::vec3(15, 15, 28)};
-            ++configurations;
-            const bool single_hides = single.test(region, box, scratch) == Visibility::occluded;
-            const bool fused_hides = fused.test(region, box, scratch) == Visibility::occluded;
-            EXPECT_TRUE(fused_hides || !single_hides) << "fusion only adds proofs";
-            culled_single += single_hides ? 1 : 0;
-            if (!fused_hides) {
-                continue;
-            }
-            ++culled_fused;
-            misses += seen_from_lattice(ref, region, box) ? 1 : 0;
-        }
+        testing::for_random_region_box_pairs(
+            tw, rng, 600, [&](const Aabb& region, const Aabb& box) {
+                ++configurations;
+                const bool single_hides = single.test(region, box, scratch) == Visibility::occluded;
+                const bool fused_hides = fused.test(region, box, scratch) == Visibility::occluded;
+                EXPECT_TRUE(fused_hides || !single_hides) << "fusion only adds proofs";
+                culled_single += single_hides ? 1 : 0;
+                if (!fused_hides) {
+                    return;
+                }
+                ++culled_fused;
+                misses += seen_from_lattice(ref, region, box) ? 1 : 0;
+            });
     }
     EXPECT_EQ(misses, 0) << "of " << culled_fused << " culled";
     // Fusion must prove clearly more than single occluders do (the fragmented world

@@ -165,31 +165,23 @@ TEST(PortalOcclusion, RandomRegionsNeverHideWhatAnEyeSeesAndPortalsCullMore) {
         const ShaftOcclusion portals(tw.world, grid, true, 2);
         ShaftOcclusion::Scratch scratch;
         const ReferenceVisibility ref(tw.world);
-        std::uniform_real_distribution<float> ux(tw.play_area.min.x, tw.play_area.max.x);
-        std::uniform_real_distribution<float> uy(tw.play_area.min.y, tw.play_area.max.y);
-        std::uniform_real_distribution<float> uz(tw.play_area.min.z, tw.play_area.max.z);
-        std::uniform_real_distribution<float> half(0.0f, 60.0f);
-        for (int i = 0; i < 600; ++i) {
-            const glm::vec3 c(ux(rng), uy(rng), uz(rng));
-            const Aabb region{c - glm::vec3(half(rng), half(rng), half(rng) * 0.5f),
-                              c + glm::vec3(half(rng), half(rng), half(rng) * 0.5f)};
-            const glm::vec3 b(ux(rng), uy(rng), uz(rng));
-            const Aabb box{b - glm::vec3(15, 15, 28), b + glm::vec3(15, 15, 28)};
-            ++configurations;
-            const bool fused_hides = fused.test(region, box, scratch) == Visibility::occluded;
-            // A random (stale or meaningless) hint changes the work, never the guarantee.
-            std::uint32_t hint = rng() % 2 == 0 ? static_cast<std::uint32_t>(rng())
-                                                : static_cast<std::uint32_t>(rng() % 64);
-            const bool portals_hide =
-                portals.test(region, box, scratch, &hint) == Visibility::occluded;
-            EXPECT_TRUE(portals_hide || !fused_hides) << "portals only add proofs";
-            culled_fused += fused_hides ? 1 : 0;
-            if (!portals_hide) {
-                continue;
-            }
-            ++culled_portals;
-            misses += seen_from_lattice(ref, region, box) ? 1 : 0;
-        }
+        testing::for_random_region_box_pairs(
+            tw, rng, 600, [&](const Aabb& region, const Aabb& box) {
+                ++configurations;
+                const bool fused_hides = fused.test(region, box, scratch) == Visibility::occluded;
+                // A random (stale or meaningless) hint changes the work, never the guarantee.
+                std::uint32_t hint = rng() % 2 == 0 ? static_cast<std::uint32_t>(rng())
+                                                    : static_cast<std::uint32_t>(rng() % 64);
+                const bool portals_hide =
+                    portals.test(region, box, scratch, &hint) == Visibility::occluded;
+                EXPECT_TRUE(portals_hide || !fused_hides) << "portals only add proofs";
+                culled_fused += fused_hides ? 1 : 0;
+                if (!portals_hide) {
+                    return;
+                }
+                ++culled_portals;
+                misses += seen_from_lattice(ref, region, box) ? 1 : 0;
+            });
     }
     EXPECT_EQ(misses, 0) << "of " << culled_portals << " culled";
     EXPECT_GT(culled_portals, culled_fused + configurations / 100)

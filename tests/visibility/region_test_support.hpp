@@ -69,4 +69,23 @@ inline TestWorld fragmented_corridor_world(std::uint32_t seed) {
     return out;
 }
 
+/// Calls `visit(region, box)` `count` times with random pairs in `tw.play_area`: an eye
+/// region of half extents up to 60 x 60 x 30 units and a player-sized box (30 x 30 x
+/// 56), the pairs the random property tests of the region cullers judge.
+template <class Visit>
+void for_random_region_box_pairs(const TestWorld& tw, std::mt19937& rng, int count, Visit&& visit) {
+    std::uniform_real_distribution<float> ux(tw.play_area.min.x, tw.play_area.max.x);
+    std::uniform_real_distribution<float> uy(tw.play_area.min.y, tw.play_area.max.y);
+    std::uniform_real_distribution<float> uz(tw.play_area.min.z, tw.play_area.max.z);
+    std::uniform_real_distribution<float> half(0.0f, 60.0f);
+    for (int i = 0; i < count; ++i) {
+        const glm::vec3 c(ux(rng), uy(rng), uz(rng));
+        const Aabb region{c - glm::vec3(half(rng), half(rng), half(rng) * 0.5f),
+                          c + glm::vec3(half(rng), half(rng), half(rng) * 0.5f)};
+        const glm::vec3 b(ux(rng), uy(rng), uz(rng));
+        const Aabb box{b - glm::vec3(15, 15, 28), b + glm::vec3(15, 15, 28)};
+        visit(region, box);
+    }
+}
+
 } // namespace dsoc::visibility::testing

@@ -152,26 +152,18 @@ TEST(ShaftOcclusion, RandomRegionsNeverHideWhatAnEyeSees) {
         ShaftOcclusion shaft(tw.world, grid);
         ShaftOcclusion::Scratch scratch;
         ReferenceVisibility ref(tw.world);
-        std::uniform_real_distribution<float> ux(tw.play_area.min.x, tw.play_area.max.x);
-        std::uniform_real_distribution<float> uy(tw.play_area.min.y, tw.play_area.max.y);
-        std::uniform_real_distribution<float> uz(tw.play_area.min.z, tw.play_area.max.z);
-        std::uniform_real_distribution<float> half(0.0f, 60.0f);
-        for (int i = 0; i < 700; ++i) {
-            const glm::vec3 c(ux(rng), uy(rng), uz(rng));
-            const Aabb region{c - glm::vec3(half(rng), half(rng), half(rng) * 0.5f),
-                              c + glm::vec3(half(rng), half(rng), half(rng) * 0.5f)};
-            const glm::vec3 b(ux(rng), uy(rng), uz(rng));
-            const Aabb box{b - glm::vec3(15, 15, 28), b + glm::vec3(15, 15, 28)};
-            ++configurations;
-            // A stale or random blocker hint changes the work, never the guarantee.
-            std::uint32_t hint = static_cast<std::uint32_t>(rng() % (tw.world.size() + 1));
-            const bool hinted = shaft.test(region, box, scratch, &hint) == Visibility::occluded;
-            if (shaft.test(region, box, scratch) != Visibility::occluded && !hinted) {
-                continue;
-            }
-            ++culled;
-            misses += testing::seen_from_lattice(ref, region, box) ? 1 : 0;
-        }
+        testing::for_random_region_box_pairs(
+            tw, rng, 700, [&](const Aabb& region, const Aabb& box) {
+                ++configurations;
+                // A stale or random blocker hint changes the work, never the guarantee.
+                std::uint32_t hint = static_cast<std::uint32_t>(rng() % (tw.world.size() + 1));
+                const bool hinted = shaft.test(region, box, scratch, &hint) == Visibility::occluded;
+                if (shaft.test(region, box, scratch) != Visibility::occluded && !hinted) {
+                    return;
+                }
+                ++culled;
+                misses += testing::seen_from_lattice(ref, region, box) ? 1 : 0;
+            });
     }
     EXPECT_EQ(misses, 0) << "of " << culled << " culled";
     // It must cull something: a meaningful share of random configurations.
