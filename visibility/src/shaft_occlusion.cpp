@@ -125,7 +125,9 @@ bool shaft_blocked_by(const Aabb& region, const Aabb& box, std::span<const Plane
 Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& scratch,
                                 std::uint32_t* hint) const {
     scratch.portal_budget = kPortalBudget;
-    return test_at(region, box, scratch, hint, portal_depth_);
+    const glm::vec3 extent = box.size();
+    const bool small = std::max(extent.x, std::max(extent.y, extent.z)) <= kMaxPortalBoxSide;
+    return test_at(region, box, scratch, hint, small ? portal_depth_ : 0);
 }
 
 int ShaftOcclusion::hidden_through_portals(const Aabb& region, const Aabb& box, Scratch& scratch,

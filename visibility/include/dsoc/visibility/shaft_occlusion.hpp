@@ -98,6 +98,12 @@ public:
     static constexpr std::size_t kMaxCutPlanes = 3;
     static constexpr int kDefaultPortalDepth = 2;
     static constexpr std::uint32_t kPortalHint = 0x80000000u;
+    /// Boxes with a longer side skip the portal tests: TBVs of fast entities and boxes of
+    /// entity clusters seldom pass them and cost the most (on a generated city, 200
+    /// viewers, 2,000 bots: dsoc 738 -> 308 µs per client-tick, the same sets; oa_dm4
+    /// unchanged). Only the queried box counts, not the portals of the sub-tests.
+    /// [Units: world units]
+    static constexpr float kMaxPortalBoxSide = 200.0f;
     /// Hinted queries after a failed portal test that skip the portal tests.
     static constexpr std::uint32_t kPortalSkips = 1;
     static constexpr int kMaxPortalDepth = 4;
