@@ -80,6 +80,7 @@ std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const Ga
     visibility::RegionCullerConfig culler;
     culler.pyramid = config.culler != "shaft";
     culler.shaft = config.culler != "pyramid";
+    culler.portal_depth = config.portal_depth;
     auto scene = visibility::OccluderScene::build(world.map().occluders);
     auto make_culler = visibility::occluder_region_visibility(scene, culler);
     if (config.pvs_stage) { // the map's PVS over the reachable clusters first

@@ -50,6 +50,9 @@ void add_options(CLI::App& app, dsoc::server::ServerConfig& config, ProgramOptio
         ->capture_default_str();
     app.add_option("--culler", config.culler, "Occlusion culler stages: shaft | pyramid | both")
         ->capture_default_str();
+    app.add_option("--portal-depth", config.portal_depth,
+                   "Levels of portal tests in the culler (0 = off; 2 = tightest, ~4x CPU)")
+        ->capture_default_str();
     app.add_option("--pvs-stage", config.pvs_stage,
                    "Reject with the map's PVS before the culler (true/false)")
         ->capture_default_str();

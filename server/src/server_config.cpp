@@ -1,6 +1,7 @@
 #include "dsoc/server/server_config.hpp"
 
 #include "dsoc/server/dsoc_settings.hpp"
+#include "dsoc/visibility/shaft_occlusion.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -35,6 +36,8 @@ std::vector<std::string> validate(const ServerConfig& c) {
           "tbv_strategy", "must be one of adaptive, explicit, fuzzy; got '" + c.tbv_strategy + "'");
     check(p, c.culler == "shaft" || c.culler == "pyramid" || c.culler == "both", "culler",
           "must be one of shaft, pyramid, both; got '" + c.culler + "'");
+    check(p, c.portal_depth >= 0 && c.portal_depth <= visibility::ShaftOcclusion::kMaxPortalDepth,
+          "portal_depth", "must be 0..4, got " + std::to_string(c.portal_depth));
     check(p,
           std::isfinite(c.region_reuse_margin) && c.region_reuse_margin >= 0.0f &&
               c.region_reuse_margin <= 512.0f,

@@ -87,6 +87,9 @@ int main(int argc, char** argv) {
         ->capture_default_str()
         ->check(CLI::Range(1, 1000000));
     app.add_option("--seed", config.seed, "Seed of bots and players")->capture_default_str();
+    app.add_option("--portal-depth", config.portal_depth,
+                   "Levels of portal tests in the culler (ServerConfig::portal_depth)")
+        ->capture_default_str();
     CLI11_PARSE(app, argc, argv);
     config.insecure = true; // no connections here: the token settings do not matter
     if (const auto problems = server::validate(config); !problems.empty()) {

@@ -96,6 +96,45 @@ TEST(InterestPolicy, PvsKeepsTheViewersClusterAndCullsOthers) {
     EXPECT_GT(total, 20u * world.entities().size() / 10);
 }
 
+TEST(InterestPolicy, PortalDepthReachesTheCullerAndOnlyAddsProofs) {
+    auto loaded = maps::load_map("oa_dm4", maps::MapSearch::from_environment());
+    if (!loaded) {
+        GTEST_SKIP() << "oa_dm4 not available (scripts/setup installs openarena-081-maps): "
+                     << loaded.error().message();
+    }
+    auto map = std::make_shared<const maps::Map>(std::move(loaded).value());
+    GameWorld world(bots(200), map);
+    for (int i = 0; i < 90; ++i) {
+        world.step(1.0f / 30.0f);
+    }
+    // `occlusion`: no temporal coherence, so each set is this tick's culler verdict.
+    std::size_t totals[2] = {0, 0};
+    std::vector<std::vector<Interest>> sets[2];
+    for (int k = 0; k < 2; ++k) {
+        ServerConfig config = bots(200);
+        config.policy = "occlusion";
+        config.portal_depth = k == 0 ? 0 : 2;
+        auto policy = make_policy(config, world);
+        for (std::uint32_t v = 0; v < 16; ++v) {
+            policy->add_viewer(v, world.entities()[v].id);
+        }
+        policy->begin_tick(world, 1);
+        for (std::uint32_t v = 0; v < 16; ++v) {
+            const Entity& viewer = world.entities()[v];
+            std::vector<Interest> out;
+            policy->select(world, Viewer{v, viewer.id, world.eye_of(viewer)}, out);
+            totals[k] += out.size();
+            sets[k].push_back(out);
+        }
+    }
+    for (std::size_t v = 0; v < sets[0].size(); ++v) {
+        for (const Interest& i : sets[1][v]) {
+            EXPECT_TRUE(contains(sets[0][v], i.id)) << "viewer " << v << " entity " << i.id;
+        }
+    }
+    EXPECT_LT(totals[1], totals[0]) << "portal tests hide more on oa_dm4";
+}
+
 TEST(GameWorld, EntitiesNeverExceedMaxSpeedHorizontally) {
     GameWorld world(bots(50), testing::rooms_map());
     const auto player = world.spawn_player();

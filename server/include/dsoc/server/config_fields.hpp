@@ -19,6 +19,7 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("policy", config.policy);
     visit("tbv_strategy", config.tbv_strategy);
     visit("culler", config.culler);
+    visit("portal_depth", config.portal_depth);
     visit("pvs_stage", config.pvs_stage);
     visit("region_reuse_margin", config.region_reuse_margin);
     visit("latency_allowance_ms", config.latency_allowance_ms);

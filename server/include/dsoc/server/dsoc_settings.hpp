@@ -49,11 +49,6 @@ void visit_dsoc_fields(const Config& config, Visitor&& visit) {
     visit("tbvs_enabled", config.tbvs_enabled);
     visit("reuse_buffers", config.reuse_buffers);
     visit("exact_region_tests", config.exact_region_tests);
-    // Being added to DSOCConfig by the culler's work in progress (2026-11-22); the
-    // condition can go once it is in every tree that builds this.
-    if constexpr (requires { config.full_tbv_proofs; }) {
-        visit("full_tbv_proofs", config.full_tbv_proofs);
-    }
     visit("blocker_hints", config.blocker_hints);
     visit("full_test_interval", config.full_test_interval);
     visit("validate_state", config.validate_state);
