@@ -5,6 +5,8 @@
 #include "dsoc/server/config_file.hpp"
 #include "dsoc/server/dsoc_settings.hpp"
 
+#include "support/aggregate_field_count.hpp"
+
 #include <gtest/gtest.h>
 
 #include <map>
@@ -16,19 +18,7 @@
 namespace dsoc::server {
 namespace {
 
-// Counts the fields of an aggregate: the largest N for which T{a1, ..., aN} compiles.
-struct AnyValue {
-    template <class T>
-    operator T() const; // NOLINT: never defined, only for overload resolution
-};
-template <class T, class... Args>
-constexpr std::size_t aggregate_field_count(Args... args) {
-    if constexpr (requires { T{args..., AnyValue{}}; }) {
-        return aggregate_field_count<T>(args..., AnyValue{});
-    } else {
-        return sizeof...(Args);
-    }
-}
+using dsoc::testing::aggregate_field_count;
 
 using FieldValue = std::variant<int, float, bool, visibility::TbvStrategy>;
 

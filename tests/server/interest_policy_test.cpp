@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <memory>
 
 namespace dsoc::server {
 namespace {
@@ -55,17 +56,28 @@ TEST(InterestPolicy, DistanceKeepsExactlyTheEntitiesWithinRadius) {
     EXPECT_GT(out.size(), 0u);
 }
 
-TEST(InterestPolicy, PvsKeepsTheViewersClusterAndCullsOthers) {
-    auto loaded = maps::load_map("oa_dm4", maps::MapSearch::from_environment());
-    if (!loaded) {
-        GTEST_SKIP() << "oa_dm4 not available (scripts/setup installs openarena-081-maps): "
-                     << loaded.error().message();
+/// oa_dm4 with 200 bots after 3 s of wandering (skipped when the map is not installed).
+class InterestPolicyOnOaDm4 : public ::testing::Test {
+protected:
+    void SetUp() override {
+        auto loaded = maps::load_map("oa_dm4", maps::MapSearch::from_environment());
+        if (!loaded) {
+            GTEST_SKIP() << "oa_dm4 not available (scripts/setup installs openarena-081-maps): "
+                         << loaded.error().message();
+        }
+        map_ = std::make_shared<const maps::Map>(std::move(loaded).value());
+        world_ = std::make_unique<GameWorld>(bots(200), map_);
+        for (int i = 0; i < 90; ++i) {
+            world_->step(1.0f / 30.0f);
+        }
     }
-    auto map = std::make_shared<const maps::Map>(std::move(loaded).value());
-    GameWorld world(bots(200), map);
-    for (int i = 0; i < 90; ++i) {
-        world.step(1.0f / 30.0f);
-    }
+    std::shared_ptr<const maps::Map> map_;
+    std::unique_ptr<GameWorld> world_;
+};
+
+TEST_F(InterestPolicyOnOaDm4, PvsKeepsTheViewersClusterAndCullsOthers) {
+    const GameWorld& world = *world_;
+    const std::shared_ptr<const maps::Map>& map = map_;
     PvsPolicy policy(map->pvs);
     policy.begin_tick(world, 1);
     std::size_t total = 0;
@@ -96,17 +108,8 @@ TEST(InterestPolicy, PvsKeepsTheViewersClusterAndCullsOthers) {
     EXPECT_GT(total, 20u * world.entities().size() / 10);
 }
 
-TEST(InterestPolicy, PortalDepthReachesTheCullerAndOnlyAddsProofs) {
-    auto loaded = maps::load_map("oa_dm4", maps::MapSearch::from_environment());
-    if (!loaded) {
-        GTEST_SKIP() << "oa_dm4 not available (scripts/setup installs openarena-081-maps): "
-                     << loaded.error().message();
-    }
-    auto map = std::make_shared<const maps::Map>(std::move(loaded).value());
-    GameWorld world(bots(200), map);
-    for (int i = 0; i < 90; ++i) {
-        world.step(1.0f / 30.0f);
-    }
+TEST_F(InterestPolicyOnOaDm4, PortalDepthReachesTheCullerAndOnlyAddsProofs) {
+    const GameWorld& world = *world_;
     // `occlusion`: no temporal coherence, so each set is this tick's culler verdict.
     std::size_t totals[2] = {0, 0};
     std::vector<std::vector<Interest>> sets[2];
