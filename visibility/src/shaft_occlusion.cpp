@@ -122,6 +122,15 @@ bool shaft_blocked_by(const Aabb& region, const Aabb& box, std::span<const Plane
     return true;
 }
 
+namespace {
+
+/// The hint naming the plane through the middle of occluder `id` across `axis`.
+std::uint32_t portal_plane_hint(int axis, OccluderId id) {
+    return ShaftOcclusion::kPortalHint | static_cast<std::uint32_t>(axis) << 29 | id;
+}
+
+} // namespace
+
 Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& scratch,
                                 std::uint32_t* hint) const {
     scratch.portal_budget = kPortalBudget;
@@ -237,7 +246,7 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
             scratch.planes.assign(1, mid_plane(id, axis));
             scratch.plane_sources.assign(1, id);
             if (hidden_through_portals(region, box, scratch, depth) >= 0) {
-                *hint = kPortalHint | static_cast<std::uint32_t>(axis) << 29 | id;
+                *hint = portal_plane_hint(axis, id);
                 return Visibility::occluded;
             }
             scratch.portal_budget = kPortalBudget; // the full test below gets its own
@@ -317,16 +326,11 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
             const int proved = hidden_through_portals(region, box, scratch, depth);
             if (proved >= 0) {
                 if (hint != nullptr) {
-                    // plane_sources is this level's: the portal tests keep their own copy.
-                    *hint = kPortalHint |
-                            static_cast<std::uint32_t>(
-                                scratch
-                                    .portal_planes[static_cast<std::size_t>(depth - 1)]
-                                                  [static_cast<std::size_t>(proved)]
-                                    .axis)
-                                << 29 |
-                            scratch.portal_sources[static_cast<std::size_t>(depth - 1)]
-                                                  [static_cast<std::size_t>(proved)];
+                    // The portal tests kept this level's planes (scratch.planes is reused).
+                    const auto level = static_cast<std::size_t>(depth - 1);
+                    const auto k = static_cast<std::size_t>(proved);
+                    *hint = portal_plane_hint(scratch.portal_planes[level][k].axis,
+                                              scratch.portal_sources[level][k]);
                 }
                 return Visibility::occluded;
             }
