@@ -238,6 +238,8 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     }
     const bool skip_portals = skips_left > 0;
     // Temporal coherence: a portal proof on the same plane as last time.
+    bool hinted_plane_failed = false;
+    CutPlane hinted_plane;
     if (hint != nullptr && (*hint & kPortalHint) != 0 && depth > 0 && !cheap_done) {
         const OccluderId id = *hint & ((1u << 29) - 1);
         const int axis = static_cast<int>((*hint >> 29) & 3u);
@@ -250,6 +252,8 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
                 return Visibility::occluded;
             }
             scratch.portal_budget = kPortalBudget; // the full test below gets its own
+            hinted_plane_failed = true;
+            hinted_plane = mid_plane(id, axis);
         }
     }
     // Temporal coherence: the occluder that hid this box last time usually still does.
@@ -322,7 +326,17 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
                 return Visibility::occluded;
             }
         }
-        if (depth > 0 && !skip_portals) {
+        if (hinted_plane_failed) { // its portal tests just failed: not twice
+            for (std::size_t i = 0; i < scratch.planes.size(); ++i) {
+                if (scratch.planes[i] == hinted_plane) {
+                    scratch.planes.erase(scratch.planes.begin() + static_cast<std::ptrdiff_t>(i));
+                    scratch.plane_sources.erase(scratch.plane_sources.begin() +
+                                                static_cast<std::ptrdiff_t>(i));
+                    break;
+                }
+            }
+        }
+        if (depth > 0 && !skip_portals && !scratch.planes.empty()) {
             const int proved = hidden_through_portals(region, box, scratch, depth);
             if (proved >= 0) {
                 if (hint != nullptr) {
