@@ -13,12 +13,13 @@ CullingPolicy::CullingPolicy(std::string_view name, const visibility::DSOCConfig
     : name_(name), clipper_(std::make_shared<const sim::ReachClipper>(world.map().collision_brushes,
                                                                       world.move_config())),
       manager_(config, world.map().bounds.expanded(64.0f), std::move(make_visibility),
-               [clipper = clipper_](glm::vec3 eye, const visibility::Aabb& region) {
-                   return clipper->clip(eye, region);
+               [clipper = clipper_](glm::vec3 eye, const visibility::Aabb& region,
+                                    const visibility::EyeReach& reach) {
+                   return clipper->clip(eye, region, reach);
                }) {
     const auto& move = world.move_config();
     entity_desc_.half_extents = (move.maxs - move.mins) * 0.5f;
-    entity_desc_.motion = sim::walking_limits(move);
+    entity_desc_.motion = sim::walking_limits(move, 1.0f / static_cast<float>(config.tick_rate));
     client_desc_.eye_motion = entity_desc_.motion;
     client_desc_.lookahead_ticks = lookahead_ticks;
     // The manager's eye is the box centre plus this offset.

@@ -1,5 +1,6 @@
 #include "dsoc/sim/reach_clipper.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace dsoc::sim {
@@ -34,14 +35,61 @@ ReachClipper::ReachClipper(std::span<const maps::CollisionBrush> brushes, const 
     : box_min_(move.mins - glm::vec3(0.0f, 0.0f, move.eye_height)),
       box_max_(move.maxs - glm::vec3(0.0f, 0.0f, move.eye_height)) {
     for (const auto& b : brushes) {
-        if ((b.contents & (maps::contents_solid | maps::contents_player_clip)) != 0 &&
-            !b.bounds.is_empty() && is_axial_box(b)) {
+        if ((b.contents & (maps::contents_solid | maps::contents_player_clip)) == 0 ||
+            b.bounds.is_empty()) {
+            continue;
+        }
+        if (is_axial_box(b)) {
             boxes_.push_back(b.bounds);
+        }
+        // Faces a player can stand on that are not flat: walking down them needs no
+        // gravity. The same test on the same normal as the mover's ground check
+        // (player_move.cpp), so a face within a rounding error of flat counts.
+        float steepest = 0.0f;
+        for (const auto& p : b.planes) {
+            if (p.normal.z >= move.min_walk_normal_z) {
+                steepest = std::max(steepest, walk_down_speed(move, p.normal.z));
+            }
+        }
+        if (steepest > 0.0f) {
+            slopes_.push_back({b.bounds, steepest});
         }
     }
 }
 
-visibility::Aabb ReachClipper::clip(glm::vec3 eye, const visibility::Aabb& region) const {
+float ReachClipper::walk_down_speed_within(const visibility::Aabb& eye_region) const {
+    // The player's box over the region, plus the ground probe and float slack.
+    constexpr float kGroundReach = 1.0f;
+    const visibility::Aabb swept{eye_region.min + box_min_ - glm::vec3(kGroundReach),
+                                 eye_region.max + box_max_ + glm::vec3(kGroundReach)};
+    float fastest = 0.0f;
+    for (const Slope& s : slopes_) {
+        if (s.bounds.min.x <= swept.max.x && s.bounds.max.x >= swept.min.x &&
+            s.bounds.min.y <= swept.max.y && s.bounds.max.y >= swept.min.y &&
+            s.bounds.min.z <= swept.max.z && s.bounds.max.z >= swept.min.z) {
+            fastest = std::max(fastest, s.walk_down_speed);
+        }
+    }
+    return fastest;
+}
+
+visibility::Aabb ReachClipper::clip(glm::vec3 eye, const visibility::Aabb& region,
+                                    const visibility::EyeReach& reach) const {
+    visibility::Aabb e = clip_to_walls(eye, region);
+    if (reach.limits == nullptr || reach.limits->gravity <= 0.0f || reach.down_velocity < 0.0f) {
+        return e;
+    }
+    // The region still holds every reachable eye, so the slopes near it are all the
+    // slopes the player can stand on meanwhile.
+    visibility::MotionLimits local = *reach.limits;
+    local.fall_speed_floor = std::min(local.fall_speed_floor, walk_down_speed_within(e));
+    const float floor = eye.z - (visibility::fall_bound(local, reach.seconds, reach.down_velocity) +
+                                 local.vertical_slack);
+    e.min.z = std::min(std::max(e.min.z, floor), eye.z);
+    return e;
+}
+
+visibility::Aabb ReachClipper::clip_to_walls(glm::vec3 eye, const visibility::Aabb& region) const {
     const visibility::Aabb player{eye + box_min_, eye + box_max_};
     visibility::Aabb e = region;
     // Each pass can only shrink e; a few passes reach the fixed point in practice.

@@ -2,13 +2,18 @@
 // and the speed contract.
 
 #include "dsoc/maps/map_spec.hpp"
+#include "dsoc/sim/motion_limits.hpp"
 #include "dsoc/sim/player_move.hpp"
 
 #include <gtest/gtest.h>
 
 #include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 namespace dsoc::sim {
 namespace {
@@ -180,19 +185,127 @@ TEST(PlayerMove, MotionBoundHoldsForRandomInput) {
     }
 }
 
+/// A walkable ramp (normal z 0.74) rising 180 units along +x, then sixteen steps 16
+/// high and 12 deep (53 degrees: 427 u/s of rise at full speed, were it allowed).
+maps::Map ramp_then_stairs_world() {
+    std::string text = R"(dsoc-map 1
+box solid -1024 -1024 -64 1024 1024 0
+brush solid 5
+plane 0 0 -1 0
+plane -0.9 0 1 0
+plane 1 0 0 200
+plane 0 1 0 100
+plane 0 -1 0 100
+box solid 200 -100 0 1000 100 180
+)";
+    for (int k = 1; k <= 16; ++k) {
+        text += "box solid " + std::to_string(200 + 12 * k) + " -100 180 1000 100 " +
+                std::to_string(180 + 16 * k) + "\n";
+    }
+    text += "spawn -200 0 25\n";
+    const auto spec = maps::parse_text_map(text, "ramp_then_stairs");
+    EXPECT_TRUE(spec.ok());
+    return maps::build_map(spec.value(), "ramp_then_stairs");
+}
+
+TEST(PlayerMove, EveryWayUpIsPaidFromOneClimbCredit) {
+    const maps::Map map = ramp_then_stairs_world();
+    const CollisionWorld world(map.collision_brushes);
+    const MoveConfig config;
+    for (const float dt : {1.0f / 30.0f, 1.0f / 20.0f, 1.0f / 10.0f}) {
+        MoveState state = spawn_state(world, config, {-200, 0, 25});
+        MoveInput input;
+        input.wish_direction = {1, 0, 0};
+        std::vector<float> heights{state.position.z};
+        const int ticks = static_cast<int>(4.0f / dt);
+        for (int i = 0; i < ticks; ++i) {
+            input.jump = i % 7 == 3 && i < ticks / 2; // jumps on the ramp and stairs too
+            player_move(world, config, input, dt, state);
+            heights.push_back(state.position.z);
+            ASSERT_GE(state.climb_credit, 0.0f);
+            ASSERT_LE(state.climb_credit, config.step_height);
+        }
+        // Climbed the whole way: ramp (180) and sixteen steps (256), origin 24 above.
+        EXPECT_NEAR(state.position.z, 180.0f + 256.0f + 24.0f, 0.5f) << "dt " << dt;
+        // Over every run of moves, the rise stays within the climb bound.
+        float worst_excess = -1e9f;
+        for (std::size_t from = 0; from < heights.size(); ++from) {
+            for (std::size_t to = from + 1; to < heights.size(); ++to) {
+                const float seconds = static_cast<float>(to - from) * dt;
+                worst_excess = std::max(worst_excess, heights[to] - heights[from] -
+                                                          motion_bound(config, seconds).up);
+            }
+        }
+        EXPECT_LE(worst_excess, 0.01f) << "dt " << dt;
+    }
+}
+
+/// The largest amount by which `heights` (one per tick of `dt`, with the downward
+/// speed at each) falls faster over some run of ticks than walking_limits() allows.
+float worst_fall_excess(const std::vector<glm::vec2>& height_and_down_speed,
+                        const MoveConfig& config, float dt) {
+    const visibility::MotionLimits limits = walking_limits(config, dt);
+    float worst = -1e9f;
+    for (std::size_t from = 0; from < height_and_down_speed.size(); ++from) {
+        const glm::vec2 start = height_and_down_speed[from];
+        for (std::size_t to = from + 1; to < height_and_down_speed.size(); ++to) {
+            const float seconds = static_cast<float>(to - from) * dt;
+            const visibility::Aabb reach = visibility::reachable_box(
+                visibility::Aabb{glm::vec3(0, 0, start.x), glm::vec3(0, 0, start.x)}, limits,
+                seconds, 1.0f, start.y);
+            worst = std::max(worst, reach.min.z - height_and_down_speed[to].x);
+        }
+    }
+    return worst;
+}
+
+TEST(PlayerMove, FallsWithinTheGravityBoundDownRampsAndStairsAtAnyTickLength) {
+    const maps::Map map = ramp_then_stairs_world();
+    const CollisionWorld world(map.collision_brushes);
+    const MoveConfig config;
+    for (const float dt : {1.0f / 30.0f, 1.0f / 10.0f}) {
+        // Down the stairs and the ramp from the top (a run the gravity law alone,
+        // with the downward speed at rest, does not bound).
+        MoveState walker = spawn_state(world, config, {420, 0, 460});
+        MoveInput input;
+        input.wish_direction = {-1, 0, 0};
+        std::vector<glm::vec2> walk{{walker.position.z, 0.0f}};
+        for (int i = 0; i < static_cast<int>(2.5f / dt); ++i) {
+            player_move(world, config, input, dt, walker);
+            walk.emplace_back(walker.position.z, std::max(0.0f, -walker.velocity.z));
+        }
+        EXPECT_NEAR(walker.position.z, 24.0f, 0.5f) << "dt " << dt << ": did not get down";
+        EXPECT_LE(worst_fall_excess(walk, config, dt), 0.01f) << "dt " << dt;
+        // A long drop: the tick's discretisation adds up.
+        const CollisionWorld nothing;
+        MoveState faller;
+        faller.position = {0, 0, 5000};
+        std::vector<glm::vec2> drop{{faller.position.z, 0.0f}};
+        for (int i = 0; i < static_cast<int>(2.0f / dt); ++i) {
+            player_move(nothing, config, {}, dt, faller);
+            drop.emplace_back(faller.position.z, std::max(0.0f, -faller.velocity.z));
+        }
+        EXPECT_LE(worst_fall_excess(drop, config, dt), 0.01f) << "dt " << dt;
+    }
+}
+
 TEST(PlayerMove, ValidateNamesBadFields) {
     MoveConfig config;
     EXPECT_TRUE(validate(config).empty());
     config.max_speed = 0.0f;
     config.mins = {20, 0, 0};
     EXPECT_EQ(validate(config).size(), 2u);
+    MoveConfig slow_climb;
+    slow_climb.climb_rate = slow_climb.jump_velocity - 1.0f; // a jump could not be paid for
+    ASSERT_EQ(validate(slow_climb).size(), 1u);
+    EXPECT_NE(validate(slow_climb)[0].find("climb_rate"), std::string::npos);
 }
 
 TEST(PlayerMove, MotionBoundFormula) {
     const MoveConfig config;
     const MotionBound b = motion_bound(config, 0.5f);
     EXPECT_FLOAT_EQ(b.horizontal, 160.0f);
-    EXPECT_FLOAT_EQ(b.up, (270.0f + 320.0f) * 0.5f + 18.0f);
+    EXPECT_FLOAT_EQ(b.up, config.climb_rate * 0.5f + 18.0f);
     EXPECT_FLOAT_EQ(b.down, 800.0f);
 }
 

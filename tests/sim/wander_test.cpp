@@ -4,13 +4,17 @@
 
 #include "dsoc/maps/map_source.hpp"
 #include "dsoc/maps/map_spec.hpp"
+#include "dsoc/sim/motion_limits.hpp"
 #include "dsoc/sim/wander_bot.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
 
 namespace dsoc::sim {
@@ -20,6 +24,9 @@ constexpr float kDt = 1.0f / 30.0f;
 constexpr int kTicks = 60 * 30;
 constexpr std::size_t kBots = 200;
 constexpr int kWindowTicks = 30; ///< also check the bound over 1-second windows
+/// Window lengths (ticks) over which walking_limits() is checked through reachable_box(),
+/// from one tick to a second: eye regions and TBVs use these.
+constexpr std::array<int, 8> kReachWindows{1, 2, 3, 5, 8, 12, 20, 30};
 /// Float rounding of positions a few thousand units from the origin. [Units: world units]
 constexpr float kTolerance = 0.01f;
 
@@ -29,6 +36,10 @@ struct RunFigures {
     std::size_t outside_bounds = 0;
     std::size_t over_speed = 0;
     std::size_t over_bound = 0;
+    /// Positions outside reachable_box(walking_limits) of an earlier position, with the
+    /// downward speed then (the interest manager's TBVs and eye regions).
+    std::size_t outside_reach = 0;
+    float worst_reach_excess = 0.0f; ///< [Units: world units]
     float fastest_horizontal = 0.0f; ///< [Units: world units/s]
     float fastest_tick_move = 0.0f;  ///< horizontal distance in one tick / dt
     std::size_t goals_reached = 0;
@@ -49,6 +60,12 @@ RunFigures run_bots(const maps::Map& map, std::uint64_t seed) {
     const MotionBound window_bound = motion_bound(move, kDt * kWindowTicks);
     std::vector<glm::vec3> window_start(bots.size());
     std::vector<float> travel(bots.size(), 0.0f);
+    const visibility::MotionLimits limits = walking_limits(move, kDt);
+    struct Sample {
+        glm::vec3 position;
+        float down_velocity; ///< >= 0
+    };
+    std::vector<std::deque<Sample>> history(bots.size()); ///< newest first
     for (std::size_t i = 0; i < bots.size(); ++i) {
         window_start[i] = bots[i].state.position;
         EXPECT_FALSE(world.box_in_solid(bots[i].state.position, move.mins, move.maxs))
@@ -58,15 +75,34 @@ RunFigures run_bots(const maps::Map& map, std::uint64_t seed) {
         for (std::size_t i = 0; i < bots.size(); ++i) {
             WanderBot& bot = bots[i];
             const glm::vec3 before = bot.state.position;
+            const float down_before = std::max(0.0f, -bot.state.velocity.z);
             wander_step(bot, world, wander, move, map.spawn_points, map.hazards, kDt);
             const glm::vec3 p = bot.state.position;
             if (bot.respawned) { // a teleport: outside the speed contract
                 ++figures.deaths;
+                history[i].clear();
                 window_start[i] = p;
                 EXPECT_FALSE(world.box_in_solid(p, move.mins, move.maxs)) << map.name;
                 continue;
             }
             const glm::vec3 moved = p - before;
+            history[i].push_front({before, down_before});
+            history[i].resize(std::min<std::size_t>(history[i].size(), kReachWindows.back()));
+            for (const int ticks : kReachWindows) {
+                if (static_cast<std::size_t>(ticks) > history[i].size()) {
+                    break;
+                }
+                const Sample& then = history[i][static_cast<std::size_t>(ticks - 1)];
+                const visibility::Aabb reach = visibility::reachable_box(
+                    visibility::Aabb{then.position, then.position}, limits,
+                    static_cast<float>(ticks) * kDt, 1.0f, then.down_velocity);
+                const glm::vec3 excess = glm::max(reach.min - p, p - reach.max);
+                const float worst = std::max({excess.x, excess.y, excess.z});
+                if (worst > kTolerance) {
+                    ++figures.outside_reach;
+                    figures.worst_reach_excess = std::max(figures.worst_reach_excess, worst);
+                }
+            }
             const float horizontal = std::hypot(moved.x, moved.y);
             travel[i] += horizontal;
             const float speed = std::hypot(bot.state.velocity.x, bot.state.velocity.y);
@@ -116,15 +152,18 @@ void check(const maps::Map& map, std::uint64_t seed) {
     std::printf(
         "[ figures  ] %s: %zu bots x %d ticks in %.2f s: inside %zu, below %zu, outside %zu, "
         "over speed %zu, over bound %zu, fastest %.1f u/s (tick move %.1f u/s), goals "
-        "reached %zu abandoned %zu, deaths %zu, on ground at end %zu, mean travel %.0f u\n",
+        "reached %zu abandoned %zu, deaths %zu, on ground at end %zu, mean travel %.0f u, "
+        "outside reach %zu (worst by %.2f u)\n",
         map.name.c_str(), kBots, kTicks, seconds, f.inside_brush, f.below_world, f.outside_bounds,
         f.over_speed, f.over_bound, f.fastest_horizontal, f.fastest_tick_move, f.goals_reached,
-        f.goals_abandoned, f.deaths, f.on_ground_at_end, f.mean_travel);
+        f.goals_abandoned, f.deaths, f.on_ground_at_end, f.mean_travel, f.outside_reach,
+        f.worst_reach_excess);
     EXPECT_EQ(f.inside_brush, 0u) << map.name;
     EXPECT_EQ(f.below_world, 0u) << map.name;
     EXPECT_EQ(f.outside_bounds, 0u) << map.name;
     EXPECT_EQ(f.over_speed, 0u) << map.name;
     EXPECT_EQ(f.over_bound, 0u) << map.name;
+    EXPECT_EQ(f.outside_reach, 0u) << map.name << ": worst by " << f.worst_reach_excess;
     EXPECT_LE(f.fastest_tick_move, MoveConfig{}.max_speed + kTolerance / kDt) << map.name;
     // They do wander: most of the run is spent moving.
     EXPECT_GT(f.mean_travel, 0.25f * MoveConfig{}.max_speed * 60.0f) << map.name;

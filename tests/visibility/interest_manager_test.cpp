@@ -522,5 +522,23 @@ TEST(Tbv, ReachableBoxContainsEveryReachablePosition) {
     EXPECT_FALSE(within_reach({0, 0, 0}, {11, 0, 0}, limits, 1.0f / 30.0f, 0.05f));
 }
 
+TEST(Tbv, FallBoundUnderGravityStartsFromTheFloorSpeedPlusTheMargin) {
+    MotionLimits limits{320.0f, 270.0f, 1600.0f};
+    limits.gravity = 800.0f;
+    const Aabb point{glm::vec3(0.0f), glm::vec3(0.0f)};
+    // At rest: gravity alone, 400 t^2.
+    EXPECT_FLOAT_EQ(reachable_box(point, limits, 0.5f, 1.0f, 0.0f).min.z, -100.0f);
+    // Unknown downward speed: the terminal speed.
+    EXPECT_FLOAT_EQ(reachable_box(point, limits, 0.5f).min.z, -800.0f);
+    limits.fall_speed_floor = 200.0f;
+    limits.fall_speed_margin = 20.0f;
+    // max(0, 200) + 20 = 220 u/s to start with: 110 + 100.
+    EXPECT_FLOAT_EQ(reachable_box(point, limits, 0.5f, 1.0f, 0.0f).min.z, -210.0f);
+    // Falling at 300 u/s already: 320 u/s: 160 + 100.
+    EXPECT_FLOAT_EQ(reachable_box(point, limits, 0.5f, 1.0f, 300.0f).min.z, -260.0f);
+    // Never beyond the terminal speed's bound.
+    EXPECT_FLOAT_EQ(reachable_box(point, limits, 0.5f, 1.0f, 1590.0f).min.z, -800.0f);
+}
+
 } // namespace
 } // namespace dsoc::visibility

@@ -470,7 +470,8 @@ Aabb InterestManager::eye_region_for(const ClientSlot& c, glm::vec3& eye) const 
     const float seconds = static_cast<float>(c.desc.lookahead_ticks) * tick_seconds_;
     const Aabb region =
         clip(reachable_box(Aabb{eye, eye}, c.desc.eye_motion, seconds, 1.0f, down_velocity));
-    return clipper_ ? clipper_(eye, region) : region;
+    return clipper_ ? clipper_(eye, region, EyeReach{&c.desc.eye_motion, seconds, down_velocity})
+                    : region;
 }
 
 void InterestManager::update_client(std::size_t index) {
@@ -493,7 +494,7 @@ void InterestManager::update_client(std::size_t index) {
         c.buffer_region = c.region;
         if (config_.reuse_buffers && config_.region_reuse_margin > 0.0f) {
             const Aabb grown = clip(c.region.expanded(config_.region_reuse_margin));
-            c.buffer_region = clipper_ ? clipper_(c.eye, grown) : grown;
+            c.buffer_region = clipper_ ? clipper_(c.eye, grown, EyeReach{}) : grown;
         }
         c.visibility->build(c.buffer_region);
         ++c.stats.buffer_builds;

@@ -5,13 +5,20 @@
 
 namespace dsoc::visibility {
 
+float fall_bound(const MotionLimits& limits, float seconds, float down_velocity) {
+    float fall = limits.down_speed * seconds;
+    if (limits.gravity > 0.0f && down_velocity >= 0.0f) {
+        const float start_speed =
+            std::max(down_velocity, limits.fall_speed_floor) + limits.fall_speed_margin;
+        fall = std::min(fall, start_speed * seconds + 0.5f * limits.gravity * seconds * seconds);
+    }
+    return fall;
+}
+
 Aabb reachable_box(const Aabb& box, const MotionLimits& limits, float seconds, float expansion,
                    float down_velocity) {
     const float h = limits.horizontal_speed * seconds * expansion;
-    float fall = limits.down_speed * seconds;
-    if (limits.gravity > 0.0f && down_velocity >= 0.0f) {
-        fall = std::min(fall, down_velocity * seconds + 0.5f * limits.gravity * seconds * seconds);
-    }
+    const float fall = fall_bound(limits, seconds, down_velocity);
     Aabb out = box;
     out.min.x -= h;
     out.min.y -= h;

@@ -197,7 +197,8 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
     std::shared_ptr<const sim::ReachClipper> clipper;
     if (options.region_bound) {
         clipper = std::make_shared<const sim::ReachClipper>(map.collision_brushes, world.move());
-        const visibility::MotionLimits limits = sim::walking_limits(world.move());
+        const visibility::MotionLimits limits =
+            sim::walking_limits(world.move(), 1.0f / static_cast<float>(sc.tick_rate));
         const float seconds = static_cast<float>(lookahead) / static_cast<float>(sc.tick_rate);
         const visibility::Aabb bounds = map.bounds.expanded(64.0f);
         const int n = options.region_lattice;
@@ -210,7 +211,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
                 visibility::reachable_box(visibility::Aabb{eye, eye}, limits, seconds, 1.0f, down);
             region = visibility::Aabb{glm::max(region.min, bounds.min),
                                       glm::min(region.max, bounds.max)};
-            region = clipper->clip(eye, region);
+            region = clipper->clip(eye, region, visibility::EyeReach{&limits, seconds, down});
             const float step = 1.0f / static_cast<float>(n - 1);
             for (int k = 0; k < n * n * n; ++k) {
                 const glm::vec3 f(static_cast<float>(k % n), static_cast<float>((k / n) % n),

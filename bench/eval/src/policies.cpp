@@ -106,12 +106,14 @@ public:
                    maps::with_pvs_stage(
                        env.map->pvs, visibility::occluder_region_visibility(
                                          env.scene, culler_config(env.fusion, env.portal_depth))),
-                   [clipper = clipper_](glm::vec3 eye, const visibility::Aabb& region) {
-                       return clipper->clip(eye, region);
+                   [clipper = clipper_](glm::vec3 eye, const visibility::Aabb& region,
+                                        const visibility::EyeReach& reach) {
+                       return clipper->clip(eye, region, reach);
                    }) {
         const sim::MoveConfig& move = env.world->move();
         entity_desc_.half_extents = (move.maxs - move.mins) * 0.5f;
-        entity_desc_.motion = sim::walking_limits(move);
+        entity_desc_.motion =
+            sim::walking_limits(move, 1.0f / static_cast<float>(config.tick_rate));
         client_desc_.eye_motion = entity_desc_.motion;
         client_desc_.lookahead_ticks = env.lookahead_ticks;
         // The manager's eye is the box centre plus this offset (= origin + eye_height).

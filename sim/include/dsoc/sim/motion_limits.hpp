@@ -7,15 +7,20 @@
 
 namespace dsoc::sim {
 
-/// Motion limits of an entity moved by player_move() under `move`: horizontal speed
-/// max_speed; rise jump_velocity + climb_rate per second plus one step; fall at most
-/// max_fall_speed, and under gravity from the current downward speed.
-[[nodiscard]] inline visibility::MotionLimits walking_limits(const MoveConfig& move) {
+/// Motion limits of an entity moved by player_move() under `move` in ticks of
+/// `tick_seconds`: horizontal speed max_speed; rise climb_rate per second plus one
+/// step (the climb credit); fall at most max_fall_speed, and under gravity from the
+/// larger of the current downward speed and walk_down_speed(), plus the tick's
+/// discretisation (player_move.hpp states the contract).
+[[nodiscard]] inline visibility::MotionLimits walking_limits(const MoveConfig& move,
+                                                             float tick_seconds) {
     visibility::MotionLimits m;
     m.horizontal_speed = move.max_speed;
-    m.up_speed = move.jump_velocity + move.climb_rate;
+    m.up_speed = move.climb_rate;
     m.down_speed = move.max_fall_speed;
     m.gravity = move.gravity;
+    m.fall_speed_floor = walk_down_speed(move);
+    m.fall_speed_margin = move.gravity * tick_seconds * 0.5f;
     m.vertical_slack = move.step_height;
     return m;
 }

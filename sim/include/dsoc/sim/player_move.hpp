@@ -6,10 +6,19 @@
 // Speed contract (what an interest manager may rely on; see motion_bound()):
 // - horizontal speed never exceeds max_speed, so the horizontal distance covered in
 //   t seconds is at most max_speed * t;
-// - vertical velocity stays in [-max_fall_speed, jump_velocity];
-// - stepping up onto ledges is paid from a step credit that refills at climb_rate and
-//   holds at most step_height, so steps add at most step_height + climb_rate * t of
-//   rise in t seconds.
+// - vertical velocity stays in [-max_fall_speed, jump_velocity], and the downward
+//   speed grows by at most gravity * dt per move from the larger of where it was and,
+//   standing on walkable ground, walk_down_speed() of that ground (0 on flat ground),
+//   so in t seconds of moves of dt an entity falls at most
+//   (max(v0, G) + gravity * dt / 2) * t + gravity * t^2 / 2, with G the largest
+//   walk_down_speed of the ground it stands on meanwhile (at most walk_down_speed() of
+//   the steepest walkable ground);
+// - every way up (a jump, a ramp, a step onto a ledge) is paid from one climb credit
+//   that refills at climb_rate (>= jump_velocity) and holds at most step_height, so
+//   the rise in t seconds is at most step_height + climb_rate * t. A step the credit
+//   cannot pay for is not taken (the ledge blocks, like a higher one, until the
+//   credit has refilled): on stairs steeper than climb_rate / max_speed a player
+//   climbs at climb_rate, not faster.
 
 #include "dsoc/sim/collision_world.hpp"
 
@@ -25,15 +34,17 @@ struct MoveConfig {
     float max_speed = 320.0f;
     /// [Units: world units/s^2] [Limit: >= 0]
     float gravity = 800.0f;
-    /// Upward speed a jump sets; also the upward speed limit. [Units: world units/s] [Limit: >= 0]
+    /// Upward speed a jump sets; also the upward velocity limit. [Units: world units/s]
+    /// [Limit: >= 0, <= climb_rate]
     float jump_velocity = 270.0f;
     /// Terminal falling speed (Quake 3 has none; a bound needs one). [Units: world units/s] [Limit:
     /// > 0]
     float max_fall_speed = 1600.0f;
     /// Highest ledge walked onto without jumping. [Units: world units] [Limit: >= 0]
     float step_height = 18.0f;
-    /// Rate at which step credit refills. [Units: world units/s] [Limit: >= 0]
-    float climb_rate = 320.0f;
+    /// Sustained rise limit: the rate at which the climb credit refills, which pays for
+    /// every rise (jumps, ramps, steps). [Units: world units/s] [Limit: >= jump_velocity]
+    float climb_rate = 270.0f;
     /// Ground and air acceleration (Quake 3 pm_accelerate, pm_airaccelerate). [Units: 1/s] [Limit:
     /// >= 0]
     float ground_accelerate = 10.0f;
@@ -60,7 +71,7 @@ struct MoveState {
     glm::vec3 velocity{0.0f}; ///< [Units: world units/s]
     bool on_ground = false;
     glm::vec3 ground_normal{0.0f, 0.0f, 1.0f}; ///< valid when on_ground
-    float step_credit = 0.0f;                  ///< [Units: world units] in [0, step_height]
+    float climb_credit = 0.0f;                 ///< [Units: world units] in [0, step_height]
 };
 
 struct MoveInput {
@@ -76,9 +87,17 @@ struct MotionBound {
     float down = 0.0f;       ///< [Units: world units]
 };
 
+/// The downward speed reachable without falling: max_speed down ground whose normal
+/// has z component `normal_z` (default: the steepest walkable ground); 0 on flat ground.
+/// [Units: world units/s]
+[[nodiscard]] float walk_down_speed(const MoveConfig& config, float normal_z);
+[[nodiscard]] inline float walk_down_speed(const MoveConfig& config) {
+    return walk_down_speed(config, config.min_walk_normal_z);
+}
+
 /// Conservative reach in `seconds` (>= 0), for movement stepped with any tick length
 /// (add one tick to `seconds` when it is not a whole number of ticks):
-/// horizontal = max_speed * t; up = (jump_velocity + climb_rate) * t + step_height;
+/// horizontal = max_speed * t; up = climb_rate * t + step_height;
 /// down = max_fall_speed * t.
 [[nodiscard]] MotionBound motion_bound(const MoveConfig& config, float seconds);
 

@@ -11,12 +11,21 @@
 // player, which a region overlapping them could not.
 //
 // Only brushes that are axis-aligned boxes take part (most Quake 3 walls and floors);
-// others are ignored, which is conservative. Threading: built once; clip() is const
-// and safe to call from many threads.
+// others are ignored, which is conservative.
+//
+// Falls: the mover gains downward speed beyond gravity only while standing on
+// walkable sloped ground (player_move.hpp), and the motion limits assume the steepest
+// walkable slope everywhere (fall_speed_floor). When no sloped walkable face lies
+// within the region the player's box can sweep, the fall is gravity's alone, and the
+// region's floor is raised to it (clip() with an EyeReach that says how the region
+// was made).
+//
+// Threading: built once; clip() is const and safe to call from many threads.
 
 #include "dsoc/maps/map.hpp"
 #include "dsoc/sim/player_move.hpp"
 #include "dsoc/visibility/geometry.hpp"
+#include "dsoc/visibility/interest_manager.hpp"
 
 #include <span>
 #include <vector>
@@ -32,13 +41,33 @@ public:
 
     /// `region` (a box of eye positions containing `eye`) minus the parts the
     /// player's box cannot reach from `eye`. Returns `region` unchanged when `eye`'s
-    /// box already overlaps a brush (a stuck or teleported player).
-    [[nodiscard]] visibility::Aabb clip(glm::vec3 eye, const visibility::Aabb& region) const;
+    /// box already overlaps a brush (a stuck or teleported player). When `reach` says
+    /// the region is reachable_box(eye, *reach.limits, reach.seconds, 1,
+    /// reach.down_velocity) (limits with gravity and a known downward speed), its floor
+    /// is raised to the fall with the walk-down speed of the slopes in reach only.
+    [[nodiscard]] visibility::Aabb clip(glm::vec3 eye, const visibility::Aabb& region,
+                                        const visibility::EyeReach& reach = {}) const;
+
+    /// The most downward speed walking can reach (player_move.hpp: walk_down_speed of
+    /// the steepest walkable sloped face) for an eye anywhere in `eye_region`; 0 when
+    /// no sloped walkable face is within the player's box's reach. [Units: world units/s]
+    [[nodiscard]] float walk_down_speed_within(const visibility::Aabb& eye_region) const;
 
     [[nodiscard]] std::size_t box_brush_count() const { return boxes_.size(); }
+    [[nodiscard]] std::size_t slope_count() const { return slopes_.size(); }
 
 private:
+    /// A brush with walkable sloped faces: its bounds hold every such face.
+    struct Slope {
+        visibility::Aabb bounds;
+        float walk_down_speed; ///< of its steepest walkable face [Units: world units/s]
+    };
+
+    [[nodiscard]] visibility::Aabb clip_to_walls(glm::vec3 eye,
+                                                 const visibility::Aabb& region) const;
+
     std::vector<visibility::Aabb> boxes_;
+    std::vector<Slope> slopes_;
     glm::vec3 box_min_{0.0f}; ///< the player's box relative to the eye
     glm::vec3 box_max_{0.0f};
 };

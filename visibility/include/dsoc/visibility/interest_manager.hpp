@@ -58,11 +58,22 @@ struct EntityDesc {
     MotionLimits motion;
 };
 
+/// How a reachable eye region was made: the client's eye_motion over `seconds` from a
+/// viewer falling at `down_velocity`. Default: unknown (`limits` null), e.g. for a
+/// region grown for reuse, which is not the motion limits' box.
+struct EyeReach {
+    const MotionLimits* limits = nullptr;
+    float seconds = 0.0f;        ///< [Units: s]
+    float down_velocity = -1.0f; ///< [Units: world units/s] < 0 when unknown
+};
+
 /// Optional game knowledge that shrinks a client's reachable eye region: given the
-/// eye and the region from the motion limits, a box that still contains every eye
-/// the client can reach (e.g. sim::ReachClipper: players do not walk through walls).
-/// Must be thread-safe; called once or twice per client per tick.
-using EyeRegionClipper = std::function<Aabb(glm::vec3 eye, const Aabb& region)>;
+/// eye, the region and how it was made, a box that still contains every eye the
+/// client can reach (e.g. sim::ReachClipper: players do not walk through walls, and
+/// fall no faster than gravity where no slope is in reach). Must be thread-safe;
+/// called once or twice per client per tick.
+using EyeRegionClipper =
+    std::function<Aabb(glm::vec3 eye, const Aabb& region, const EyeReach& reach)>;
 
 struct ClientDesc {
     /// The entity the client controls and views from; kNoEntity for a spectator

@@ -23,17 +23,30 @@ struct MotionLimits {
     /// covers at most v0 * t + gravity * t^2 / 2. 0: use down_speed alone.
     /// [Units: world units / s^2] [Limit: >= 0]
     float gravity = 0.0f;
+    /// With gravity only: the downward speed a fall may start from whatever the current
+    /// one is (walking down the steepest walkable ground needs no gravity to get there).
+    /// [Units: world units/s] [Limit: >= 0]
+    float fall_speed_floor = 0.0f;
+    /// With gravity only: added to the starting downward speed for movement stepped in
+    /// ticks of dt (velocity first, then position: gravity * dt / 2 more per second
+    /// than the continuous law). [Units: world units/s] [Limit: >= 0]
+    float fall_speed_margin = 0.0f;
     /// Distance added up and down whatever the time (e.g. a step-up or step-down a
     /// movement code may take in one move). [Units: world units] [Limit: >= 0]
     float vertical_slack = 0.0f;
 };
 
+/// How far an entity moving within `limits` can fall in `seconds`, not counting
+/// vertical_slack: down_speed * seconds, or, when gravity > 0 and the current downward
+/// speed `down_velocity` (>= 0) is known, the smaller of that and
+/// (max(down_velocity, fall_speed_floor) + fall_speed_margin) * t + gravity * t^2 / 2.
+/// [Units: world units]
+[[nodiscard]] float fall_bound(const MotionLimits& limits, float seconds, float down_velocity);
+
 /// The box `box` can sweep within `seconds`: grown by horizontal_speed * seconds on
 /// x and y, up_speed * seconds + vertical_slack above and the fall bound +
 /// vertical_slack below, then every growth scaled by `expansion` (>= 1, a safety
-/// margin). The fall bound is down_speed * seconds, or, when gravity > 0 and the
-/// current downward speed `down_velocity` (>= 0) is known, the smaller of that and
-/// down_velocity * t + gravity * t^2 / 2. Pass a negative down_velocity when unknown.
+/// margin). The fall bound is fall_bound(); pass a negative down_velocity when unknown.
 /// Axis-separable, so it contains the exact reachable set (a disc is inside its
 /// bounding square).
 [[nodiscard]] Aabb reachable_box(const Aabb& box, const MotionLimits& limits, float seconds,
