@@ -35,6 +35,32 @@ TEST(CutPlaneFusion, AWallOfTwoBrushesHidesWhatNeitherHidesAlone) {
     EXPECT_FALSE(seen_from_lattice(ReferenceVisibility(world), region, box));
 }
 
+TEST(CutPlaneFusion, AFusionProofIsRememberedInTheHintAndTriedFirst) {
+    // The same two-brush wall: no single brush hides the box, their plane does.
+    OccluderWorld world;
+    add_box(world, {-8, -600, -100}, {8, 7, 300});
+    add_box(world, {-4, 7, -100}, {12, 600, 300});
+    const OccluderGrid grid(world, 128.0f);
+    const Aabb region{{-200, -40, 0}, {-120, 40, 60}};
+    const Aabb box{{150, -20, 0}, {180, 20, 56}};
+    const ShaftOcclusion fused(world, grid, true, 0);
+    ShaftOcclusion::Scratch scratch;
+    std::uint32_t hint = 0;
+    ASSERT_EQ(fused.test(region, box, scratch, &hint), Visibility::occluded);
+    ASSERT_NE(hint & ShaftOcclusion::kPortalHint, 0u) << "a plane, not one occluder: " << hint;
+    EXPECT_EQ((hint >> 29) & 3u, 0u) << "the plane across x";
+    const std::uint32_t first = hint;
+    // The box moves along the wall: the hinted plane proves it again.
+    EXPECT_EQ(fused.test(region, Aabb{{150, 30, 0}, {180, 70, 56}}, scratch, &hint),
+              Visibility::occluded);
+    EXPECT_EQ(hint, first);
+    // Past the wall's end the plane no longer covers it: the full test answers, and the
+    // hint no longer names the plane.
+    EXPECT_EQ(fused.test(region, Aabb{{150, 2000, 0}, {180, 2040, 56}}, scratch, &hint),
+              Visibility::visible);
+    EXPECT_EQ(hint, 0u);
+}
+
 TEST(CutPlaneFusion, ADoorwayIsNotCovered) {
     // A wall across x = 0 with a doorway |y| < 48, z < 128: left, right and a lintel.
     OccluderWorld world;

@@ -237,23 +237,30 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
         *hint = 0;
     }
     const bool skip_portals = skips_left > 0;
-    // Temporal coherence: a portal proof on the same plane as last time.
+    // Temporal coherence: a fusion or portal proof on the same plane as last time.
     bool hinted_plane_failed = false;
     CutPlane hinted_plane;
-    if (hint != nullptr && (*hint & kPortalHint) != 0 && depth > 0 && !cheap_done) {
+    if (hint != nullptr && (*hint & kPortalHint) != 0 && fusion_ && !cheap_done) {
         const OccluderId id = *hint & ((1u << 29) - 1);
         const int axis = static_cast<int>((*hint >> 29) & 3u);
         *hint = 0;
         if (id < world_->size() && axis < 3 && separates(mid_plane(id, axis))) {
-            scratch.planes.assign(1, mid_plane(id, axis));
-            scratch.plane_sources.assign(1, id);
-            if (hidden_through_portals(region, box, scratch, depth) >= 0) {
+            hinted_plane = mid_plane(id, axis);
+            if (CutPlaneFusion(*world_, *grid_)
+                    .covers(region, box, hinted_plane, scratch.grid, scratch.fusion)) {
                 *hint = portal_plane_hint(axis, id);
                 return Visibility::occluded;
             }
-            scratch.portal_budget = kPortalBudget; // the full test below gets its own
+            if (depth > 0) {
+                scratch.planes.assign(1, hinted_plane);
+                scratch.plane_sources.assign(1, id);
+                if (hidden_through_portals(region, box, scratch, depth) >= 0) {
+                    *hint = portal_plane_hint(axis, id);
+                    return Visibility::occluded;
+                }
+                scratch.portal_budget = kPortalBudget; // the full test below gets its own
+            }
             hinted_plane_failed = true;
-            hinted_plane = mid_plane(id, axis);
         }
     }
     // Temporal coherence: the occluder that hid this box last time usually still does.
@@ -322,11 +329,17 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     if (!scratch.planes.empty()) {
         const CutPlaneFusion fusion(*world_, *grid_);
         for (std::size_t i = 0; !cheap_done && i < scratch.planes.size(); ++i) {
+            if (hinted_plane_failed && scratch.planes[i] == hinted_plane) {
+                continue; // just failed above
+            }
             if (fusion.covers(region, box, scratch.planes[i], scratch.grid, scratch.fusion)) {
+                if (hint != nullptr) {
+                    *hint = portal_plane_hint(scratch.planes[i].axis, scratch.plane_sources[i]);
+                }
                 return Visibility::occluded;
             }
         }
-        if (hinted_plane_failed) { // its portal tests just failed: not twice
+        if (hinted_plane_failed) { // its fusion and portal tests just failed: not twice
             for (std::size_t i = 0; i < scratch.planes.size(); ++i) {
                 if (scratch.planes[i] == hinted_plane) {
                     scratch.planes.erase(scratch.planes.begin() + static_cast<std::ptrdiff_t>(i));

@@ -84,8 +84,9 @@ public:
 
     /// `hint` (optional, in/out): what proved the box hidden last time, tried first:
     /// 0 (nothing), 1 + the id of an occluder, or kPortalHint | axis << 29 | id for the
-    /// portal tests on the plane through the middle of occluder `id` across `axis`.
-    /// Written here when one of those proves the box hidden; reset to 0 otherwise.
+    /// plane through the middle of occluder `id` across `axis`, whose fusion test, then
+    /// portal tests, proved it. Written here when one of those proves the box hidden;
+    /// reset to 0 otherwise.
     [[nodiscard]] Visibility test(const Aabb& region, const Aabb& box, Scratch& scratch,
                                   std::uint32_t* hint = nullptr) const;
 
@@ -110,7 +111,7 @@ public:
     /// Open parts of a plane given sub-tests at most; a plane leaving more is skipped.
     static constexpr std::size_t kMaxPortals = 8;
     /// Sub-tests (two per open part at most) per top-level test, all levels together.
-    static constexpr int kPortalBudget = 24;
+    static constexpr int kPortalBudget = 48;
     /// Open parts are widened by this in the plane (rounding from double). [Units: world units]
     static constexpr float kPortalPad = 1.0f / 64.0f;
 
