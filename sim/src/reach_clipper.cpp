@@ -84,7 +84,7 @@ visibility::Aabb ReachClipper::clip(glm::vec3 eye, const visibility::Aabb& regio
     visibility::MotionLimits local = *reach.limits;
     local.fall_speed_floor = std::min(local.fall_speed_floor, walk_down_speed_within(e));
     const float floor = eye.z - (visibility::fall_bound(local, reach.seconds, reach.down_velocity) +
-                                 local.vertical_slack);
+                                 local.fall_slack);
     e.min.z = std::min(std::max(e.min.z, floor), eye.z);
     return e;
 }

@@ -538,6 +538,12 @@ TEST(Tbv, FallBoundUnderGravityStartsFromTheFloorSpeedPlusTheMargin) {
     EXPECT_FLOAT_EQ(reachable_box(point, limits, 0.5f, 1.0f, 300.0f).min.z, -260.0f);
     // Never beyond the terminal speed's bound.
     EXPECT_FLOAT_EQ(reachable_box(point, limits, 0.5f, 1.0f, 1590.0f).min.z, -800.0f);
+    // The step slack goes above, the fall slack below.
+    limits.vertical_slack = 18.0f;
+    limits.fall_slack = 0.25f;
+    const Aabb reach = reachable_box(point, limits, 0.5f, 1.0f, 0.0f);
+    EXPECT_FLOAT_EQ(reach.max.z, 135.0f + 18.0f);
+    EXPECT_FLOAT_EQ(reach.min.z, -210.25f);
 }
 
 } // namespace

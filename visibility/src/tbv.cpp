@@ -24,7 +24,7 @@ Aabb reachable_box(const Aabb& box, const MotionLimits& limits, float seconds, f
     out.min.y -= h;
     out.max.x += h;
     out.max.y += h;
-    out.min.z -= (fall + limits.vertical_slack) * expansion;
+    out.min.z -= (fall + limits.fall_slack) * expansion;
     out.max.z += (limits.up_speed * seconds + limits.vertical_slack) * expansion;
     return out;
 }
@@ -39,7 +39,7 @@ bool within_reach(glm::vec3 from, glm::vec3 to, const MotionLimits& limits, floa
     if (d.z > limits.up_speed * seconds + limits.vertical_slack + tolerance) {
         return false;
     }
-    return -d.z <= limits.down_speed * seconds + limits.vertical_slack + tolerance;
+    return -d.z <= limits.down_speed * seconds + limits.fall_slack + tolerance;
 }
 
 void MovementHistory::push(glm::vec3 center) {

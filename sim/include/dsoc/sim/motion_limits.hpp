@@ -21,7 +21,10 @@ namespace dsoc::sim {
     m.gravity = move.gravity;
     m.fall_speed_floor = walk_down_speed(move);
     m.fall_speed_margin = move.gravity * tick_seconds * 0.5f;
-    m.vertical_slack = move.step_height;
+    m.vertical_slack = move.step_height; // one step up, paid from the climb credit
+    // Below: the fall law needs no step (the mover never steps down); a quarter unit
+    // for float rounding of positions far from the origin.
+    m.fall_slack = 0.25f;
     return m;
 }
 

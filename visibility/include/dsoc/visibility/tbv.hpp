@@ -31,21 +31,24 @@ struct MotionLimits {
     /// ticks of dt (velocity first, then position: gravity * dt / 2 more per second
     /// than the continuous law). [Units: world units/s] [Limit: >= 0]
     float fall_speed_margin = 0.0f;
-    /// Distance added up and down whatever the time (e.g. a step-up or step-down a
-    /// movement code may take in one move). [Units: world units] [Limit: >= 0]
+    /// Distance added above whatever the time (e.g. a step-up a movement code may take
+    /// in one move). [Units: world units] [Limit: >= 0]
     float vertical_slack = 0.0f;
+    /// Distance added below whatever the time (e.g. a step-down, or float rounding of
+    /// positions far from the origin). [Units: world units] [Limit: >= 0]
+    float fall_slack = 0.0f;
 };
 
 /// How far an entity moving within `limits` can fall in `seconds`, not counting
-/// vertical_slack: down_speed * seconds, or, when gravity > 0 and the current downward
+/// fall_slack: down_speed * seconds, or, when gravity > 0 and the current downward
 /// speed `down_velocity` (>= 0) is known, the smaller of that and
 /// (max(down_velocity, fall_speed_floor) + fall_speed_margin) * t + gravity * t^2 / 2.
 /// [Units: world units]
 [[nodiscard]] float fall_bound(const MotionLimits& limits, float seconds, float down_velocity);
 
 /// The box `box` can sweep within `seconds`: grown by horizontal_speed * seconds on
-/// x and y, up_speed * seconds + vertical_slack above and the fall bound +
-/// vertical_slack below, then every growth scaled by `expansion` (>= 1, a safety
+/// x and y, up_speed * seconds + vertical_slack above and the fall bound + fall_slack
+/// below, then every growth scaled by `expansion` (>= 1, a safety
 /// margin). The fall bound is fall_bound(); pass a negative down_velocity when unknown.
 /// Axis-separable, so it contains the exact reachable set (a disc is inside its
 /// bounding square).
