@@ -18,14 +18,24 @@ using testing::add_box;
 using testing::fragmented_corridor_world;
 using testing::seen_from_lattice;
 
-TEST(CutPlaneFusion, AWallOfTwoBrushesHidesWhatNeitherHidesAlone) {
-    // A wall across x = 0 made of two brushes meeting at y = 7, of different thickness.
+/// A wall across x = 0 made of two brushes meeting at y = 7, of different thickness,
+/// with an eye region in front of it and a box behind it that neither brush hides alone.
+struct TwoBrushWall {
     OccluderWorld world;
-    add_box(world, {-8, -600, -100}, {8, 7, 300});
-    add_box(world, {-4, 7, -100}, {12, 600, 300});
+    Aabb region{{-200, -40, 0}, {-120, 40, 60}};
+    Aabb box{{150, -20, 0}, {180, 20, 56}};
+    TwoBrushWall() {
+        add_box(world, {-8, -600, -100}, {8, 7, 300});
+        add_box(world, {-4, 7, -100}, {12, 600, 300});
+    }
+};
+
+TEST(CutPlaneFusion, AWallOfTwoBrushesHidesWhatNeitherHidesAlone) {
+    const TwoBrushWall wall;
+    const OccluderWorld& world = wall.world;
     const OccluderGrid grid(world, 128.0f);
-    const Aabb region{{-200, -40, 0}, {-120, 40, 60}};
-    const Aabb box{{150, -20, 0}, {180, 20, 56}};
+    const Aabb& region = wall.region;
+    const Aabb& box = wall.box;
 
     const ShaftOcclusion single(world, grid, false);
     const ShaftOcclusion fused(world, grid, true);
@@ -36,14 +46,12 @@ TEST(CutPlaneFusion, AWallOfTwoBrushesHidesWhatNeitherHidesAlone) {
 }
 
 TEST(CutPlaneFusion, AFusionProofIsRememberedInTheHintAndTriedFirst) {
-    // The same two-brush wall: no single brush hides the box, their plane does.
-    OccluderWorld world;
-    add_box(world, {-8, -600, -100}, {8, 7, 300});
-    add_box(world, {-4, 7, -100}, {12, 600, 300});
-    const OccluderGrid grid(world, 128.0f);
-    const Aabb region{{-200, -40, 0}, {-120, 40, 60}};
-    const Aabb box{{150, -20, 0}, {180, 20, 56}};
-    const ShaftOcclusion fused(world, grid, true, 0);
+    // No single brush hides the box, their plane does.
+    const TwoBrushWall wall;
+    const OccluderGrid grid(wall.world, 128.0f);
+    const Aabb& region = wall.region;
+    const Aabb& box = wall.box;
+    const ShaftOcclusion fused(wall.world, grid, true, 0);
     ShaftOcclusion::Scratch scratch;
     std::uint32_t hint = 0;
     ASSERT_EQ(fused.test(region, box, scratch, &hint), Visibility::occluded);
