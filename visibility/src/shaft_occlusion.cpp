@@ -149,10 +149,14 @@ int ShaftOcclusion::hidden_through_portals(const Aabb& region, const Aabb& box, 
     const CutPlaneFusion fusion(*world_, *grid_);
     for (std::size_t pi = 0; pi < planes.size(); ++pi) {
         const CutPlane& plane = planes[pi];
-        if (fusion.coverage(region, box, plane, scratch.grid, scratch.fusion, false) !=
-                CutPlaneFusion::Coverage::partial ||
+        const CutPlaneFusion::Coverage cover =
+            fusion.coverage(region, box, plane, scratch.grid, scratch.fusion, false);
+        if (cover == CutPlaneFusion::Coverage::covered) {
+            return static_cast<int>(pi); // the fused occluders alone close the plane
+        }
+        if (cover != CutPlaneFusion::Coverage::partial ||
             scratch.fusion.pieces.size() > kMaxPortals) {
-            continue; // covered (then the cheap test proved it), undecided, or too many
+            continue; // undecided, or too many open parts
         }
         const int a = plane.axis;
         const int u = (a + 1) % 3;
@@ -246,19 +250,21 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
         *hint = 0;
         if (id < world_->size() && axis < 3 && separates(mid_plane(id, axis))) {
             hinted_plane = mid_plane(id, axis);
-            if (CutPlaneFusion(*world_, *grid_)
-                    .covers(region, box, hinted_plane, scratch.grid, scratch.fusion)) {
-                *hint = portal_plane_hint(axis, id);
-                return Visibility::occluded;
-            }
+            // With portal levels left, one coverage of the plane decides both: covered
+            // (fusion) or every open part closed (portals).
+            bool proved = false;
             if (depth > 0) {
                 scratch.planes.assign(1, hinted_plane);
                 scratch.plane_sources.assign(1, id);
-                if (hidden_through_portals(region, box, scratch, depth) >= 0) {
-                    *hint = portal_plane_hint(axis, id);
-                    return Visibility::occluded;
-                }
+                proved = hidden_through_portals(region, box, scratch, depth) >= 0;
                 scratch.portal_budget = kPortalBudget; // the full test below gets its own
+            } else {
+                proved = CutPlaneFusion(*world_, *grid_)
+                             .covers(region, box, hinted_plane, scratch.grid, scratch.fusion);
+            }
+            if (proved) {
+                *hint = portal_plane_hint(axis, id);
+                return Visibility::occluded;
             }
             hinted_plane_failed = true;
         }

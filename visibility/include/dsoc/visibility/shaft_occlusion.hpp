@@ -120,8 +120,8 @@ private:
     /// fusion tests of this pair already failed, only the portal tests are left.
     [[nodiscard]] Visibility test_at(const Aabb& region, const Aabb& box, Scratch& scratch,
                                      std::uint32_t* hint, int depth, bool cheap_done = false) const;
-    /// True when, for one of scratch.planes, every open part is hidden from `region`
-    /// or hides `box` (sub-tests at `depth` - 1).
+    /// True when, for one of scratch.planes, the cut occluders cover it (fusion), or
+    /// every open part is hidden from `region` or hides `box` (sub-tests at `depth` - 1).
     /// Returns the index in scratch.planes of the plane that proved it, or -1.
     [[nodiscard]] int hidden_through_portals(const Aabb& region, const Aabb& box, Scratch& scratch,
                                              int depth) const;
