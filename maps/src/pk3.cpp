@@ -12,6 +12,8 @@ namespace {
 struct ZipCloser {
     void operator()(zip_t* archive) const { zip_discard(archive); }
 };
+/// For error paths only (a failure is already being reported); the success path
+/// closes with zip_fclose() itself and checks its status.
 struct ZipFileCloser {
     void operator()(zip_file_t* file) const { zip_fclose(file); }
 };
@@ -28,6 +30,29 @@ Result<ZipPtr> open_archive(const std::filesystem::path& pk3) {
         return LoadError{pk3.string(), "", std::move(what)};
     }
     return ZipPtr(archive);
+}
+
+/// What a libzip error code means for an entry being read, in words.
+std::string failure_text(int zip_code, const char* libzip_text) {
+    switch (zip_code) {
+    case ZIP_ER_CRC:
+        return "CRC-32 mismatch: the entry's data does not match its checksum (damaged "
+               "archive)";
+    case ZIP_ER_COMPRESSED_DATA:
+    case ZIP_ER_ZLIB:
+        return std::string("compressed data is invalid (damaged archive): ") + libzip_text;
+    case ZIP_ER_INCONS:
+        return std::string("inconsistent entry (damaged archive): ") + libzip_text;
+    case ZIP_ER_EOF:
+        return "the archive ends inside the entry (truncated archive)";
+    default:
+        return std::string("cannot read entry: ") + libzip_text;
+    }
+}
+
+std::string read_failure(zip_file_t* file) {
+    zip_error_t* error = zip_file_get_error(file);
+    return failure_text(zip_error_code_zip(error), zip_error_strerror(error));
 }
 
 std::string lower(std::string_view text) {
@@ -74,15 +99,36 @@ Result<std::vector<std::byte>> read_pk3_entry(const std::filesystem::path& pk3,
     while (done < bytes.size()) {
         const zip_int64_t got = zip_fread(file.get(), bytes.data() + done, bytes.size() - done);
         if (got < 0) {
-            return LoadError{pk3.string(), name,
-                             std::string("corrupt entry: ") + zip_file_strerror(file.get())};
+            return LoadError{pk3.string(), name, read_failure(file.get())};
         }
         if (got == 0) {
             return LoadError{pk3.string(), name,
-                             "entry ends after " + std::to_string(done) + " of " +
-                                 std::to_string(bytes.size()) + " bytes"};
+                             "size mismatch: the entry ends after " + std::to_string(done) +
+                                 " of the " + std::to_string(bytes.size()) +
+                                 " bytes its directory declares (damaged archive)"};
         }
         done += static_cast<std::size_t>(got);
+    }
+    // Read to the end: libzip checks the CRC-32 only when a read reaches the end of
+    // the entry, and an entry that goes on past its declared size is damaged too.
+    std::byte extra{};
+    const zip_int64_t tail = zip_fread(file.get(), &extra, 1);
+    if (tail < 0) {
+        return LoadError{pk3.string(), name, read_failure(file.get())};
+    }
+    if (tail > 0) {
+        return LoadError{pk3.string(), name,
+                         "size mismatch: the entry holds more than the " +
+                             std::to_string(bytes.size()) +
+                             " bytes its directory declares (damaged archive)"};
+    }
+    const int closed = zip_fclose(file.release());
+    if (closed != 0) {
+        zip_error_t error;
+        zip_error_init_with_code(&error, closed);
+        std::string what = failure_text(closed, zip_error_strerror(&error));
+        zip_error_fini(&error);
+        return LoadError{pk3.string(), name, std::move(what)};
     }
     return bytes;
 }

@@ -15,8 +15,12 @@ namespace dsoc::maps {
 inline constexpr std::size_t kMaxPk3EntryBytes = 256u * 1024u * 1024u;
 
 /// Reads one entry (e.g. "maps/oa_dm4.bsp", matched case-insensitively, as Quake 3
-/// does). Errors: archive missing or corrupt, entry missing, larger than
-/// kMaxPk3EntryBytes, or shorter than its directory says.
+/// does), always to its end, so that damage never passes as data: the bytes are
+/// returned only if they decompress cleanly, number exactly the size the archive's
+/// directory declares and match its CRC-32. Errors (a LoadError whose file is the
+/// archive, lump the entry and what the failure): archive missing, truncated or
+/// inconsistent; entry missing or larger than kMaxPk3EntryBytes; compressed data
+/// invalid; CRC-32 mismatch; size mismatch (fewer or more bytes than declared).
 [[nodiscard]] Result<std::vector<std::byte>> read_pk3_entry(const std::filesystem::path& pk3,
                                                             std::string_view entry);
 
