@@ -140,7 +140,11 @@ void read_dsoc_table(const toml::node& node, std::string_view source,
                            ": dsoc: expected a table ([dsoc]), got " + type_name(node.type()));
         return;
     }
-    for (const auto& [key, value] : *table) {
+    for (const auto& entry : *table) {
+        // Named references, not a structured binding: clang 14 (Debian 12's, used for
+        // the fuzz targets) rejects a lambda capturing a structured binding.
+        const toml::key& key = entry.first;
+        const toml::node& value = entry.second;
         const std::string name(key.str());
         const std::string at = where(source, value.source());
         std::string why = "unknown setting: not a visibility::DSOCConfig field (see "
