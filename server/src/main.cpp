@@ -1,5 +1,6 @@
 // dsoc-server: the game server with occlusion-aware interest management.
 
+#include "dsoc/maps/map_checks.hpp"
 #include "dsoc/maps/map_source.hpp"
 #include "dsoc/server/config_file.hpp"
 #include "dsoc/server/dsoc_settings.hpp"
@@ -194,8 +195,16 @@ int main(int argc, char** argv) {
         return 2;
     }
     auto map = std::make_shared<const dsoc::maps::Map>(std::move(loaded).value());
-    if (map->spawn_points.empty()) {
-        spdlog::error("map '{}' has no spawn points", config.map);
+    // The map's sanity findings, logged once here (dsoc-mapinfo lists the same).
+    const auto findings = dsoc::maps::check_map(*map);
+    for (const auto& finding : findings) {
+        if (finding.severity == dsoc::maps::FindingSeverity::unusable) {
+            spdlog::error("map '{}' is unusable: {}: {}", config.map, finding.code, finding.text);
+        } else {
+            spdlog::warn("map '{}': {}: {}", config.map, finding.code, finding.text);
+        }
+    }
+    if (dsoc::maps::any_unusable(findings)) {
         return 2;
     }
     spdlog::info(

@@ -1,7 +1,11 @@
 // dsoc-mapinfo: loads a map the way a server would and prints what it holds:
-// brushes, occluders, degenerate brushes skipped, spawn points, bounds, load time.
-// Exit status: 0 loaded, 1 the map failed to load (message on stderr), 2 bad usage.
+// brushes, occluders, degenerate brushes skipped, spawn points, bounds, load time,
+// and the sanity checks' findings (dsoc/maps/map_checks.hpp), which dsoc-server logs
+// at start (and refuses to run a map with an "unusable" one).
+// Exit status: 0 loaded (findings or not), 1 the map failed to load (message on
+// stderr), 2 bad usage.
 
+#include "dsoc/maps/map_checks.hpp"
 #include "dsoc/maps/map_source.hpp"
 
 #include <CLI/CLI.hpp>
@@ -17,7 +21,8 @@ nlohmann::json vec_json(glm::vec3 v) {
     return nlohmann::json::array({v.x, v.y, v.z});
 }
 
-void print_text(const dsoc::maps::Map& map, double load_ms) {
+void print_text(const dsoc::maps::Map& map, const std::vector<dsoc::maps::MapFinding>& findings,
+                double load_ms) {
     const auto& s = map.stats;
     std::printf("map                 %s\n", map.name.c_str());
     std::printf("source              %s\n", map.source.c_str());
@@ -43,9 +48,16 @@ void print_text(const dsoc::maps::Map& map, double load_ms) {
                     map.bounds.max.z);
     }
     std::printf("load ms             %.1f\n", load_ms);
+    std::printf("findings            %zu%s\n", findings.size(),
+                dsoc::maps::any_unusable(findings) ? " (unusable: a server refuses this map)" : "");
+    for (const auto& f : findings) {
+        std::printf("  %-8s %s: %s\n", dsoc::maps::to_string(f.severity), f.code.c_str(),
+                    f.text.c_str());
+    }
 }
 
-void print_json(const dsoc::maps::Map& map, double load_ms) {
+void print_json(const dsoc::maps::Map& map, const std::vector<dsoc::maps::MapFinding>& findings,
+                double load_ms) {
     const auto& s = map.stats;
     nlohmann::json out;
     out["map"] = map.name;
@@ -74,6 +86,12 @@ void print_json(const dsoc::maps::Map& map, double load_ms) {
         out["bounds"] = {{"min", vec_json(map.bounds.min)}, {"max", vec_json(map.bounds.max)}};
     }
     out["load_ms"] = load_ms;
+    out["usable"] = !dsoc::maps::any_unusable(findings);
+    out["findings"] = nlohmann::json::array();
+    for (const auto& f : findings) {
+        out["findings"].push_back(
+            {{"severity", dsoc::maps::to_string(f.severity)}, {"code", f.code}, {"text", f.text}});
+    }
     std::cout << out.dump() << '\n';
 }
 
@@ -92,7 +110,7 @@ int main(int argc, char** argv) {
     app.add_option("MAP", map_spec, "map name, file path or generator");
     app.add_flag("--json", json,
                  "print one JSON object (keys brushes, opaque_occluders, "
-                 "degenerate_skipped, spawn_points, bounds, load_ms, ...)");
+                 "degenerate_skipped, spawn_points, bounds, load_ms, usable, findings, ...)");
     app.add_option("--pak", paks, "a .pk3 archive or a directory of them, searched first")
         ->allow_extra_args(false);
     app.add_flag("--list", list, "list the map names found and exit");
@@ -118,10 +136,11 @@ int main(int argc, char** argv) {
         std::cerr << "dsoc-mapinfo: " << map.error().message() << '\n';
         return 1;
     }
+    const auto findings = dsoc::maps::check_map(map.value());
     if (json) {
-        print_json(map.value(), load_ms);
+        print_json(map.value(), findings, load_ms);
     } else {
-        print_text(map.value(), load_ms);
+        print_text(map.value(), findings, load_ms);
     }
     return 0;
 }
