@@ -6,6 +6,7 @@
 #include <boost/asio/write.hpp>
 
 #include <algorithm>
+#include <limits>
 
 #include <spdlog/spdlog.h>
 
@@ -18,6 +19,7 @@ namespace {
 
 constexpr auto kCloseGrace = std::chrono::seconds(1);
 constexpr std::size_t kMaxNameBytes = 64;
+constexpr std::size_t kKernelSlack = 16 * 1024; ///< [Units: bytes]
 
 std::string body_name(const pb::Envelope& message) {
     const auto* field = pb::Envelope::descriptor()->FindFieldByNumber(message.body_case());
@@ -269,18 +271,47 @@ void Session::disconnect(pb::DisconnectReason reason, const std::string& text) {
                  protocol::disconnect_reason_name(reason), text);
     close_reason_ = reason;
     state_ = State::closing;
+    // The reason goes right after the frame being written (a frame cannot be cut):
+    // everything queued behind that frame is dropped, stale snapshots included.
+    const std::size_t in_flight = writing_ ? 1 : 0;
+    while (write_queue_.size() > in_flight) {
+        queued_bytes_ -= write_queue_.back().bytes.size();
+        snapshot_queued_ = snapshot_queued_ && !write_queue_.back().snapshot;
+        write_queue_.pop_back();
+    }
     pb::Envelope message;
     message.mutable_disconnect()->set_reason(reason);
     message.mutable_disconnect()->set_text(text);
     std::vector<std::uint8_t> frame;
     protocol::encode_frame(message, frame);
     enqueue(std::move(frame), false); // beyond the queue limit on purpose: the reason must go out
+    make_room_for_queue();
     deadline_.expires_after(kCloseGrace);
     deadline_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
         if (!ec) {
             self->close_now();
         }
     });
+}
+
+void Session::make_room_for_queue() {
+    // A slow or stalled reader's kernel send buffer is full: grow it so that what is
+    // left (the rest of one frame and the reason) is handed to the kernel at once.
+    // The kernel delivers it whenever the client reads again, even after close_now()
+    // (closing a socket does not discard what it still has to send), so the client
+    // sees the reason, then end-of-file, however long it stalls before reading.
+    boost::system::error_code ec;
+    asio::socket_base::send_buffer_size current;
+    socket_.get_option(current, ec);
+    if (ec) {
+        return;
+    }
+    // Twice what is queued: the kernel counts its bookkeeping against the buffer too.
+    const std::size_t wanted =
+        static_cast<std::size_t>(std::max(current.value(), 0)) + 2 * queued_bytes_ + kKernelSlack;
+    socket_.set_option(asio::socket_base::send_buffer_size(static_cast<int>(
+                           std::min<std::size_t>(wanted, std::numeric_limits<int>::max()))),
+                       ec);
 }
 
 void Session::enqueue(std::vector<std::uint8_t> frame, bool snapshot) {

@@ -96,13 +96,40 @@ TEST(ClientAbuse, SlowReaderHasSnapshotsDroppedStaysBoundedAndIsDisconnected) {
 
     const auto& stats = server.stats();
     EXPECT_EQ(stats.disconnects.count("too_slow"), 1u);
-    if (d.has_value()) { // it may also have been closed before it read the reason
-        EXPECT_EQ(protocol::disconnect_reason_name(d->reason()), "too_slow") << d->text();
-    }
+    // It resumed reading well within a second of being dropped: the reason reached it.
+    ASSERT_TRUE(d.has_value()) << "no disconnect message";
+    EXPECT_EQ(protocol::disconnect_reason_name(d->reason()), "too_slow") << d->text();
+    EXPECT_EQ(slow.trailing_bytes(), 0u) << "the connection ended inside a frame";
     // Stale snapshots were dropped, not queued: the queue never held more than about
     // one snapshot (a few KiB here), far below what 1.5 s of snapshots would take.
     EXPECT_GE(stats.snapshots_dropped, 10u);
     EXPECT_LE(stats.peak_queued_bytes, 32u * 1024u);
+}
+
+TEST(ClientAbuse, StalledReaderThatReadsAgainLateReceivesTooSlowThenEndOfFile) {
+    auto c = base_config();
+    c.bots = 150;
+    c.policy = "broadcast";
+    c.socket_send_buffer_bytes = 4096;
+    c.slow_client_timeout_ms = 300;
+    RunningServer server(c);
+
+    RawClient slow(server.port(), 4096);
+    slow.send_message(client_hello());
+    // Stalled through the drop (about 300 ms after its first snapshot) and well past
+    // the 1 s grace after it, when the server has closed the socket...
+    std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+    // ...then reading again: the rest of the frame that was being written, the reason,
+    // end-of-file; no frame cut off.
+    const auto d = slow.read_until_closed();
+    server.stop();
+
+    EXPECT_EQ(server.stats().disconnects.count("too_slow"), 1u);
+    ASSERT_TRUE(d.has_value()) << "no disconnect message after " << slow.snapshots()
+                               << " snapshots; " << slow.trailing_bytes()
+                               << " bytes of a cut-off frame";
+    EXPECT_EQ(protocol::disconnect_reason_name(d->reason()), "too_slow") << d->text();
+    EXPECT_EQ(slow.trailing_bytes(), 0u) << "the connection ended inside a frame";
 }
 
 TEST(ClientAbuse, ConnectionsWithoutHelloAreClosedAtTheDeadline) {

@@ -11,7 +11,9 @@
 #include <boost/asio/read.hpp>
 #include <boost/asio/write.hpp>
 
+#include <algorithm>
 #include <array>
+#include <chrono>
 #include <optional>
 #include <span>
 #include <thread>
@@ -43,16 +45,24 @@ public:
     }
 
     /// Reads until the server closes the connection; returns its Disconnect, if one
-    /// arrived, and counts the snapshots seen on the way.
-    std::optional<protocol::pb::Disconnect> read_until_closed() {
+    /// arrived, and counts the snapshots seen on the way. A slow reader passes
+    /// `chunk` < 4096 bytes per read and a `pause` between reads.
+    std::optional<protocol::pb::Disconnect>
+    read_until_closed(std::size_t chunk = 4096,
+                      std::chrono::milliseconds pause = std::chrono::milliseconds(0)) {
         protocol::FrameDecoder decoder(16 * 1024 * 1024);
         std::optional<protocol::pb::Disconnect> disconnect;
         std::array<std::uint8_t, 4096> buffer{};
         for (;;) {
             boost::system::error_code ec;
-            const std::size_t n = socket_.read_some(boost::asio::buffer(buffer), ec);
+            const std::size_t n = socket_.read_some(
+                boost::asio::buffer(buffer.data(), std::min(chunk, buffer.size())), ec);
             if (ec) {
+                trailing_bytes_ = decoder.buffered_bytes();
                 break;
+            }
+            if (pause.count() > 0) {
+                std::this_thread::sleep_for(pause);
             }
             decoder.feed(std::span<const std::uint8_t>(buffer.data(), n));
             std::span<const std::uint8_t> payload;
@@ -75,12 +85,15 @@ public:
 
     [[nodiscard]] std::uint64_t snapshots() const { return snapshots_; }
     [[nodiscard]] bool hello_received() const { return hello_received_; }
+    /// Bytes of an unfinished frame when the connection ended (a cut-off frame).
+    [[nodiscard]] std::size_t trailing_bytes() const { return trailing_bytes_; }
 
 private:
     boost::asio::io_context io_;
     boost::asio::ip::tcp::socket socket_;
     std::uint64_t snapshots_ = 0;
     bool hello_received_ = false;
+    std::size_t trailing_bytes_ = 0;
 };
 
 /// A ClientHello of the current protocol, optionally with a connect token.

@@ -78,8 +78,11 @@ public:
     /// two buffers without allocating.
     void send_snapshot_frame(std::vector<std::uint8_t>& frame);
 
-    /// Queues a Disconnect with `reason`, stops reading, and closes the socket once
-    /// the queue has drained (or after a 1 s grace period).
+    /// Drops every queued frame but the one being written (a frame is never cut),
+    /// queues a Disconnect with `reason` behind it, grows the socket's send buffer so
+    /// that both go to the kernel at once, stops handling messages and half-closes;
+    /// the socket is closed when the peer closes or after a 1 s grace period. A client
+    /// that reads again, however late, receives the reason, then end-of-file.
     void disconnect(protocol::pb::DisconnectReason reason, const std::string& text);
 
     [[nodiscard]] State state() const { return state_; }
@@ -112,6 +115,7 @@ private:
     void enqueue(std::vector<std::uint8_t> frame, bool snapshot);
     void handle_client_message(const protocol::pb::Envelope& message);
     void write_next();
+    void make_room_for_queue();
     void close_now();
 
     boost::asio::ip::tcp::socket socket_;
