@@ -2,7 +2,9 @@
 // Shared helpers for the maps tests: where the OpenArena maps are, and a small
 // in-memory Quake 3 BSP writer for building valid and corrupt files.
 
+#include "dsoc/maps/map.hpp"
 #include "dsoc/maps/q3_bsp.hpp"
+#include "dsoc/visibility/test_worlds.hpp"
 
 #include <gtest/gtest.h>
 
@@ -13,6 +15,18 @@
 #include <vector>
 
 namespace dsoc::maps::test {
+
+/// A small world with no files: the 2 x 2 rooms of visibility::make_corridor_world as a
+/// Map (occluders and bounds; no PVS).
+inline Map corridor_map(std::uint32_t seed = 3) {
+    const visibility::TestWorld w = visibility::make_corridor_world(seed, 2, 2);
+    Map map;
+    map.name = "corridor";
+    map.source = "generator:corridor";
+    map.occluders = w.world.occluders();
+    map.bounds = w.world.bounds();
+    return map;
+}
 
 inline const std::filesystem::path kOpenArenaPak =
     "/usr/share/games/openarena/baseoa/pak1-maps.pk3";

@@ -32,14 +32,6 @@ constexpr std::uint32_t kNoCluster = 0xffffffffu;
 constexpr std::size_t kMinClusterMembers = 3;
 
 /// `into` becomes the union of `into` and `more`, both sorted and free of duplicates.
-void merge_keys(std::vector<std::int32_t>& into, const std::vector<std::int32_t>& more) {
-    const std::size_t old_size = into.size();
-    into.insert(into.end(), more.begin(), more.end());
-    std::inplace_merge(into.begin(), into.begin() + static_cast<std::ptrdiff_t>(old_size),
-                       into.end());
-    into.erase(std::unique(into.begin(), into.end()), into.end());
-}
-
 bool valid_box(const Aabb& b) {
     return std::isfinite(b.min.x) && std::isfinite(b.min.y) && std::isfinite(b.min.z) &&
            std::isfinite(b.max.x) && std::isfinite(b.max.y) && std::isfinite(b.max.z) &&
@@ -386,9 +378,6 @@ void InterestManager::begin_update(std::uint64_t tick) {
                 if (duration >= 1) {
                     PreparedBox& candidate = e.tbv_candidates[k];
                     preparer_->prepare(tbv_box(e, duration), candidate);
-                    std::sort(candidate.keys.begin(), candidate.keys.end()); // for merge_keys
-                    candidate.keys.erase(std::unique(candidate.keys.begin(), candidate.keys.end()),
-                                         candidate.keys.end());
                 }
             }
         }
@@ -742,7 +731,7 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
             if (coarse_tbvs_) {
                 // The group is hidden exactly while every member TBV is: its keys are
                 // the union of theirs, no test needed.
-                merge_keys(g.prepared.keys, candidate.keys);
+                preparer_->merge_prepared(g.prepared, candidate);
                 g.prepared.box = merged;
             } else {
                 ++c.stats.tbv_tests;

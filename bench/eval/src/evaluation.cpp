@@ -5,6 +5,7 @@
 #include "dsoc/eval/replication.hpp"
 #include "dsoc/eval/visibility_truth.hpp"
 #include "dsoc/eval/world_sim.hpp"
+#include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/sim/motion_limits.hpp"
 #include "dsoc/sim/reach_clipper.hpp"
 #include "dsoc/trace/trace_writer.hpp"
@@ -28,6 +29,33 @@ double thread_cpu_us() {
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// The map's baked table from the cache, baked (and cached) when missing.
+std::shared_ptr<const visibility::CellVisibilityTable>
+baked_table(const maps::Map& map, const visibility::OccluderScene& scene,
+            const EvalOptions& options, std::ostream* progress) {
+    maps::BakeRequest request;
+    request.config.cell_size = options.bake_cell_size;
+    request.dir = options.bake_dir;
+    auto baked = maps::load_or_bake(map, scene, request, [&](double fraction, double seconds) {
+        if (progress != nullptr) {
+            *progress << "\rbaking " << map.name << ": " << static_cast<int>(100.0 * fraction)
+                      << "% after " << static_cast<int>(seconds) << " s" << std::flush;
+        }
+    });
+    if (!baked) {
+        throw std::runtime_error(baked.error().message());
+    }
+    if (progress != nullptr) {
+        if (!baked->cache_problem.empty()) {
+            *progress << "\ncached table refused: " << baked->cache_problem;
+        }
+        *progress << "\n"
+                  << (baked->from_cache ? "baked table loaded from " : "baked table written to ")
+                  << baked->file.string() << "\n";
+    }
+    return baked->table;
 }
 
 struct PolicyRun {
@@ -129,6 +157,9 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
         const bool culling = name == "occlusion" || name.rfind("dsoc", 0) == 0;
         if (culling && !env.scene) {
             env.scene = visibility::OccluderScene::build(map.occluders);
+        }
+        if ((name == "dsoc-baked" || name == "dsoc-table") && !env.table) {
+            env.table = baked_table(map, *env.scene, options, progress);
         }
         PolicyRun run;
         run.policy = make_policy(name, env);

@@ -73,6 +73,13 @@ int main(int argc, char** argv) {
                    "levels of portal tests in the culler's shaft stage (0 = off)")
         ->check(CLI::Range(0, 4))
         ->capture_default_str();
+    app.add_option("--bake-cell-size", options.bake_cell_size,
+                   "cell edge of the baked table the dsoc-baked and dsoc-table policies use")
+        ->check(CLI::Range(4.0f, 1024.0f))
+        ->capture_default_str();
+    app.add_option("--bake-dir", options.bake_dir,
+                   "cache of baked tables (default: $DSOC_BAKE_DIR, $XDG_CACHE_HOME/dsoc/bakes "
+                   "or ~/.cache/dsoc/bakes)");
     app.add_flag("--region-bound", options.region_bound,
                  "also judge pairs from a lattice of eyes over each client's reachable region "
                  "(what any policy covering that region must send; slow)");
@@ -144,6 +151,9 @@ int main(int argc, char** argv) {
             known = known || n == name;
         }
         for (const auto& n : diagnostic_policy_names()) {
+            known = known || n == name;
+        }
+        for (const auto& n : baked_policy_names()) {
             known = known || n == name;
         }
         if (!known) {

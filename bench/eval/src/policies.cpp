@@ -3,6 +3,7 @@
 #include "dsoc/maps/pvs_region_visibility.hpp"
 #include "dsoc/sim/motion_limits.hpp"
 #include "dsoc/sim/reach_clipper.hpp"
+#include "dsoc/visibility/baked_region_visibility.hpp"
 #include "dsoc/visibility/interest_manager.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
 
@@ -96,16 +97,36 @@ visibility::RegionCullerConfig culler_config(bool fusion, int portal_depth) {
     return c;
 }
 
+/// Which stages the culler of a culling policy runs, first to last.
+enum class CullerStages {
+    pvs_exact,   ///< the map's PVS, then the exact shaft stage
+    baked_exact, ///< the baked table, the map's PVS, then the exact shaft stage
+    baked_only,  ///< the baked table alone
+};
+
+visibility::RegionVisibilityFactory make_culler(CullerStages stages, const PolicyEnv& env) {
+    auto exact = visibility::occluder_region_visibility(
+        env.scene, culler_config(env.fusion, env.portal_depth));
+    switch (stages) {
+    case CullerStages::pvs_exact:
+        return maps::with_pvs_stage(env.map->pvs, std::move(exact));
+    case CullerStages::baked_exact:
+        return visibility::with_baked_stage(env.table,
+                                            maps::with_pvs_stage(env.map->pvs, std::move(exact)));
+    case CullerStages::baked_only:
+        return visibility::with_baked_stage(env.table, {});
+    }
+    return exact;
+}
+
 class CullingPolicy final : public Policy {
 public:
-    CullingPolicy(std::string name, const visibility::DSOCConfig& config, const PolicyEnv& env)
+    CullingPolicy(std::string name, const visibility::DSOCConfig& config, const PolicyEnv& env,
+                  CullerStages stages = CullerStages::pvs_exact)
         : name_(std::move(name)), lookahead_(env.lookahead_ticks),
           clipper_(std::make_shared<const sim::ReachClipper>(env.map->collision_brushes,
                                                              env.world->move())),
-          manager_(config, env.map->bounds.expanded(64.0f),
-                   maps::with_pvs_stage(
-                       env.map->pvs, visibility::occluder_region_visibility(
-                                         env.scene, culler_config(env.fusion, env.portal_depth))),
+          manager_(config, env.map->bounds.expanded(64.0f), make_culler(stages, env),
                    [clipper = clipper_](glm::vec3 eye, const visibility::Aabb& region,
                                         const visibility::EyeReach& reach) {
                        return clipper->clip(eye, region, reach);
@@ -253,6 +274,11 @@ const std::vector<std::string>& diagnostic_policy_names() {
     return names;
 }
 
+const std::vector<std::string>& baked_policy_names() {
+    static const std::vector<std::string> names = {"dsoc-baked", "dsoc-table"};
+    return names;
+}
+
 const std::vector<std::string>& all_policy_names() {
     static const std::vector<std::string> names = {"broadcast",  "distance", "pvs",
                                                    "occlusion",  "dsoc",     "dsoc-explicit",
@@ -285,7 +311,7 @@ std::unique_ptr<Policy> make_policy(std::string_view name, const PolicyEnv& env)
             point_env.lookahead_ticks = 0; // diagnostic: the present eye only
             return std::make_unique<CullingPolicy>(std::string(name), config, point_env);
         }
-    } else if (name == "dsoc") {
+    } else if (name == "dsoc" || name == "dsoc-baked" || name == "dsoc-table") {
         config.strategy = visibility::TbvStrategy::adaptive;
     } else if (name == "dsoc-explicit") {
         config.strategy = visibility::TbvStrategy::explicit_duration;
@@ -311,7 +337,14 @@ std::unique_ptr<Policy> make_policy(std::string_view name, const PolicyEnv& env)
     if (const auto problems = visibility::validate(config); !problems.empty()) {
         throw std::runtime_error("DSOCConfig for " + std::string(name) + ": " + problems.front());
     }
-    return std::make_unique<CullingPolicy>(std::string(name), config, env);
+    CullerStages stages = CullerStages::pvs_exact;
+    if (name == "dsoc-baked" || name == "dsoc-table") {
+        if (env.table == nullptr) {
+            throw std::runtime_error(std::string(name) + " needs a baked table (--bake-cell-size)");
+        }
+        stages = name == "dsoc-baked" ? CullerStages::baked_exact : CullerStages::baked_only;
+    }
+    return std::make_unique<CullingPolicy>(std::string(name), config, env, stages);
 }
 
 } // namespace dsoc::eval

@@ -5,6 +5,7 @@
 #include "dsoc/visibility/box_visibility.hpp"
 #include "dsoc/visibility/geometry.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -19,6 +20,11 @@ struct PreparedBox {
     Aabb box;
     std::vector<std::int32_t> keys;
     bool prepared = false; ///< keys are meaningful; false: tests fall back to `box` alone
+    /// With two prepared stages in a row (a baked table, then the map's PVS): the next
+    /// stage's preparation of the same box (0 or 1 element). Only the first stage's
+    /// keys may be merged (TBV groups); a culler uses `inner` only for a box it
+    /// prepared itself.
+    std::vector<PreparedBox> inner;
 };
 
 class RegionVisibility {
@@ -63,6 +69,17 @@ public:
     [[nodiscard]] virtual Visibility test_prepared_hinted(const PreparedBox& p,
                                                           std::uint32_t& hint) const {
         return p.prepared ? test_prepared(p) : test_box_hinted(p.box, hint);
+    }
+    /// Makes `into` (prepared by this culler) stand for the union of its box and
+    /// `more`'s (also prepared by it, `prepared` both): test_prepared_coarse() of the
+    /// result is `occluded` only when it is for both. Only the first stage's keys are
+    /// merged (`inner` is left as it is). The default takes the sorted union of the
+    /// keys (a key set such as clusters: hidden when no key is visible); `box` is the
+    /// caller's to set.
+    virtual void merge_prepared(PreparedBox& into, const PreparedBox& more) const {
+        into.keys.insert(into.keys.end(), more.keys.begin(), more.keys.end());
+        std::sort(into.keys.begin(), into.keys.end());
+        into.keys.erase(std::unique(into.keys.begin(), into.keys.end()), into.keys.end());
     }
     /// The cheap first stage alone (for long-lived TBVs, re-proven after every rebuild):
     /// `occluded` only when that stage proves it, so it proves less than test_prepared().

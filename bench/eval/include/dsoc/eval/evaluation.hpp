@@ -42,6 +42,11 @@ struct EvalOptions {
     bool region_bound = false;
     /// Eyes per side of that lattice (n^3 eyes, corners included). [Limit: 2..9]
     int region_lattice = 3;
+    /// The baked table for dsoc-baked and dsoc-table: cell edge (the cache holds one
+    /// table per map and settings) and cache directory ("" = maps::default_bake_dir()).
+    /// [Units: world units]
+    float bake_cell_size = 32.0f;
+    std::string bake_dir;
     /// Concrete violations kept per policy for the report.
     std::size_t max_examples = 10;
 };

@@ -18,6 +18,7 @@
 #include "dsoc/eval/ray_oracle.hpp"
 #include "dsoc/eval/scenario.hpp"
 #include "dsoc/eval/world_sim.hpp"
+#include "dsoc/visibility/cell_visibility.hpp"
 #include "dsoc/visibility/dsoc_config.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
 
@@ -45,6 +46,9 @@ struct PolicyEnv {
     float entity_cluster_size = visibility::DSOCConfig{}.entity_cluster_size;
     /// The latency allowance the culling policies promise. [Units: ticks]
     int lookahead_ticks = 5;
+    /// The map's baked cell visibility table, for the dsoc-baked and dsoc-table
+    /// policies (null: those policies are refused).
+    std::shared_ptr<const visibility::CellVisibilityTable> table;
 };
 
 /// Counters of the InterestManager-based policies, summed over clients.
@@ -80,6 +84,11 @@ public:
     /// Live TBV groups summed over clients (0 for policies without TBVs).
     [[nodiscard]] virtual std::uint64_t live_tbvs() const { return 0; }
 };
+
+/// The dsoc policies over a baked cell table (EvalOptions::bake_cell_size):
+/// dsoc-baked (the table, then the exact stages) and dsoc-table (the table alone).
+/// Not in all_policy_names(): the first run on a map bakes its table.
+const std::vector<std::string>& baked_policy_names();
 
 /// Every policy name, in report order.
 [[nodiscard]] const std::vector<std::string>& all_policy_names();

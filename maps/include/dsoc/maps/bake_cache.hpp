@@ -1,0 +1,59 @@
+#pragma once
+// Baked cell visibility tables kept on disk between runs: a map's table is looked up
+// by its key (bake_file.hpp) in a cache directory; a missing file is baked and
+// written; a stale, truncated or corrupt one is reported in one line and rebaked,
+// never trusted.
+
+#include "dsoc/maps/bake_file.hpp"
+#include "dsoc/maps/map.hpp"
+#include "dsoc/visibility/cell_bake.hpp"
+#include "dsoc/visibility/occluder_region_visibility.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace dsoc::maps {
+
+/// $DSOC_BAKE_DIR, else $XDG_CACHE_HOME/dsoc/bakes, else $HOME/.cache/dsoc/bakes, else
+/// ".dsoc-bakes" in the working directory.
+[[nodiscard]] std::filesystem::path default_bake_dir();
+
+struct BakeRequest {
+    visibility::CellBakeConfig config;
+    /// Cache directory; empty: default_bake_dir().
+    std::filesystem::path dir;
+    /// The table's rows must fit this; cells grow by 1.25x steps from
+    /// config.cell_size until they do. [Units: bytes] [Limit: >= 1 MiB]
+    std::uint64_t max_table_bytes = std::uint64_t{64} << 20;
+    /// Bake again even when a good file exists.
+    bool force = false;
+};
+
+struct BakedTable {
+    std::shared_ptr<const visibility::CellVisibilityTable> table;
+    std::filesystem::path file;
+    std::uint64_t key = 0;
+    bool from_cache = false;
+    /// Why an existing file was not used (one line); empty when none was refused.
+    std::string cache_problem;
+    /// Why the new table could not be written (one line); the table is still usable.
+    std::string write_problem;
+    visibility::CellBakeStats stats; ///< of the bake, when one ran
+};
+
+/// The grid `map` is baked over: cells of `cell_size` over the map's bounds, grown by
+/// 1.25x steps until the dense table of its open cells fits `max_table_bytes`.
+[[nodiscard]] visibility::CellGrid bake_grid(const Map& map, const visibility::OccluderScene& scene,
+                                             float cell_size, std::uint64_t max_table_bytes);
+
+/// The table for `map` from the cache, or baked (and written) when there is no good
+/// file. `scene` must be built from map.occluders. An error only when the map has no
+/// bounds or the settings are invalid.
+[[nodiscard]] Result<BakedTable> load_or_bake(const Map& map,
+                                              const visibility::OccluderScene& scene,
+                                              const BakeRequest& request,
+                                              const visibility::BakeProgress& progress = {});
+
+} // namespace dsoc::maps

@@ -1,0 +1,59 @@
+#pragma once
+// The .dsocbake file: a CellVisibilityTable on disk, versioned, checksummed and keyed
+// by what it was baked from (the map's occluders and PVS, the grid, the bake
+// settings). The layout is specified in docs/baked-visibility.md ("The file").
+// Nothing read from such a file is trusted: every field and the checksum are checked,
+// and any problem comes back as a LoadError naming the file and what is wrong.
+
+#include "dsoc/maps/load_error.hpp"
+#include "dsoc/maps/map.hpp"
+#include "dsoc/visibility/cell_bake.hpp"
+#include "dsoc/visibility/cell_visibility.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace dsoc::maps {
+
+/// Bumped on any change of the layout or of what the bits mean.
+inline constexpr std::uint32_t kBakeFormatVersion = 1;
+/// Largest file read or written. [Units: bytes]
+inline constexpr std::uint64_t kMaxBakeFileBytes = std::uint64_t{1} << 30;
+
+/// The key a table is filed under: a 64-bit hash of the format version, the map's
+/// occluders (every solid plane), its PVS (cluster count and every cluster pair's
+/// bit), the grid and the settings that change the result (not `threads`).
+[[nodiscard]] std::uint64_t bake_key(const Map& map, const visibility::CellGrid& grid,
+                                     const visibility::CellBakeConfig& config);
+
+/// The file's checksum function over `bytes` (see the spec): 64-bit words, FNV-style.
+[[nodiscard]] std::uint64_t bake_checksum(std::span<const std::byte> bytes,
+                                          std::uint64_t seed = 0xcbf29ce484222325ull);
+
+/// The file's bytes for `table` under `key`.
+[[nodiscard]] std::vector<std::byte> encode_bake(const visibility::CellVisibilityTable& table,
+                                                 std::uint64_t key);
+
+/// Parses and checks `bytes` (read from `name`, for messages). With `expected_key`,
+/// a file of another key is refused ("made for another map or other settings").
+[[nodiscard]] Result<visibility::CellVisibilityTable>
+decode_bake(std::span<const std::byte> bytes, const std::string& name,
+            std::optional<std::uint64_t> expected_key = std::nullopt);
+
+/// Reads and decodes `path`.
+[[nodiscard]] Result<visibility::CellVisibilityTable>
+read_bake_file(const std::filesystem::path& path,
+               std::optional<std::uint64_t> expected_key = std::nullopt);
+
+/// Writes atomically (a temporary file beside `path`, then a rename). Returns an
+/// error message, or nothing.
+[[nodiscard]] std::optional<std::string>
+write_bake_file(const std::filesystem::path& path, const visibility::CellVisibilityTable& table,
+                std::uint64_t key);
+
+} // namespace dsoc::maps

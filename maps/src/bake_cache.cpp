@@ -1,0 +1,94 @@
+#include "dsoc/maps/bake_cache.hpp"
+
+#include "dsoc/maps/pvs_bake_pruner.hpp"
+
+#include <cctype>
+#include <cstdio>
+#include <cstdlib>
+
+namespace dsoc::maps {
+
+namespace {
+
+std::string file_stem(const std::string& name) {
+    std::string out;
+    for (const char c : name) {
+        out += std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '-' || c == '_' ? c : '_';
+    }
+    return out.empty() ? std::string("map") : out.substr(0, 64);
+}
+
+} // namespace
+
+std::filesystem::path default_bake_dir() {
+    if (const char* dir = std::getenv("DSOC_BAKE_DIR"); dir != nullptr && *dir != '\0') {
+        return dir;
+    }
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg != nullptr && *xdg != '\0') {
+        return std::filesystem::path(xdg) / "dsoc" / "bakes";
+    }
+    if (const char* home = std::getenv("HOME"); home != nullptr && *home != '\0') {
+        return std::filesystem::path(home) / ".cache" / "dsoc" / "bakes";
+    }
+    return ".dsoc-bakes";
+}
+
+static std::unique_ptr<PvsBakePruner> pvs_pruner(const Map& map) {
+    if (map.pvs != nullptr && map.pvs->has_visibility()) {
+        return std::make_unique<PvsBakePruner>(map.pvs);
+    }
+    return nullptr;
+}
+
+visibility::CellGrid bake_grid(const Map& map, const visibility::OccluderScene& scene,
+                               float cell_size, std::uint64_t max_table_bytes) {
+    const auto pruner = pvs_pruner(map);
+    for (;; cell_size *= 1.25f) {
+        const auto grid = visibility::CellGrid::covering(map.bounds, cell_size);
+        const auto open =
+            static_cast<std::uint64_t>(visibility::open_cells_of(scene, grid, pruner.get()).size());
+        if (open * ((open + 63) / 64) * 8 <= max_table_bytes || cell_size > 1024.0f) {
+            return grid;
+        }
+    }
+}
+
+Result<BakedTable> load_or_bake(const Map& map, const visibility::OccluderScene& scene,
+                                const BakeRequest& request,
+                                const visibility::BakeProgress& progress) {
+    if (map.bounds.is_empty()) {
+        return LoadError{map.name, "", "the map has no bounds: nothing to bake"};
+    }
+    if (const auto problems = visibility::validate(request.config); !problems.empty()) {
+        return LoadError{map.name, "bake settings", problems.front()};
+    }
+    BakedTable out;
+    const auto grid = bake_grid(map, scene, request.config.cell_size, request.max_table_bytes);
+    out.key = bake_key(map, grid, request.config);
+    char key_hex[17];
+    std::snprintf(key_hex, sizeof key_hex, "%016llx", static_cast<unsigned long long>(out.key));
+    const auto dir = request.dir.empty() ? default_bake_dir() : request.dir;
+    out.file = dir / (file_stem(map.name) + "-" + key_hex + ".dsocbake");
+    std::error_code ec;
+    if (!request.force && std::filesystem::exists(out.file, ec)) {
+        auto cached = read_bake_file(out.file, out.key);
+        if (cached) {
+            out.table =
+                std::make_shared<const visibility::CellVisibilityTable>(std::move(cached).value());
+            out.from_cache = true;
+            return out;
+        }
+        out.cache_problem = cached.error().message() + "; baking again";
+    }
+    // The compiler's PVS, where the map has one, proves far pairs apart for free.
+    const auto pruner = pvs_pruner(map);
+    auto table = visibility::bake_cell_visibility(scene, grid, request.config, pruner.get(),
+                                                  &out.stats, progress);
+    if (auto problem = write_bake_file(out.file, table, out.key)) {
+        out.write_problem = *problem;
+    }
+    out.table = std::make_shared<const visibility::CellVisibilityTable>(std::move(table));
+    return out;
+}
+
+} // namespace dsoc::maps

@@ -1,0 +1,279 @@
+#include "dsoc/maps/bake_file.hpp"
+
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <system_error>
+
+namespace dsoc::maps {
+
+namespace {
+
+constexpr char kMagic[8] = {'D', 'S', 'O', 'C', 'B', 'A', 'K', 'E'};
+constexpr std::size_t kHeaderBytes = 80;
+constexpr std::size_t kChecksumOffset = 64;
+/// Grids larger than this many cells are refused (2^28: 268M cells).
+constexpr std::uint64_t kMaxGridCells = std::uint64_t{1} << 28;
+
+static_assert(std::endian::native == std::endian::little,
+              "the .dsocbake layout is little-endian; add byte swaps for this target");
+
+template <class T>
+void put(std::vector<std::byte>& out, std::size_t at, T v) {
+    std::memcpy(out.data() + at, &v, sizeof v);
+}
+template <class T>
+T get(std::span<const std::byte> in, std::size_t at) {
+    T v;
+    std::memcpy(&v, in.data() + at, sizeof v);
+    return v;
+}
+
+std::uint64_t checksum_of_file(std::span<const std::byte> bytes) {
+    const std::uint64_t head = bake_checksum(bytes.first(kChecksumOffset));
+    return bake_checksum(bytes.subspan(kHeaderBytes), head);
+}
+
+std::size_t open_list_bytes(std::uint64_t open) {
+    return (open * 4 + 7) / 8 * 8;
+}
+
+struct Hasher {
+    std::uint64_t h = 0xcbf29ce484222325ull;
+    void word(std::uint64_t w) { h = (h ^ w) * 0x100000001b3ull; }
+    void f32(float v) { word(std::bit_cast<std::uint32_t>(v)); }
+    void i64(std::int64_t v) { word(static_cast<std::uint64_t>(v)); }
+};
+
+} // namespace
+
+std::uint64_t bake_checksum(std::span<const std::byte> bytes, std::uint64_t seed) {
+    std::uint64_t h = seed;
+    std::size_t i = 0;
+    for (; i + 8 <= bytes.size(); i += 8) {
+        std::uint64_t w;
+        std::memcpy(&w, bytes.data() + i, 8);
+        h = (h ^ w) * 0x100000001b3ull;
+    }
+    if (i < bytes.size()) {
+        std::uint64_t w = 0;
+        std::memcpy(&w, bytes.data() + i, bytes.size() - i);
+        h = (h ^ w) * 0x100000001b3ull;
+    }
+    return h;
+}
+
+std::uint64_t bake_key(const Map& map, const visibility::CellGrid& grid,
+                       const visibility::CellBakeConfig& config) {
+    Hasher k;
+    k.word(kBakeFormatVersion);
+    k.word(map.occluders.size());
+    for (const auto& occluder : map.occluders) {
+        k.word(occluder.planes().size());
+        for (const visibility::Plane& p : occluder.planes()) {
+            k.f32(p.normal.x);
+            k.f32(p.normal.y);
+            k.f32(p.normal.z);
+            k.f32(p.distance);
+        }
+    }
+    const int clusters =
+        map.pvs != nullptr && map.pvs->has_visibility() ? map.pvs->cluster_count() : 0;
+    k.i64(clusters);
+    for (int a = 0; a < clusters; ++a) {
+        std::uint64_t bits = 0;
+        for (int b = 0; b < clusters; ++b) {
+            bits = bits << 1 | (map.pvs->cluster_visible(a, b) ? 1u : 0u);
+            if ((b & 63) == 63) {
+                k.word(bits);
+                bits = 0;
+            }
+        }
+        k.word(bits);
+    }
+    k.f32(grid.origin.x);
+    k.f32(grid.origin.y);
+    k.f32(grid.origin.z);
+    k.f32(grid.cell_size);
+    k.i64(grid.dims.x);
+    k.i64(grid.dims.y);
+    k.i64(grid.dims.z);
+    k.f32(config.cell_size);
+    k.i64(config.portal_depth);
+    k.i64(config.top_level);
+    k.i64(config.witness_stop_level);
+    k.i64(config.witness_segments);
+    k.i64(config.both_directions ? 1 : 0);
+    return k.h;
+}
+
+std::vector<std::byte> encode_bake(const visibility::CellVisibilityTable& table,
+                                   std::uint64_t key) {
+    const auto& grid = table.grid();
+    const std::size_t open = table.open_count();
+    const std::size_t list = open_list_bytes(open);
+    const auto words = table.words();
+    std::vector<std::byte> out(kHeaderBytes + list + words.size() * 8);
+    std::memcpy(out.data(), kMagic, 8);
+    put<std::uint32_t>(out, 8, kBakeFormatVersion);
+    put<std::uint32_t>(out, 12, static_cast<std::uint32_t>(kHeaderBytes));
+    put<std::uint64_t>(out, 16, key);
+    put<float>(out, 24, grid.cell_size);
+    put<float>(out, 28, grid.origin.x);
+    put<float>(out, 32, grid.origin.y);
+    put<float>(out, 36, grid.origin.z);
+    put<std::int32_t>(out, 40, grid.dims.x);
+    put<std::int32_t>(out, 44, grid.dims.y);
+    put<std::int32_t>(out, 48, grid.dims.z);
+    put<std::uint32_t>(out, 52, static_cast<std::uint32_t>(open));
+    put<std::uint64_t>(out, 56, table.words_per_row());
+    put<std::uint64_t>(out, 72, 0);
+    std::memcpy(out.data() + kHeaderBytes, table.open_cells().data(), open * 4);
+    std::memcpy(out.data() + kHeaderBytes + list, words.data(), words.size() * 8);
+    put<std::uint64_t>(out, kChecksumOffset, checksum_of_file(out));
+    return out;
+}
+
+Result<visibility::CellVisibilityTable> decode_bake(std::span<const std::byte> bytes,
+                                                    const std::string& name,
+                                                    std::optional<std::uint64_t> expected_key) {
+    const auto fail = [&](const std::string& part, const std::string& what) {
+        return LoadError{name, part, what};
+    };
+    if (bytes.size() < kHeaderBytes) {
+        return fail("header", "truncated: " + std::to_string(bytes.size()) +
+                                  " bytes, the header alone is " + std::to_string(kHeaderBytes));
+    }
+    if (std::memcmp(bytes.data(), kMagic, 8) != 0) {
+        return fail("header", "not a .dsocbake file (bad magic)");
+    }
+    const auto version = get<std::uint32_t>(bytes, 8);
+    if (version != kBakeFormatVersion) {
+        return fail("header", "format version " + std::to_string(version) + ", this build reads " +
+                                  std::to_string(kBakeFormatVersion));
+    }
+    if (get<std::uint32_t>(bytes, 12) != kHeaderBytes) {
+        return fail("header", "header size " + std::to_string(get<std::uint32_t>(bytes, 12)) +
+                                  ", expected " + std::to_string(kHeaderBytes));
+    }
+    visibility::CellGrid grid;
+    grid.cell_size = get<float>(bytes, 24);
+    grid.origin = {get<float>(bytes, 28), get<float>(bytes, 32), get<float>(bytes, 36)};
+    grid.dims = {get<std::int32_t>(bytes, 40), get<std::int32_t>(bytes, 44),
+                 get<std::int32_t>(bytes, 48)};
+    if (!(grid.cell_size >= 1.0f && grid.cell_size <= 4096.0f) || !std::isfinite(grid.origin.x) ||
+        !std::isfinite(grid.origin.y) || !std::isfinite(grid.origin.z) ||
+        std::abs(grid.origin.x) > 1e7f || std::abs(grid.origin.y) > 1e7f ||
+        std::abs(grid.origin.z) > 1e7f) {
+        return fail("header", "grid origin or cell size out of range");
+    }
+    if (grid.dims.x < 1 || grid.dims.y < 1 || grid.dims.z < 1 ||
+        static_cast<std::uint64_t>(grid.dims.x) * static_cast<std::uint64_t>(grid.dims.y) *
+                static_cast<std::uint64_t>(grid.dims.z) >
+            kMaxGridCells) {
+        return fail("header", "grid dimensions out of range");
+    }
+    const std::uint64_t open = get<std::uint32_t>(bytes, 52);
+    const std::uint64_t words_per_row = get<std::uint64_t>(bytes, 56);
+    if (open > grid.cell_count()) {
+        return fail("header", "more open cells (" + std::to_string(open) + ") than cells (" +
+                                  std::to_string(grid.cell_count()) + ")");
+    }
+    if (words_per_row != (open + 63) / 64) {
+        return fail("header", "words per row " + std::to_string(words_per_row) + " do not fit " +
+                                  std::to_string(open) + " open cells");
+    }
+    const std::uint64_t expected_size =
+        kHeaderBytes + open_list_bytes(open) + open * words_per_row * 8;
+    if (expected_size > kMaxBakeFileBytes) {
+        return fail("header", "table of " + std::to_string(expected_size) +
+                                  " bytes is over the limit of " +
+                                  std::to_string(kMaxBakeFileBytes));
+    }
+    if (bytes.size() != expected_size) {
+        return fail("", (bytes.size() < expected_size ? "truncated: " : "trailing bytes: ") +
+                            std::to_string(bytes.size()) + " bytes, the header says " +
+                            std::to_string(expected_size));
+    }
+    if (get<std::uint64_t>(bytes, kChecksumOffset) != checksum_of_file(bytes)) {
+        return fail("", "checksum mismatch: the file is corrupt");
+    }
+    const std::uint64_t key = get<std::uint64_t>(bytes, 16);
+    if (expected_key && key != *expected_key) {
+        return fail("header", "made for another map or other bake settings (key " +
+                                  std::to_string(key) + ", expected " +
+                                  std::to_string(*expected_key) + ")");
+    }
+    std::vector<std::uint32_t> cells(open);
+    std::memcpy(cells.data(), bytes.data() + kHeaderBytes, open * 4);
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+        if (cells[i] >= grid.cell_count() || (i > 0 && cells[i] <= cells[i - 1])) {
+            return fail("open cells",
+                        "entry " + std::to_string(i) + " is out of range or not increasing");
+        }
+    }
+    visibility::CellVisibilityTable table(grid, std::move(cells));
+    auto words = table.words();
+    std::memcpy(words.data(), bytes.data() + kHeaderBytes + open_list_bytes(open),
+                words.size() * 8);
+    if (open % 64 != 0) {
+        const std::uint64_t beyond = ~std::uint64_t{0} << (open % 64);
+        for (std::size_t r = 0; r < open; ++r) {
+            if ((words[(r + 1) * words_per_row - 1] & beyond) != 0) {
+                return fail("rows", "row " + std::to_string(r) + " has bits past the last cell");
+            }
+        }
+    }
+    return table;
+}
+
+Result<visibility::CellVisibilityTable> read_bake_file(const std::filesystem::path& path,
+                                                       std::optional<std::uint64_t> expected_key) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    if (ec) {
+        return LoadError{path.string(), "", "cannot read: " + ec.message()};
+    }
+    if (size > kMaxBakeFileBytes) {
+        return LoadError{path.string(), "",
+                         "file of " + std::to_string(size) + " bytes is over the limit of " +
+                             std::to_string(kMaxBakeFileBytes)};
+    }
+    std::vector<std::byte> bytes(static_cast<std::size_t>(size));
+    std::ifstream in(path, std::ios::binary);
+    if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size))) {
+        return LoadError{path.string(), "", "cannot read the file"};
+    }
+    return decode_bake(bytes, path.string(), expected_key);
+}
+
+std::optional<std::string> write_bake_file(const std::filesystem::path& path,
+                                           const visibility::CellVisibilityTable& table,
+                                           std::uint64_t key) {
+    const auto bytes = encode_bake(table, key);
+    std::error_code ec;
+    if (path.has_parent_path()) {
+        std::filesystem::create_directories(path.parent_path(), ec);
+        if (ec) {
+            return "cannot create " + path.parent_path().string() + ": " + ec.message();
+        }
+    }
+    auto temp = path;
+    temp += ".tmp";
+    {
+        std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+        if (!out.write(reinterpret_cast<const char*>(bytes.data()),
+                       static_cast<std::streamsize>(bytes.size())) ||
+            !out.flush()) {
+            return "cannot write " + temp.string();
+        }
+    }
+    std::filesystem::rename(temp, path, ec);
+    if (ec) {
+        return "cannot rename " + temp.string() + " to " + path.string() + ": " + ec.message();
+    }
+    return std::nullopt;
+}
+
+} // namespace dsoc::maps

@@ -1,0 +1,190 @@
+// The .dsocbake file and the cache: a table survives the round trip bit for bit;
+// truncated, corrupt, wrong-version and wrong-map files are each refused with a
+// message naming the file and what is wrong; the cache rebakes what it refuses and
+// bakes anew for a changed map.
+
+#include "dsoc/maps/bake_cache.hpp"
+#include "dsoc/maps/bake_file.hpp"
+#include "dsoc/maps/map_source.hpp"
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+namespace dsoc::maps {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Fixture {
+    Map map;
+    std::shared_ptr<const visibility::OccluderScene> scene;
+};
+
+const Fixture& rooms() {
+    static const Fixture f = [] {
+        Fixture out{test::corridor_map(), nullptr};
+        out.scene = visibility::OccluderScene::build(out.map.occluders);
+        return out;
+    }();
+    return f;
+}
+
+BakeRequest small_request(const fs::path& dir) {
+    BakeRequest r;
+    r.config.cell_size = 64.0f;
+    r.config.threads = 2;
+    r.dir = dir;
+    return r;
+}
+
+class BakeFileTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ =
+            fs::temp_directory_path() /
+            ("dsoc-bake-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+             "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+    fs::path dir_;
+};
+
+std::vector<std::byte> read_all(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::vector<char> raw((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::vector<std::byte> out(raw.size());
+    std::memcpy(out.data(), raw.data(), raw.size());
+    return out;
+}
+
+void write_all(const fs::path& p, const std::vector<std::byte>& bytes) {
+    std::ofstream out(p, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(bytes.data()),
+              static_cast<std::streamsize>(bytes.size()));
+}
+
+TEST_F(BakeFileTest, TheCacheBakesOnceThenLoadsTheSameBits) {
+    const auto first = load_or_bake(rooms().map, *rooms().scene, small_request(dir_));
+    ASSERT_TRUE(first.ok()) << first.error().message();
+    EXPECT_FALSE(first->from_cache);
+    EXPECT_TRUE(first->write_problem.empty()) << first->write_problem;
+    EXPECT_TRUE(fs::exists(first->file));
+    EXPECT_GT(first->table->hidden_pairs(), 0u); // something is culled
+    const auto second = load_or_bake(rooms().map, *rooms().scene, small_request(dir_));
+    ASSERT_TRUE(second.ok());
+    EXPECT_TRUE(second->from_cache);
+    EXPECT_TRUE(second->cache_problem.empty());
+    ASSERT_EQ(first->table->open_cells(), second->table->open_cells());
+    const auto a = first->table->words();
+    const auto b = second->table->words();
+    ASSERT_TRUE(std::equal(a.begin(), a.end(), b.begin(), b.end()));
+}
+
+TEST_F(BakeFileTest, EveryKindOfDamageIsRefusedNamingTheFileAndWhat) {
+    const auto baked = load_or_bake(rooms().map, *rooms().scene, small_request(dir_));
+    ASSERT_TRUE(baked.ok());
+    const auto good = read_all(baked->file);
+    ASSERT_TRUE(decode_bake(good, "good", baked->key).ok());
+    struct Damage {
+        const char* kind;
+        std::vector<std::byte> bytes;
+        const char* expect; ///< in the message
+    };
+    std::vector<Damage> cases;
+    cases.push_back({"empty", {}, "truncated"});
+    cases.push_back({"header cut", {good.begin(), good.begin() + 40}, "truncated"});
+    cases.push_back({"rows cut", {good.begin(), good.end() - 9}, "truncated"});
+    auto longer = good;
+    longer.push_back(std::byte{0});
+    cases.push_back({"trailing byte", longer, "trailing bytes"});
+    auto flipped = good;
+    flipped[flipped.size() / 2 + 3] ^= std::byte{0x10};
+    cases.push_back({"bit flip in the rows", flipped, "checksum"});
+    auto flipped_head = good;
+    flipped_head[30] ^= std::byte{0x01}; // the grid origin
+    cases.push_back({"bit flip in the header", flipped_head, "checksum"});
+    auto magic = good;
+    magic[0] = std::byte{'X'};
+    cases.push_back({"magic", magic, "not a .dsocbake file"});
+    auto version = good;
+    version[8] = std::byte{99};
+    cases.push_back({"version", version, "format version 99"});
+    auto dims = good;
+    const std::int32_t huge = 1 << 30;
+    std::memcpy(dims.data() + 40, &huge, 4);
+    cases.push_back({"absurd grid", dims, "grid dimensions"});
+    for (const Damage& d : cases) {
+        const auto r = decode_bake(d.bytes, "t.dsocbake", baked->key);
+        ASSERT_FALSE(r.ok()) << d.kind << " was accepted";
+        const std::string m = r.error().message();
+        EXPECT_NE(m.find("t.dsocbake"), std::string::npos) << d.kind << ": " << m;
+        EXPECT_NE(m.find(d.expect), std::string::npos) << d.kind << ": " << m;
+    }
+    // A good file of another map (or other settings) is refused by its key.
+    const auto other = decode_bake(good, "t.dsocbake", baked->key ^ 1u);
+    ASSERT_FALSE(other.ok());
+    EXPECT_NE(other.error().message().find("another map"), std::string::npos);
+}
+
+TEST_F(BakeFileTest, TheCacheRefusesADamagedFileInOneLineAndBakesAgain) {
+    const auto baked = load_or_bake(rooms().map, *rooms().scene, small_request(dir_));
+    ASSERT_TRUE(baked.ok());
+    auto bytes = read_all(baked->file);
+    bytes[bytes.size() - 20] ^= std::byte{0x04};
+    write_all(baked->file, bytes);
+    const auto again = load_or_bake(rooms().map, *rooms().scene, small_request(dir_));
+    ASSERT_TRUE(again.ok());
+    EXPECT_FALSE(again->from_cache);
+    EXPECT_NE(again->cache_problem.find(baked->file.string()), std::string::npos)
+        << again->cache_problem;
+    EXPECT_NE(again->cache_problem.find("checksum"), std::string::npos) << again->cache_problem;
+    EXPECT_EQ(again->cache_problem.find('\n'), std::string::npos);
+    // The rebaked file is good again.
+    EXPECT_TRUE(read_bake_file(again->file, again->key).ok());
+    // A truncated file: the same.
+    fs::resize_file(again->file, 100);
+    const auto third = load_or_bake(rooms().map, *rooms().scene, small_request(dir_));
+    ASSERT_TRUE(third.ok());
+    EXPECT_FALSE(third->from_cache);
+    EXPECT_NE(third->cache_problem.find("truncated"), std::string::npos) << third->cache_problem;
+}
+
+TEST_F(BakeFileTest, AChangedMapIsBakedAnewNotServedTheOldTable) {
+    const auto before = load_or_bake(rooms().map, *rooms().scene, small_request(dir_));
+    ASSERT_TRUE(before.ok());
+    Map changed = rooms().map;
+    changed.occluders.pop_back(); // one wall fewer
+    const auto scene = visibility::OccluderScene::build(changed.occluders);
+    const auto after = load_or_bake(changed, *scene, small_request(dir_));
+    ASSERT_TRUE(after.ok());
+    EXPECT_NE(before->key, after->key);
+    EXPECT_FALSE(after->from_cache);
+    // The old map's file planted under the new key's name is refused as another map's.
+    fs::copy_file(before->file, after->file, fs::copy_options::overwrite_existing);
+    const auto planted = load_or_bake(changed, *scene, small_request(dir_));
+    ASSERT_TRUE(planted.ok());
+    EXPECT_FALSE(planted->from_cache);
+    EXPECT_NE(planted->cache_problem.find("another map"), std::string::npos)
+        << planted->cache_problem;
+}
+
+TEST(BakeKey, DependsOnTheSettingsThatChangeTheTableOnly) {
+    const Map& map = rooms().map;
+    const auto grid = visibility::CellGrid::covering(map.bounds, 128.0f);
+    visibility::CellBakeConfig a;
+    a.cell_size = 128.0f;
+    visibility::CellBakeConfig b = a;
+    b.threads = 7; // not part of the result
+    EXPECT_EQ(bake_key(map, grid, a), bake_key(map, grid, b));
+    b.portal_depth = 1;
+    EXPECT_NE(bake_key(map, grid, a), bake_key(map, grid, b));
+}
+
+} // namespace
+} // namespace dsoc::maps

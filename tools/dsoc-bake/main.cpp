@@ -1,0 +1,153 @@
+// dsoc-bake: bakes the cell visibility table of each map into the cache directory (or
+// loads it when a good one is there) and prints what it holds. Progress with an ETA
+// goes to stderr.
+// Exit status: 0 every map baked or loaded, 1 some map failed (message on stderr),
+// 2 bad usage.
+
+#include "dsoc/maps/bake_cache.hpp"
+#include "dsoc/maps/map_source.hpp"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <iostream>
+
+namespace {
+
+void print_progress(const std::string& name, double fraction, double elapsed) {
+    const double eta = fraction > 0.0 ? elapsed * (1.0 - fraction) / fraction : 0.0;
+    std::fprintf(stderr, "\r%s: %5.1f%%  %6.1f s elapsed, ETA %6.1f s ", name.c_str(),
+                 100.0 * fraction, elapsed, eta);
+    if (fraction >= 1.0) {
+        std::fprintf(stderr, "\n");
+    }
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{
+        "Bakes the cell visibility table of each map (cached; see docs/baked-visibility.md)"};
+    std::vector<std::string> specs;
+    dsoc::maps::BakeRequest request;
+    std::string dir;
+    bool json = false;
+    std::uint64_t max_mib = 64;
+    app.add_option("maps", specs, "map names (oa_dm4), .bsp/.pk3/text map paths or gen:...")
+        ->required();
+    app.add_option("--cell-size", request.config.cell_size, "cell edge in world units")
+        ->capture_default_str();
+    app.add_option("--threads", request.config.threads, "worker threads (0: one per core)")
+        ->capture_default_str();
+    app.add_option("--portal-depth", request.config.portal_depth,
+                   "portal levels of the exact tests")
+        ->capture_default_str();
+    app.add_option("--top-level", request.config.top_level,
+                   "hierarchy levels (blocks of 2^L cells paired first; 0: none)")
+        ->capture_default_str();
+    app.add_option("--witness-stop-level", request.config.witness_stop_level,
+                   "a clear segment between blocks of 2^L cells marks them all visible")
+        ->capture_default_str();
+    app.add_option("--witness-segments", request.config.witness_segments,
+                   "segments cast between two blocks before an exact test")
+        ->capture_default_str();
+    app.add_flag("--both-directions,!--one-direction", request.config.both_directions,
+                 "retry a failed exact test of two cells with region and box swapped")
+        ->capture_default_str();
+    app.add_option("--max-table-mib", max_mib, "cells grow until the table fits")
+        ->capture_default_str();
+    app.add_option("--cache-dir", dir,
+                   "where tables are kept (default: $DSOC_BAKE_DIR, "
+                   "$XDG_CACHE_HOME/dsoc/bakes or ~/.cache/dsoc/bakes)");
+    app.add_flag("--force", request.force, "bake again even when the cache holds a good table");
+    app.add_flag("--json", json, "one JSON object per map on stdout");
+    CLI11_PARSE(app, argc, argv);
+    if (const auto problems = dsoc::visibility::validate(request.config); !problems.empty()) {
+        std::cerr << "dsoc-bake: " << problems.front() << "\n";
+        return 2;
+    }
+    request.dir = dir;
+    request.max_table_bytes = max_mib << 20;
+
+    const auto search = dsoc::maps::MapSearch::from_environment();
+    int failures = 0;
+    for (const std::string& spec : specs) {
+        auto map = dsoc::maps::load_map(spec, search);
+        if (!map) {
+            std::cerr << "dsoc-bake: " << map.error().message() << "\n";
+            ++failures;
+            continue;
+        }
+        const auto scene = dsoc::visibility::OccluderScene::build(map->occluders);
+        auto baked =
+            dsoc::maps::load_or_bake(map.value(), *scene, request,
+                                     [&](double f, double s) { print_progress(map->name, f, s); });
+        if (!baked) {
+            std::cerr << "dsoc-bake: " << baked.error().message() << "\n";
+            ++failures;
+            continue;
+        }
+        if (!baked->cache_problem.empty()) {
+            std::cerr << "dsoc-bake: cached table refused: " << baked->cache_problem << "\n";
+        }
+        if (!baked->write_problem.empty()) {
+            std::cerr << "dsoc-bake: table not saved: " << baked->write_problem << "\n";
+        }
+        const auto& t = *baked->table;
+        const auto& s = baked->stats;
+        const double n = static_cast<double>(t.open_count());
+        const double hidden = n > 0 ? static_cast<double>(t.hidden_pairs()) / (n * n) : 0.0;
+        std::error_code ec;
+        const auto file_bytes = std::filesystem::file_size(baked->file, ec);
+        if (json) {
+            nlohmann::json out;
+            out["map"] = map->name;
+            out["file"] = baked->file.string();
+            out["from_cache"] = baked->from_cache;
+            out["cell_size"] = t.grid().cell_size;
+            out["cells"] = t.grid().cell_count();
+            out["open_cells"] = t.open_count();
+            out["hidden_pair_fraction"] = hidden;
+            out["file_bytes"] = ec ? 0 : file_bytes;
+            out["memory_bytes"] = t.memory_bytes();
+            out["bake_seconds"] = s.seconds;
+            out["exact_tests"] = s.exact_tests;
+            out["exact_hidden"] = s.exact_hidden;
+            out["pruned"] = s.pruned;
+            out["witness_rays"] = s.witness_rays;
+            out["witness_clear"] = s.witness_clear;
+            std::cout << out.dump() << std::endl;
+        } else {
+            std::printf("%s: %s %s\n", map->name.c_str(), baked->from_cache ? "loaded" : "baked",
+                        baked->file.c_str());
+            std::printf("  cells %zu (%.0f-unit), open %zu, hidden pairs %.1f%%, file %.1f MiB, "
+                        "memory %.1f MiB\n",
+                        t.grid().cell_count(), static_cast<double>(t.grid().cell_size),
+                        t.open_count(), 100.0 * hidden,
+                        ec ? 0.0 : static_cast<double>(file_bytes) / (1 << 20),
+                        static_cast<double>(t.memory_bytes()) / (1 << 20));
+            if (!baked->from_cache) {
+                std::printf("  bake %.1f s: %llu pair visits, %llu pruned by the PVS, %llu witness "
+                            "rays (%llu clear), %llu exact tests (%llu hidden)\n",
+                            s.seconds, static_cast<unsigned long long>(s.pair_visits),
+                            static_cast<unsigned long long>(s.pruned),
+                            static_cast<unsigned long long>(s.witness_rays),
+                            static_cast<unsigned long long>(s.witness_clear),
+                            static_cast<unsigned long long>(s.exact_tests),
+                            static_cast<unsigned long long>(s.exact_hidden));
+                std::printf("  exact tests (hidden) by block level:");
+                for (int l = 0; l < 7; ++l) {
+                    if (s.exact_by_level[l] > 0) {
+                        std::printf(" %d: %llu (%llu)", l,
+                                    static_cast<unsigned long long>(s.exact_by_level[l]),
+                                    static_cast<unsigned long long>(s.hidden_by_level[l]));
+                    }
+                }
+                std::printf("\n");
+            }
+            std::fflush(stdout);
+        }
+    }
+    return failures == 0 ? 0 : 1;
+}

@@ -1,0 +1,70 @@
+#pragma once
+// A baked cell visibility table (cell_visibility.hpp) as the first stage of a region
+// culler: the union of the rows of the open cells a client's eye region touches is
+// conservative for every eye of the region, so a box none of whose open cells is in
+// that union is hidden from all of them. A prepared box costs a few bit tests.
+//
+// A region or box the table does not cover (part of it outside the grid, or only
+// solid cells) is never answered by guess: it goes to the next stage, or is
+// `visible` when there is none.
+
+#include "dsoc/visibility/cell_visibility.hpp"
+#include "dsoc/visibility/region_visibility.hpp"
+
+#include <memory>
+#include <vector>
+
+namespace dsoc::visibility {
+
+class BakedRegionVisibility final : public RegionVisibility {
+public:
+    /// `next` (may be null: the table alone) answers what the table passes or does
+    /// not cover.
+    BakedRegionVisibility(std::shared_ptr<const CellVisibilityTable> table,
+                          std::unique_ptr<RegionVisibility> next);
+
+    void build(const Aabb& region) override;
+    [[nodiscard]] Visibility test_box(const Aabb& box) const override;
+    [[nodiscard]] Visibility test_box_quick(const Aabb& box) const override;
+    [[nodiscard]] Visibility test_box_hinted(const Aabb& box, std::uint32_t& hint) const override;
+
+    /// Prepared boxes carry their open cells, so the table costs a few bit tests.
+    [[nodiscard]] bool has_prepared_stage() const override { return true; }
+    void prepare(const Aabb& box, PreparedBox& out) const override;
+    [[nodiscard]] Visibility test_prepared(const PreparedBox& p) const override;
+    [[nodiscard]] Visibility test_prepared_quick(const PreparedBox& p) const override;
+    [[nodiscard]] Visibility test_prepared_hinted(const PreparedBox& p,
+                                                  std::uint32_t& hint) const override;
+    /// The table alone: `visible` whenever it passes the box (the next stage is skipped).
+    [[nodiscard]] Visibility test_prepared_coarse(const PreparedBox& p) const override;
+    /// Keys are runs of open cells (CellVisibilityTable::open_runs_of): the union is
+    /// both lists of runs.
+    void merge_prepared(PreparedBox& into, const PreparedBox& more) const override {
+        into.keys.insert(into.keys.end(), more.keys.begin(), more.keys.end());
+    }
+
+    /// True when the last build() found the region covered by the table.
+    [[nodiscard]] bool active() const { return active_; }
+
+private:
+    /// True when the table proves every run of open cells in `runs` hidden from the
+    /// built region.
+    [[nodiscard]] bool hidden(const std::vector<std::int32_t>& runs) const;
+    [[nodiscard]] bool box_hidden(const Aabb& box) const;
+
+    std::shared_ptr<const CellVisibilityTable> table_;
+    std::unique_ptr<RegionVisibility> next_;
+    bool active_ = false;
+    glm::ivec3 built_lo_{1};
+    glm::ivec3 built_hi_{0};
+    std::vector<std::uint64_t> visible_; ///< union of the region's rows
+    mutable std::vector<std::int32_t> scratch_;
+};
+
+/// Puts the table in front of every culler `make_next` makes (`make_next` empty: the
+/// table alone); returns `make_next` itself when `table` is null.
+[[nodiscard]] RegionVisibilityFactory
+with_baked_stage(std::shared_ptr<const CellVisibilityTable> table,
+                 RegionVisibilityFactory make_next);
+
+} // namespace dsoc::visibility

@@ -1,0 +1,98 @@
+#pragma once
+// Baking a CellVisibilityTable from an occluder scene: the exact from-region tests of
+// the shaft stage (one occluder, fused occluders on cut planes, portals) applied to
+// pairs of cells and of blocks of cells, so that one proof for two blocks hides every
+// pair of their cells.
+//
+// Conservative by construction: a pair of cells is left hidden only when an exact test
+// proved every segment between blocks holding them blocked, or the pruner proved them
+// apart; every pair nothing proved is marked visible.
+
+#include "dsoc/visibility/cell_visibility.hpp"
+#include "dsoc/visibility/occluder_region_visibility.hpp"
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace dsoc::visibility {
+
+/// A cheap conservative proof the bake tries before its exact tests, e.g. the map
+/// compiler's PVS. keys() says what the pruner knows of a box; hidden() is true only
+/// when no point of a box with keys `a` can see any point of a box with keys `b`
+/// (empty keys: nothing known, never hidden). Const and thread-safe.
+class BakePruner {
+public:
+    virtual ~BakePruner() = default;
+    /// True only when no eye and no point that can be seen lies in `box` (solid, or
+    /// outside the map): such a cell gets no row.
+    [[nodiscard]] virtual bool empty_space(const Aabb& /*box*/) const { return false; }
+    virtual void keys(const Aabb& box, std::vector<std::int32_t>& out) const = 0;
+    [[nodiscard]] virtual bool hidden(std::span<const std::int32_t> a,
+                                      std::span<const std::int32_t> b) const = 0;
+};
+
+struct CellBakeConfig {
+    /// Edge of a cell. [Units: world units] [Limit: 4 .. 1024]
+    float cell_size = 32.0f;
+    /// Worker threads; 0: one per core. [Limit: 0 .. 256]
+    int threads = 0;
+    /// Levels of portal tests in the exact stage (ShaftOcclusion). [Limit: 0 .. 4]
+    int portal_depth = 2;
+    /// Blocks of 2^top_level cells per side are paired first, then refined where no
+    /// proof holds; 0 pairs single cells directly (no hierarchy: the slow twin the
+    /// tests compare with). [Limit: 0 .. 6]
+    int top_level = 2;
+    /// When a segment between two blocks of at most 2^witness_stop_level cells per
+    /// side is clear, every pair of their cells is marked visible without refining
+    /// (0: refine to single cells, the tightest table). [Limit: 0 .. 3]
+    int witness_stop_level = 1;
+    /// Segments cast between two blocks (the first joins their representative
+    /// points, the others random open points of random open cells of theirs) before
+    /// an exact test: one
+    /// clear segment shows the pair is not all hidden, for far less than a failed
+    /// exact test. [Limit: 1 .. 64]
+    int witness_segments = 4;
+    /// After a failed exact test of two single cells, try it the other way round
+    /// (region and box swapped): the tests are not symmetric in what they prove.
+    bool both_directions = false;
+};
+
+/// Every problem with the settings, in words; empty when they are usable.
+[[nodiscard]] std::vector<std::string> validate(const CellBakeConfig& config);
+
+struct CellBakeStats {
+    std::uint64_t cells = 0;         ///< grid cells
+    std::uint64_t open_cells = 0;    ///< of those, not inside an occluder
+    std::uint64_t pair_visits = 0;   ///< pairs of blocks or cells looked at
+    std::uint64_t pruned = 0;        ///< hidden by the pruner
+    std::uint64_t witness_rays = 0;  ///< segments cast between blocks
+    std::uint64_t witness_clear = 0; ///< of those, clear (the pair is not all hidden)
+    std::uint64_t exact_tests = 0;   ///< exact region tests
+    std::uint64_t exact_hidden = 0;  ///< of those, proven hidden
+    /// Exact tests and proofs by the higher level of the two blocks (0: two cells).
+    std::uint64_t exact_by_level[7] = {};
+    std::uint64_t hidden_by_level[7] = {};
+    double seconds = 0.0;
+};
+
+/// Called from one worker now and then: fraction of the work done (0..1) and the
+/// seconds since the bake started.
+using BakeProgress = std::function<void(double fraction, double elapsed_seconds)>;
+
+/// The grid cells that are open: not inside the interior of one occluder (every corner
+/// 1/64 unit inside all of its planes) and not empty space to `pruner` (may be null).
+/// Increasing grid indexes.
+[[nodiscard]] std::vector<std::uint32_t>
+open_cells_of(const OccluderScene& scene, const CellGrid& grid, const BakePruner* pruner = nullptr);
+
+/// Bakes the table over `grid` (validate(config) must be empty; the scene must have
+/// its grid). `pruner` may be null. Runs on config.threads workers.
+[[nodiscard]] CellVisibilityTable
+bake_cell_visibility(const OccluderScene& scene, const CellGrid& grid, const CellBakeConfig& config,
+                     const BakePruner* pruner = nullptr, CellBakeStats* stats = nullptr,
+                     const BakeProgress& progress = {});
+
+} // namespace dsoc::visibility

@@ -1,0 +1,154 @@
+#include "dsoc/visibility/baked_region_visibility.hpp"
+
+#include <algorithm>
+
+namespace dsoc::visibility {
+
+BakedRegionVisibility::BakedRegionVisibility(std::shared_ptr<const CellVisibilityTable> table,
+                                             std::unique_ptr<RegionVisibility> next)
+    : table_(std::move(table)), next_(std::move(next)) {}
+
+void BakedRegionVisibility::build(const Aabb& region) {
+    if (next_) {
+        next_->build(region);
+    }
+    glm::ivec3 lo;
+    glm::ivec3 hi;
+    if (!table_->grid().range_of(region, lo, hi)) {
+        active_ = false;
+        built_lo_ = glm::ivec3(1);
+        built_hi_ = glm::ivec3(0);
+        return;
+    }
+    if (lo == built_lo_ && hi == built_hi_) {
+        return; // the same cells: the same union (and the same active_)
+    }
+    built_lo_ = lo;
+    built_hi_ = hi;
+    const CellGrid& grid = table_->grid();
+    const std::size_t words = table_->words_per_row();
+    visible_.assign(words, 0);
+    bool any = false;
+    for (int z = lo.z; z <= hi.z; ++z) {
+        for (int y = lo.y; y <= hi.y; ++y) {
+            for (int x = lo.x; x <= hi.x; ++x) {
+                const OpenCell c = table_->open_index(grid.index({x, y, z}));
+                if (c == kSolidCell) {
+                    continue;
+                }
+                any = true;
+                const auto row = table_->row(c);
+                for (std::size_t k = 0; k < words; ++k) {
+                    visible_[k] |= row[k];
+                }
+            }
+        }
+    }
+    active_ = any;
+}
+
+bool BakedRegionVisibility::hidden(const std::vector<std::int32_t>& runs) const {
+    for (std::size_t k = 0; k + 1 < runs.size(); k += 2) {
+        const auto first = static_cast<std::size_t>(runs[k]);
+        const auto end = static_cast<std::size_t>(runs[k + 1]);
+        std::size_t w = first >> 6;
+        const std::size_t last = (end - 1) >> 6;
+        std::uint64_t mask = ~std::uint64_t{0} << (first & 63);
+        for (; w < last; ++w, mask = ~std::uint64_t{0}) {
+            if ((visible_[w] & mask) != 0) {
+                return false;
+            }
+        }
+        mask &= ~std::uint64_t{0} >> (63 - ((end - 1) & 63));
+        if ((visible_[w] & mask) != 0) {
+            return false;
+        }
+    }
+    return true;
+}
+
+bool BakedRegionVisibility::box_hidden(const Aabb& box) const {
+    return active_ && table_->open_runs_of(box, scratch_) && hidden(scratch_);
+}
+
+Visibility BakedRegionVisibility::test_box(const Aabb& box) const {
+    if (box_hidden(box)) {
+        return Visibility::occluded;
+    }
+    return next_ ? next_->test_box(box) : Visibility::visible;
+}
+
+Visibility BakedRegionVisibility::test_box_quick(const Aabb& box) const {
+    if (box_hidden(box)) {
+        return Visibility::occluded;
+    }
+    return next_ ? next_->test_box_quick(box) : Visibility::visible;
+}
+
+Visibility BakedRegionVisibility::test_box_hinted(const Aabb& box, std::uint32_t& hint) const {
+    if (box_hidden(box)) {
+        return Visibility::occluded;
+    }
+    return next_ ? next_->test_box_hinted(box, hint) : Visibility::visible;
+}
+
+void BakedRegionVisibility::prepare(const Aabb& box, PreparedBox& out) const {
+    out.box = box;
+    out.prepared = table_->open_runs_of(box, out.keys);
+    if (next_ && next_->has_prepared_stage()) {
+        out.inner.resize(1);
+        next_->prepare(box, out.inner.front());
+    } else {
+        out.inner.clear();
+    }
+}
+
+// The next stage gets its own preparation of the box when it has one (same box).
+Visibility BakedRegionVisibility::test_prepared(const PreparedBox& p) const {
+    if (active_ && p.prepared && hidden(p.keys)) {
+        return Visibility::occluded;
+    }
+    if (!next_) {
+        return Visibility::visible;
+    }
+    return p.inner.empty() ? next_->test_box(p.box) : next_->test_prepared(p.inner.front());
+}
+
+Visibility BakedRegionVisibility::test_prepared_quick(const PreparedBox& p) const {
+    if (active_ && p.prepared && hidden(p.keys)) {
+        return Visibility::occluded;
+    }
+    if (!next_) {
+        return Visibility::visible;
+    }
+    return p.inner.empty() ? next_->test_box_quick(p.box)
+                           : next_->test_prepared_quick(p.inner.front());
+}
+
+Visibility BakedRegionVisibility::test_prepared_hinted(const PreparedBox& p,
+                                                       std::uint32_t& hint) const {
+    if (active_ && p.prepared && hidden(p.keys)) {
+        return Visibility::occluded;
+    }
+    if (!next_) {
+        return Visibility::visible;
+    }
+    return p.inner.empty() ? next_->test_box_hinted(p.box, hint)
+                           : next_->test_prepared_hinted(p.inner.front(), hint);
+}
+
+Visibility BakedRegionVisibility::test_prepared_coarse(const PreparedBox& p) const {
+    return active_ && p.prepared && hidden(p.keys) ? Visibility::occluded : Visibility::visible;
+}
+
+RegionVisibilityFactory with_baked_stage(std::shared_ptr<const CellVisibilityTable> table,
+                                         RegionVisibilityFactory make_next) {
+    if (table == nullptr) {
+        return make_next;
+    }
+    return [table = std::move(table), make_next = std::move(make_next)] {
+        return std::make_unique<BakedRegionVisibility>(table, make_next ? make_next() : nullptr);
+    };
+}
+
+} // namespace dsoc::visibility

@@ -1,0 +1,510 @@
+#include "dsoc/visibility/cell_bake.hpp"
+
+#include "dsoc/visibility/reference_visibility.hpp"
+#include "dsoc/visibility/shaft_occlusion.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstddef>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <thread>
+
+namespace dsoc::visibility {
+
+namespace {
+
+/// How far inside every plane each corner of a solid cell lies. [Units: world units]
+constexpr float kSolidMargin = 1.0f / 64.0f;
+/// Points outside every occluder kept per open cell for witness segments.
+constexpr int kSamplesPerCell = 8;
+
+/// One level of the block hierarchy: level l holds blocks of 2^l cells per side.
+/// Per block: its open cells, the box of those cells, a representative point (the
+/// centre of its open cell nearest the block's centre) and the pruner's keys.
+struct Level {
+    glm::ivec3 dims{0};
+    std::vector<std::uint32_t> open_start; ///< CSR into `open`, one more than blocks
+    std::vector<OpenCell> open;
+    std::vector<Aabb> box;
+    std::vector<glm::vec3> rep;
+    std::vector<std::uint32_t> key_start;
+    std::vector<std::int32_t> keys;
+
+    [[nodiscard]] std::size_t size() const { return box.size(); }
+    [[nodiscard]] std::uint32_t index(glm::ivec3 b) const {
+        return static_cast<std::uint32_t>((b.z * dims.y + b.y) * dims.x + b.x);
+    }
+    [[nodiscard]] std::span<const OpenCell> cells(std::uint32_t i) const {
+        return {open.data() + open_start[i], open_start[i + 1] - open_start[i]};
+    }
+    [[nodiscard]] std::span<const std::int32_t> keys_of(std::uint32_t i) const {
+        return {keys.data() + key_start[i], key_start[i + 1] - key_start[i]};
+    }
+    [[nodiscard]] bool empty(std::uint32_t i) const { return open_start[i] == open_start[i + 1]; }
+};
+
+struct Node {
+    int level;
+    std::uint32_t index;
+};
+
+class Baker {
+public:
+    Baker(const OccluderScene& scene, const CellGrid& grid, const CellBakeConfig& config,
+          const BakePruner* pruner, CellVisibilityTable& table)
+        : scene_(scene), grid_(grid), config_(config), pruner_(pruner), table_(table) {
+        build_levels();
+        build_samples();
+    }
+
+    void run(CellBakeStats& stats, const BakeProgress& progress);
+
+private:
+    struct Worker {
+        ShaftOcclusion::Scratch shaft;
+        OccluderGrid::Scratch segment;
+        CellBakeStats stats;
+        std::mt19937 random{0x5eed};
+    };
+
+    void build_levels();
+    /// Up to kSamplesPerCell points of each open cell outside every occluder.
+    void build_samples();
+    [[nodiscard]] glm::vec3 random_sample(Worker& w, Node n) const;
+    void resolve_self(Worker& w, Node a);
+    void resolve(Worker& w, Node a, Node b);
+    void mark_all(Node a, Node b);
+    [[nodiscard]] bool segment_clear(Worker& w, glm::vec3 p, glm::vec3 q) const;
+    /// True when one of config_.witness_segments segments between the blocks is clear.
+    [[nodiscard]] bool witness(Worker& w, Node a, Node b) const;
+    [[nodiscard]] bool exact_hidden(Worker& w, const Aabb& region, const Aabb& box,
+                                    int level) const;
+    template <typename F>
+    void for_children(Node n, F&& f) const;
+
+    const OccluderScene& scene_;
+    const CellGrid& grid_;
+    const CellBakeConfig& config_;
+    const BakePruner* pruner_;
+    CellVisibilityTable& table_;
+    std::vector<Level> levels_;
+    std::vector<std::uint32_t> sample_start_; ///< CSR by open cell into samples_
+    std::vector<glm::vec3> samples_;
+};
+
+void Baker::build_samples() {
+    const OccluderWorld& world = scene_.world;
+    std::mt19937 random(0x5a3b1e5u);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    const auto open = [&](glm::vec3 p) {
+        for (const OccluderId id : scene_.grid->items_at(p)) {
+            if (world.occluder(id).bounds().contains(p) && world.occluder(id).contains(p)) {
+                return false;
+            }
+        }
+        return true;
+    };
+    sample_start_.assign(1, 0);
+    for (const std::uint32_t cell : table_.open_cells()) {
+        const Aabb box = grid_.cell_box(grid_.coords(cell));
+        int kept = 0;
+        if (open(box.center())) {
+            samples_.push_back(box.center());
+            ++kept;
+        }
+        for (int tries = 0; tries < 4 * kSamplesPerCell && kept < kSamplesPerCell; ++tries) {
+            const glm::vec3 p =
+                box.min + glm::vec3(unit(random), unit(random), unit(random)) * box.size();
+            if (open(p)) {
+                samples_.push_back(p);
+                ++kept;
+            }
+        }
+        if (kept == 0) {
+            samples_.push_back(box.center()); // all solid as far as we looked
+        }
+        sample_start_.push_back(static_cast<std::uint32_t>(samples_.size()));
+    }
+}
+
+glm::vec3 Baker::random_sample(Worker& w, Node n) const {
+    const auto cells = levels_[static_cast<std::size_t>(n.level)].cells(n.index);
+    const auto c = static_cast<std::size_t>(
+        cells[std::uniform_int_distribution<std::size_t>(0, cells.size() - 1)(w.random)]);
+    const std::uint32_t first = sample_start_[c];
+    const std::uint32_t count = sample_start_[c + 1] - first;
+    return samples_[first + std::uniform_int_distribution<std::uint32_t>(0, count - 1)(w.random)];
+}
+
+void Baker::build_levels() {
+    const int top = config_.top_level;
+    levels_.resize(static_cast<std::size_t>(top) + 1);
+    std::vector<glm::vec3> centre(table_.open_count());
+    {
+        Level& l0 = levels_[0];
+        l0.dims = grid_.dims;
+        const std::size_t n = grid_.cell_count();
+        l0.open_start.reserve(n + 1);
+        l0.open_start.push_back(0);
+        l0.box.resize(n);
+        l0.rep.resize(n);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const Aabb box = grid_.cell_box(grid_.coords(i));
+            const OpenCell c = table_.open_index(i);
+            if (c != kSolidCell) {
+                l0.open.push_back(c);
+                l0.box[i] = box;
+                l0.rep[i] = box.center();
+                centre[static_cast<std::size_t>(c)] = box.center();
+            }
+            l0.open_start.push_back(static_cast<std::uint32_t>(l0.open.size()));
+        }
+    }
+    for (int l = 1; l <= top; ++l) {
+        const Level& below = levels_[static_cast<std::size_t>(l) - 1];
+        Level& level = levels_[static_cast<std::size_t>(l)];
+        level.dims = (below.dims + 1) / 2;
+        const std::size_t n = static_cast<std::size_t>(level.dims.x) * level.dims.y * level.dims.z;
+        level.open_start.reserve(n + 1);
+        level.open_start.push_back(0);
+        level.box.resize(n);
+        level.rep.resize(n);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const int x = static_cast<int>(i % static_cast<std::uint32_t>(level.dims.x));
+            const int y = static_cast<int>(i / static_cast<std::uint32_t>(level.dims.x) %
+                                           static_cast<std::uint32_t>(level.dims.y));
+            const int z = static_cast<int>(i / static_cast<std::uint32_t>(level.dims.x) /
+                                           static_cast<std::uint32_t>(level.dims.y));
+            Aabb box;
+            for (int k = 0; k < 8; ++k) {
+                const glm::ivec3 c{2 * x + (k & 1), 2 * y + (k >> 1 & 1), 2 * z + (k >> 2 & 1)};
+                if (c.x >= below.dims.x || c.y >= below.dims.y || c.z >= below.dims.z) {
+                    continue;
+                }
+                const std::uint32_t child = below.index(c);
+                if (below.empty(child)) {
+                    continue;
+                }
+                const auto cells = below.cells(child);
+                level.open.insert(level.open.end(), cells.begin(), cells.end());
+                box.extend(below.box[child]);
+            }
+            level.open_start.push_back(static_cast<std::uint32_t>(level.open.size()));
+            level.box[i] = box;
+            if (!box.is_empty()) {
+                const glm::vec3 mid = box.center();
+                float best = std::numeric_limits<float>::max();
+                for (const OpenCell c : level.cells(i)) {
+                    const glm::vec3 d = centre[static_cast<std::size_t>(c)] - mid;
+                    const float d2 = glm::dot(d, d);
+                    if (d2 < best) {
+                        best = d2;
+                        level.rep[i] = centre[static_cast<std::size_t>(c)];
+                    }
+                }
+            }
+        }
+    }
+    std::vector<std::int32_t> keys;
+    for (Level& level : levels_) {
+        level.key_start.assign(1, 0);
+        for (std::uint32_t i = 0; i < level.size(); ++i) {
+            if (pruner_ != nullptr && !level.empty(i)) {
+                pruner_->keys(level.box[i], keys);
+                level.keys.insert(level.keys.end(), keys.begin(), keys.end());
+            }
+            level.key_start.push_back(static_cast<std::uint32_t>(level.keys.size()));
+        }
+    }
+}
+
+template <typename F>
+void Baker::for_children(Node n, F&& f) const {
+    const Level& level = levels_[static_cast<std::size_t>(n.level)];
+    const Level& below = levels_[static_cast<std::size_t>(n.level) - 1];
+    const int x = static_cast<int>(n.index % static_cast<std::uint32_t>(level.dims.x));
+    const int y = static_cast<int>(n.index / static_cast<std::uint32_t>(level.dims.x) %
+                                   static_cast<std::uint32_t>(level.dims.y));
+    const int z = static_cast<int>(n.index / static_cast<std::uint32_t>(level.dims.x) /
+                                   static_cast<std::uint32_t>(level.dims.y));
+    for (int k = 0; k < 8; ++k) {
+        const glm::ivec3 c{2 * x + (k & 1), 2 * y + (k >> 1 & 1), 2 * z + (k >> 2 & 1)};
+        if (c.x < below.dims.x && c.y < below.dims.y && c.z < below.dims.z) {
+            const std::uint32_t child = below.index(c);
+            if (!below.empty(child)) {
+                f(Node{n.level - 1, child});
+            }
+        }
+    }
+}
+
+bool Baker::segment_clear(Worker& w, glm::vec3 p, glm::vec3 q) const {
+    const OccluderWorld& world = scene_.world;
+    scene_.grid->query_segment(p, q, w.segment);
+    for (const OccluderId id : w.segment.found) {
+        const Aabb& solid = world.solid_box(id);
+        const bool blocked = solid.is_empty() ? segment_blocked_by(p, q, world.solid_planes(id))
+                                              : segment_through_box(p, q, solid);
+        if (blocked) {
+            return false;
+        }
+    }
+    return true;
+}
+
+bool Baker::witness(Worker& w, Node a, Node b) const {
+    const Level& la = levels_[static_cast<std::size_t>(a.level)];
+    const Level& lb = levels_[static_cast<std::size_t>(b.level)];
+    ++w.stats.witness_rays;
+    if (segment_clear(w, la.rep[a.index], lb.rep[b.index])) {
+        return true;
+    }
+    for (int k = 1; k < config_.witness_segments; ++k) {
+        ++w.stats.witness_rays;
+        if (segment_clear(w, random_sample(w, a), random_sample(w, b))) {
+            return true;
+        }
+    }
+    return false;
+}
+
+bool Baker::exact_hidden(Worker& w, const Aabb& region, const Aabb& box, int level) const {
+    ++w.stats.exact_tests;
+    ++w.stats.exact_by_level[level];
+    const ShaftOcclusion shaft(scene_.world, *scene_.grid, true, config_.portal_depth);
+    const bool hidden = shaft.test(region, box, w.shaft) == Visibility::occluded;
+    w.stats.exact_hidden += hidden ? 1 : 0;
+    w.stats.hidden_by_level[level] += hidden ? 1 : 0;
+    return hidden;
+}
+
+void Baker::mark_all(Node a, Node b) {
+    const auto ca = levels_[static_cast<std::size_t>(a.level)].cells(a.index);
+    const auto cb = levels_[static_cast<std::size_t>(b.level)].cells(b.index);
+    for (const OpenCell x : ca) {
+        for (const OpenCell y : cb) {
+            table_.set_visible_atomic(x, y);
+        }
+    }
+}
+
+void Baker::resolve_self(Worker& w, Node a) {
+    if (a.level == 0) {
+        const OpenCell c = levels_[0].cells(a.index)[0];
+        table_.set_visible_atomic(c, c);
+        return;
+    }
+    Node children[8];
+    int n = 0;
+    for_children(a, [&](Node c) { children[n++] = c; });
+    for (int i = 0; i < n; ++i) {
+        resolve_self(w, children[i]);
+        for (int j = i + 1; j < n; ++j) {
+            resolve(w, children[i], children[j]);
+        }
+    }
+}
+
+void Baker::resolve(Worker& w, Node a, Node b) {
+    ++w.stats.pair_visits;
+    const Level& la = levels_[static_cast<std::size_t>(a.level)];
+    const Level& lb = levels_[static_cast<std::size_t>(b.level)];
+    if (pruner_ != nullptr && pruner_->hidden(la.keys_of(a.index), lb.keys_of(b.index))) {
+        ++w.stats.pruned;
+        return;
+    }
+    const bool clear = witness(w, a, b);
+    const bool leaves = a.level == 0 && b.level == 0;
+    if (clear) {
+        ++w.stats.witness_clear;
+        if (a.level <= config_.witness_stop_level && b.level <= config_.witness_stop_level) {
+            mark_all(a, b);
+            return;
+        }
+    } else {
+        const int level = std::max(a.level, b.level);
+        if (exact_hidden(w, la.box[a.index], lb.box[b.index], level)) {
+            return;
+        }
+        if (leaves) {
+            if (config_.both_directions && exact_hidden(w, lb.box[b.index], la.box[a.index], 0)) {
+                return;
+            }
+            mark_all(a, b);
+            return;
+        }
+    }
+    // Refine the larger block (both are never leaves here).
+    if (a.level >= b.level) {
+        for_children(a, [&](Node c) { resolve(w, c, b); });
+    } else {
+        for_children(b, [&](Node c) { resolve(w, a, c); });
+    }
+}
+
+void Baker::run(CellBakeStats& stats, const BakeProgress& progress) {
+    const auto start = std::chrono::steady_clock::now();
+    const int top = config_.top_level;
+    const Level& level = levels_[static_cast<std::size_t>(top)];
+    std::vector<std::uint32_t> blocks;
+    for (std::uint32_t i = 0; i < level.size(); ++i) {
+        if (!level.empty(i)) {
+            blocks.push_back(i);
+        }
+    }
+    // Every unordered pair of top blocks, a block with itself included; shuffled so
+    // that the cost is spread evenly over time (progress and ETA stay honest).
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> work;
+    work.reserve(blocks.size() * (blocks.size() + 1) / 2);
+    for (std::size_t i = 0; i < blocks.size(); ++i) {
+        for (std::size_t j = i; j < blocks.size(); ++j) {
+            work.emplace_back(blocks[i], blocks[j]);
+        }
+    }
+    std::shuffle(work.begin(), work.end(), std::mt19937_64(0x5eedba4e));
+
+    unsigned threads = config_.threads > 0 ? static_cast<unsigned>(config_.threads)
+                                           : std::max(1u, std::thread::hardware_concurrency());
+    threads =
+        std::min<unsigned>(threads, static_cast<unsigned>(std::max<std::size_t>(1, work.size())));
+    std::atomic<std::size_t> next{0};
+    std::atomic<std::size_t> done{0};
+    std::vector<Worker> workers(threads);
+    const auto body = [&](unsigned t) {
+        Worker& w = workers[t];
+        auto last_report = std::chrono::steady_clock::now();
+        for (std::size_t k = next.fetch_add(1); k < work.size(); k = next.fetch_add(1)) {
+            const auto [i, j] = work[k];
+            if (i == j) {
+                resolve_self(w, Node{top, i});
+            } else {
+                resolve(w, Node{top, i}, Node{top, j});
+            }
+            const std::size_t finished = done.fetch_add(1) + 1;
+            if (t == 0 && progress) {
+                const auto now = std::chrono::steady_clock::now();
+                if (now - last_report > std::chrono::milliseconds(500)) {
+                    last_report = now;
+                    progress(static_cast<double>(finished) / static_cast<double>(work.size()),
+                             std::chrono::duration<double>(now - start).count());
+                }
+            }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (unsigned t = 1; t < threads; ++t) {
+        pool.emplace_back(body, t);
+    }
+    body(0);
+    for (auto& th : pool) {
+        th.join();
+    }
+    for (const Worker& w : workers) {
+        stats.pair_visits += w.stats.pair_visits;
+        stats.pruned += w.stats.pruned;
+        stats.witness_rays += w.stats.witness_rays;
+        stats.witness_clear += w.stats.witness_clear;
+        stats.exact_tests += w.stats.exact_tests;
+        stats.exact_hidden += w.stats.exact_hidden;
+        for (int l = 0; l < 7; ++l) {
+            stats.exact_by_level[l] += w.stats.exact_by_level[l];
+            stats.hidden_by_level[l] += w.stats.hidden_by_level[l];
+        }
+    }
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (progress) {
+        progress(1.0, stats.seconds);
+    }
+}
+
+bool inside_interior(const OccluderWorld& world, OccluderId id, const Aabb& box) {
+    for (const Plane& p : world.solid_planes(id)) {
+        for (int k = 0; k < 8; ++k) {
+            const glm::vec3 corner{(k & 1) != 0 ? box.max.x : box.min.x,
+                                   (k & 2) != 0 ? box.max.y : box.min.y,
+                                   (k & 4) != 0 ? box.max.z : box.min.z};
+            if (p.signed_distance(corner) > -kSolidMargin) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
+} // namespace
+
+std::vector<std::string> validate(const CellBakeConfig& c) {
+    std::vector<std::string> problems;
+    if (!(c.cell_size >= 4.0f && c.cell_size <= 1024.0f)) {
+        problems.push_back("cell_size must be within 4..1024 world units");
+    }
+    if (c.threads < 0 || c.threads > 256) {
+        problems.push_back("threads must be within 0..256");
+    }
+    if (c.portal_depth < 0 || c.portal_depth > 4) {
+        problems.push_back("portal_depth must be within 0..4");
+    }
+    if (c.top_level < 0 || c.top_level > 6) {
+        problems.push_back("top_level must be within 0..6");
+    }
+    if (c.witness_segments < 1 || c.witness_segments > 64) {
+        problems.push_back("witness_segments must be within 1..64");
+    }
+    if (c.witness_stop_level < 0 || c.witness_stop_level > 3) {
+        problems.push_back("witness_stop_level must be within 0..3");
+    }
+    return problems;
+}
+
+std::vector<std::uint32_t> open_cells_of(const OccluderScene& scene, const CellGrid& grid,
+                                         const BakePruner* pruner) {
+    std::vector<std::uint32_t> open;
+    OccluderGrid::Scratch scratch;
+    const auto n = static_cast<std::uint32_t>(grid.cell_count());
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const Aabb box = grid.cell_box(grid.coords(i));
+        bool solid = pruner != nullptr && pruner->empty_space(box);
+        if (!solid && scene.grid != nullptr) {
+            scene.grid->query(box, scratch);
+            for (const OccluderId id : scratch.found) {
+                if (scene.world.occluder(id).bounds().contains(box) &&
+                    inside_interior(scene.world, id, box)) {
+                    solid = true;
+                    break;
+                }
+            }
+        }
+        if (!solid) {
+            open.push_back(i);
+        }
+    }
+    return open;
+}
+
+CellVisibilityTable bake_cell_visibility(const OccluderScene& scene, const CellGrid& grid,
+                                         const CellBakeConfig& config, const BakePruner* pruner,
+                                         CellBakeStats* stats, const BakeProgress& progress) {
+    if (const auto problems = validate(config); !problems.empty()) {
+        throw std::invalid_argument("CellBakeConfig: " + problems.front());
+    }
+    if (scene.grid == nullptr) {
+        throw std::invalid_argument("bake_cell_visibility: the scene has no occluder grid");
+    }
+    CellVisibilityTable table(grid, open_cells_of(scene, grid, pruner));
+    CellBakeStats local;
+    local.cells = grid.cell_count();
+    local.open_cells = table.open_count();
+    if (table.open_count() > 0) {
+        Baker baker(scene, grid, config, pruner, table);
+        baker.run(local, progress);
+    }
+    if (stats != nullptr) {
+        *stats = local;
+    }
+    return table;
+}
+
+} // namespace dsoc::visibility
