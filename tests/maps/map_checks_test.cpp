@@ -40,6 +40,17 @@ std::string codes(const std::vector<MapFinding>& findings) {
     return out;
 }
 
+/// Expects the finding `code`, of `severity`, whose text holds every one of `parts`.
+void expect_finding(const std::vector<MapFinding>& findings, const std::string& code,
+                    FindingSeverity severity, std::initializer_list<const char*> parts) {
+    const MapFinding* f = find(findings, code);
+    ASSERT_NE(f, nullptr) << code << " missing from:\n" << codes(findings);
+    EXPECT_EQ(f->severity, severity) << code;
+    for (const char* part : parts) {
+        EXPECT_NE(f->text.find(part), std::string::npos) << "'" << part << "' not in " << f->text;
+    }
+}
+
 TEST(MapChecks, SoundMapsHaveNoFindings) {
     EXPECT_EQ(codes(check_map(text_map("spawn 0 0 25 90\n"))), "");
     EXPECT_EQ(codes(check_map(build_map(generate_rooms({}), "gen:rooms"))), "");
@@ -63,35 +74,28 @@ TEST(MapChecks, NoOccludersIsAWarning) {
                                "glass.dsocmap");
     ASSERT_TRUE(spec.ok()) << spec.error().message();
     const auto findings = check_map(build_map(spec.value(), "glass.dsocmap"));
-    const MapFinding* f = find(findings, "no_occluders");
-    ASSERT_NE(f, nullptr) << codes(findings);
-    EXPECT_EQ(f->severity, FindingSeverity::warning);
-    EXPECT_NE(f->text.find("occlusion culling hides nothing"), std::string::npos) << f->text;
+    expect_finding(findings, "no_occluders", FindingSeverity::warning,
+                   {"occlusion culling hides nothing"});
     EXPECT_FALSE(any_unusable(findings)) << codes(findings);
 }
 
 TEST(MapChecks, SpawnsOutsideTheWorldAreWarnedAndAllOutsideIsUnusable) {
     const auto some = check_map(text_map("spawn 0 0 25\nspawn 5000 0 25\nspawn 0 0 -400\n"));
-    const MapFinding* f = find(some, "spawn_outside_world");
-    ASSERT_NE(f, nullptr) << codes(some);
-    EXPECT_NE(f->text.find("2 of 3 spawn points"), std::string::npos) << f->text;
-    EXPECT_NE(f->text.find("#1 at (5000 0 25)"), std::string::npos) << f->text;
+    expect_finding(some, "spawn_outside_world", FindingSeverity::warning,
+                   {"2 of 3 spawn points", "#1 at (5000 0 25)"});
     EXPECT_FALSE(any_unusable(some)) << codes(some);
 
     // A roofless map's spawn above its walls is inside; far above is not.
     EXPECT_EQ(find(check_map(text_map("spawn 0 0 300\n")), "spawn_outside_world"), nullptr);
     const auto all = check_map(text_map("spawn 5000 0 25\nspawn 0 0 5000\n"));
-    ASSERT_NE(find(all, "no_usable_spawn_point"), nullptr) << codes(all);
-    EXPECT_TRUE(any_unusable(all));
+    expect_finding(all, "no_usable_spawn_point", FindingSeverity::unusable, {"no player"});
 }
 
 TEST(MapChecks, SpawnsInsideSolidAreWarned) {
     // Inside the pillar, and one just resting on its top face (not inside).
     const auto findings = check_map(text_map("spawn 150 150 64\nspawn 150 150 128.5\n"));
-    const MapFinding* f = find(findings, "spawn_in_solid");
-    ASSERT_NE(f, nullptr) << codes(findings);
-    EXPECT_NE(f->text.find("1 of 2 spawn points"), std::string::npos) << f->text;
-    EXPECT_NE(f->text.find("#0 at (150 150 64)"), std::string::npos) << f->text;
+    expect_finding(findings, "spawn_in_solid", FindingSeverity::warning,
+                   {"1 of 2 spawn points", "#0 at (150 150 64)"});
     EXPECT_FALSE(any_unusable(findings));
     EXPECT_TRUE(any_unusable(check_map(text_map("spawn 150 150 64\n"))));
 }
@@ -99,15 +103,13 @@ TEST(MapChecks, SpawnsInsideSolidAreWarned) {
 TEST(MapChecks, SpawnsInsideAHazardAreWarned) {
     const auto findings = check_map(text_map("spawn 0 0 25\nspawn -300 -300 25\n"
                                              "hazard -400 -400 0 -200 -200 64\n"));
-    ASSERT_NE(find(findings, "spawn_in_hazard"), nullptr) << codes(findings);
+    expect_finding(findings, "spawn_in_hazard", FindingSeverity::warning,
+                   {"1 of 2 spawn points", "#1 at (-300 -300 25)"});
     EXPECT_FALSE(any_unusable(findings));
 }
 
 TEST(MapChecks, NoSpawnPointsIsUnusable) {
-    const auto findings = check_map(text_map(""));
-    const MapFinding* f = find(findings, "no_spawn_points");
-    ASSERT_NE(f, nullptr) << codes(findings);
-    EXPECT_EQ(f->severity, FindingSeverity::unusable);
+    expect_finding(check_map(text_map("")), "no_spawn_points", FindingSeverity::unusable, {});
 }
 
 TEST(MapChecks, EmptyWorldWarnsOfEverything) {
@@ -143,10 +145,8 @@ TEST(MapChecks, BrushesWithNonFinitePlanesAreLeftOutAndWarned) {
     spec.brushes.push_back(bad);
     spec.spawn_points.push_back({{0, 0, 25}});
     const auto findings = check_map(build_map(spec, "spec"));
-    const MapFinding* f = find(findings, "degenerate_brushes");
-    ASSERT_NE(f, nullptr) << codes(findings);
-    EXPECT_NE(f->text.find("1 of 2"), std::string::npos) << f->text;
-    EXPECT_NE(f->text.find("non-finite 1"), std::string::npos) << f->text;
+    expect_finding(findings, "degenerate_brushes", FindingSeverity::warning,
+                   {"1 of 2", "non-finite 1"});
     EXPECT_FALSE(any_unusable(findings)) << codes(findings);
 }
 
