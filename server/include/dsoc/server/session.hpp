@@ -82,7 +82,8 @@ public:
     /// queues a Disconnect with `reason` behind it, grows the socket's send buffer so
     /// that both go to the kernel at once, stops handling messages and half-closes;
     /// the socket is closed when the peer closes or after a 1 s grace period. A client
-    /// that reads again, however late, receives the reason, then end-of-file.
+    /// that reads again, even after that, receives the reason, then end-of-file
+    /// (within the kernel's limits: net.core.wmem_max, the life of an orphaned socket).
     void disconnect(protocol::pb::DisconnectReason reason, const std::string& text);
 
     [[nodiscard]] State state() const { return state_; }
