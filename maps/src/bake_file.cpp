@@ -1,5 +1,6 @@
 #include "dsoc/maps/bake_file.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -13,8 +14,12 @@ namespace {
 constexpr char kMagic[8] = {'D', 'S', 'O', 'C', 'B', 'A', 'K', 'E'};
 constexpr std::size_t kHeaderBytes = 80;
 constexpr std::size_t kChecksumOffset = 64;
-/// Grids larger than this many cells are refused (2^28: 268M cells).
-constexpr std::uint64_t kMaxGridCells = std::uint64_t{1} << 28;
+/// Grids larger than this many cells are refused (2^24: 16.7M cells, 128 MiB of
+/// per-cell indexes when loaded; the bake's 64 MiB table budget keeps real grids far
+/// below it).
+constexpr std::uint64_t kMaxGridCells = std::uint64_t{1} << 24;
+/// Grid cells allowed per open cell (at least 64 open cells counted).
+constexpr std::uint64_t kCellsPerOpenCell = 1024;
 
 static_assert(std::endian::native == std::endian::little,
               "the .dsocbake layout is little-endian; add byte swaps for this target");
@@ -129,8 +134,10 @@ std::vector<std::byte> encode_bake(const visibility::CellVisibilityTable& table,
     put<std::uint32_t>(out, 52, static_cast<std::uint32_t>(open));
     put<std::uint64_t>(out, 56, table.words_per_row());
     put<std::uint64_t>(out, 72, 0);
-    std::memcpy(out.data() + kHeaderBytes, table.open_cells().data(), open * 4);
-    std::memcpy(out.data() + kHeaderBytes + list, words.data(), words.size() * 8);
+    if (open > 0) { // memcpy from an empty vector's null data() is undefined
+        std::memcpy(out.data() + kHeaderBytes, table.open_cells().data(), open * 4);
+        std::memcpy(out.data() + kHeaderBytes + list, words.data(), words.size() * 8);
+    }
     put<std::uint64_t>(out, kChecksumOffset, checksum_of_file(out));
     return out;
 }
@@ -176,6 +183,13 @@ Result<visibility::CellVisibilityTable> decode_bake(std::span<const std::byte> b
     }
     const std::uint64_t open = get<std::uint32_t>(bytes, 52);
     const std::uint64_t words_per_row = get<std::uint64_t>(bytes, 56);
+    // Real grids hold at most a few grid cells per open cell (the bake's grid is the
+    // map's bounds); a grid far larger than its open cells would only cost memory.
+    if (grid.cell_count() > kCellsPerOpenCell * std::max<std::uint64_t>(open, 64)) {
+        return fail("header", std::to_string(grid.cell_count()) + " grid cells for " +
+                                  std::to_string(open) + " open cells: more than " +
+                                  std::to_string(kCellsPerOpenCell) + " per open cell");
+    }
     if (open > grid.cell_count()) {
         return fail("header", "more open cells (" + std::to_string(open) + ") than cells (" +
                                   std::to_string(grid.cell_count()) + ")");
@@ -206,7 +220,9 @@ Result<visibility::CellVisibilityTable> decode_bake(std::span<const std::byte> b
                                   std::to_string(*expected_key) + ")");
     }
     std::vector<std::uint32_t> cells(open);
-    std::memcpy(cells.data(), bytes.data() + kHeaderBytes, open * 4);
+    if (open > 0) {
+        std::memcpy(cells.data(), bytes.data() + kHeaderBytes, open * 4);
+    }
     for (std::size_t i = 0; i < cells.size(); ++i) {
         if (cells[i] >= grid.cell_count() || (i > 0 && cells[i] <= cells[i - 1])) {
             return fail("open cells",
@@ -215,8 +231,10 @@ Result<visibility::CellVisibilityTable> decode_bake(std::span<const std::byte> b
     }
     visibility::CellVisibilityTable table(grid, std::move(cells));
     auto words = table.words();
-    std::memcpy(words.data(), bytes.data() + kHeaderBytes + open_list_bytes(open),
-                words.size() * 8);
+    if (!words.empty()) {
+        std::memcpy(words.data(), bytes.data() + kHeaderBytes + open_list_bytes(open),
+                    words.size() * 8);
+    }
     if (open % 64 != 0) {
         const std::uint64_t beyond = ~std::uint64_t{0} << (open % 64);
         for (std::size_t r = 0; r < open; ++r) {

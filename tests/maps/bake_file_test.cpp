@@ -119,6 +119,12 @@ TEST_F(BakeFileTest, EveryKindOfDamageIsRefusedNamingTheFileAndWhat) {
     const std::int32_t huge = 1 << 30;
     std::memcpy(dims.data() + 40, &huge, 4);
     cases.push_back({"absurd grid", dims, "grid dimensions"});
+    auto sparse = good; // a grid far larger than its open cells (allocation guard)
+    const std::int32_t side = 200;
+    for (int axis = 0; axis < 3; ++axis) {
+        std::memcpy(sparse.data() + 40 + 4 * axis, &side, 4);
+    }
+    cases.push_back({"grid much larger than its open cells", sparse, "per open cell"});
     for (const Damage& d : cases) {
         const auto r = decode_bake(d.bytes, "t.dsocbake", baked->key);
         ASSERT_FALSE(r.ok()) << d.kind << " was accepted";
@@ -172,6 +178,17 @@ TEST_F(BakeFileTest, AChangedMapIsBakedAnewNotServedTheOldTable) {
     EXPECT_FALSE(planted->from_cache);
     EXPECT_NE(planted->cache_problem.find("another map"), std::string::npos)
         << planted->cache_problem;
+}
+
+TEST(BakeFile, ATableWithNoOpenCellsSurvivesTheRoundTrip) {
+    visibility::CellGrid grid;
+    grid.cell_size = 32.0f;
+    grid.dims = {4, 4, 2};
+    const visibility::CellVisibilityTable empty(grid, {});
+    const auto decoded = decode_bake(encode_bake(empty, 42), "empty", 42);
+    ASSERT_TRUE(decoded.ok()) << decoded.error().message();
+    EXPECT_EQ(decoded->open_count(), 0u);
+    EXPECT_EQ(decoded->grid().dims, grid.dims);
 }
 
 TEST(BakeKey, DependsOnTheSettingsThatChangeTheTableOnly) {
