@@ -1,9 +1,16 @@
 #include "dsoc/server/interest_policy.hpp"
 
+#include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/maps/pvs_region_visibility.hpp"
 #include "dsoc/server/culling_policy.hpp"
 #include "dsoc/server/dsoc_settings.hpp"
+#include "dsoc/visibility/baked_region_visibility.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <stdexcept>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -65,6 +72,37 @@ void PvsPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
     }
 }
 
+std::shared_ptr<const visibility::CellVisibilityTable>
+baked_table(const ServerConfig& config, const GameWorld& world,
+            const visibility::OccluderScene& scene) {
+    maps::BakeRequest request;
+    request.config.cell_size = config.bake_cell_size;
+    request.dir = config.bake_dir;
+    const std::string& name = world.map().name;
+    auto baked = maps::load_or_bake(world.map(), scene, request, [&](double f, double seconds) {
+        const double eta = f > 0.0 ? seconds * (1.0 - f) / f : 0.0;
+        std::fprintf(stderr, "\rbaking the cell visibility of %s: %5.1f%%, %.0f s, ETA %.0f s ",
+                     name.c_str(), 100.0 * f, seconds, eta);
+        if (f >= 1.0) {
+            std::fprintf(stderr, "\n");
+        }
+    });
+    if (!baked) {
+        throw std::runtime_error("baked stage: " + baked.error().message());
+    }
+    if (!baked->cache_problem.empty()) {
+        spdlog::warn("baked stage: cached table refused: {}", baked->cache_problem);
+    }
+    if (!baked->write_problem.empty()) {
+        spdlog::warn("baked stage: table not saved: {}", baked->write_problem);
+    }
+    spdlog::info("baked stage: {} {} ({} open cells of {:.0f} units, {:.1f} MiB)",
+                 baked->from_cache ? "loaded" : "baked and saved", baked->file.string(),
+                 baked->table->open_count(), static_cast<double>(baked->table->grid().cell_size),
+                 static_cast<double>(baked->table->memory_bytes()) / (1 << 20));
+    return baked->table;
+}
+
 std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const GameWorld& world) {
     if (config.policy == "broadcast") {
         return std::make_unique<BroadcastPolicy>();
@@ -85,6 +123,11 @@ std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const Ga
     auto make_culler = visibility::occluder_region_visibility(scene, culler);
     if (config.pvs_stage) { // the map's PVS over the reachable clusters first
         make_culler = maps::with_pvs_stage(world.map().pvs, std::move(make_culler));
+    }
+    if (config.baked_stage) { // the baked cell table before them (or alone)
+        make_culler =
+            visibility::with_baked_stage(baked_table(config, world, *scene),
+                                         config.exact_stages ? std::move(make_culler) : nullptr);
     }
     return std::make_unique<CullingPolicy>(config.policy, dsoc, world, std::move(make_culler),
                                            lookahead_ticks(config));

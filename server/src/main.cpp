@@ -54,6 +54,14 @@ void add_options(CLI::App& app, dsoc::server::ServerConfig& config, ProgramOptio
     app.add_option("--portal-depth", config.portal_depth,
                    "Levels of portal tests in the culler (0 = off; 2 = tightest, ~4x CPU)")
         ->capture_default_str();
+    app.add_option("--baked-stage", config.baked_stage,
+                   "The map's baked cell visibility table first (true/false; baked and cached "
+                   "on first start: dsoc-bake MAP does it ahead)");
+    app.add_option("--bake-cell-size", config.bake_cell_size, "Cell edge of the baked table")
+        ->capture_default_str();
+    app.add_option("--bake-dir", config.bake_dir, "Cache of baked tables");
+    app.add_option("--exact-stages", config.exact_stages,
+                   "false: the baked table alone, no PVS or shaft test (true/false)");
     app.add_option("--pvs-stage", config.pvs_stage,
                    "Reject with the map's PVS before the culler (true/false)")
         ->capture_default_str();

@@ -39,6 +39,12 @@ std::vector<std::string> validate(const ServerConfig& c) {
     check(p, c.portal_depth >= 0 && c.portal_depth <= visibility::ShaftOcclusion::kMaxPortalDepth,
           "portal_depth", "must be 0..4, got " + std::to_string(c.portal_depth));
     check(p,
+          std::isfinite(c.bake_cell_size) && c.bake_cell_size >= 4.0f &&
+              c.bake_cell_size <= 1024.0f,
+          "bake_cell_size", "must be 4..1024 units");
+    check(p, c.exact_stages || c.baked_stage, "exact_stages",
+          "false needs baked_stage = true (the baked table is then the only stage)");
+    check(p,
           std::isfinite(c.region_reuse_margin) && c.region_reuse_margin >= 0.0f &&
               c.region_reuse_margin <= 512.0f,
           "region_reuse_margin", "must be 0..512 units");

@@ -90,5 +90,79 @@ TEST(DsocWithoutAPvs, ZeroPopInOnAGeneratedCityWithEntityClusters) {
     }
 }
 
+/// dsoc-baked (the baked table, then the exact stages) and dsoc-table (the table
+/// alone, TBVs proven by it) judged every tick; returns the metrics by name.
+std::vector<PolicyMetrics> run_baked(EvalOptions options, const std::string& tag) {
+    const auto dir = std::filesystem::temp_directory_path() / ("dsoc-eval-bakes-" + tag);
+    std::filesystem::remove_all(dir);
+    options.bake_dir = dir.string();
+    options.policies = {"broadcast", "dsoc-baked", "dsoc-table"};
+    const EvalResult result = run_evaluation(options, nullptr);
+    std::filesystem::remove_all(dir);
+    EXPECT_GE(result.oracle_client_ticks, 5000u);
+    return result.policies;
+}
+
+void expect_no_popin_and_culling(const std::vector<PolicyMetrics>& policies, const std::string& map,
+                                 double max_kept) {
+    const PolicyMetrics* broadcast = nullptr;
+    for (const auto& m : policies) {
+        broadcast = m.name == "broadcast" ? &m : broadcast;
+    }
+    ASSERT_NE(broadcast, nullptr);
+    for (const auto& m : policies) {
+        if (m.name == "broadcast") {
+            continue;
+        }
+        EXPECT_EQ(m.popin_present, 0u) << m.name;
+        EXPECT_EQ(m.popin_lookahead, 0u) << m.name;
+        const double kept = static_cast<double>(m.replicated_pairs) /
+                            static_cast<double>(broadcast->replicated_pairs);
+        EXPECT_LT(kept, max_kept) << m.name;
+        std::printf("%s on %s: pop-in %llu / %llu, keeps %.1f%% of broadcast's pairs\n",
+                    m.name.c_str(), map.c_str(), static_cast<unsigned long long>(m.popin_present),
+                    static_cast<unsigned long long>(m.popin_lookahead), kept * 100.0);
+    }
+}
+
+TEST(DsocOnARealMap, ZeroPopInWithTheBakedStage) {
+    if (!std::filesystem::exists("/usr/share/games/openarena/baseoa/pak1-maps.pk3")) {
+        GTEST_SKIP() << "OpenArena maps not installed (scripts/setup installs openarena-081-maps)";
+    }
+    EvalOptions options;
+    Scenario& s = options.scenario;
+    s.name = "dsoc-baked-acceptance";
+    s.map = "oa_dm4";
+    s.viewers = 32;
+    s.bots = 96;
+    s.tick_rate = 30;
+    s.rtt_ms = 100;
+    s.interpolation_ms = 50;
+    s.duration_s = 8.0; // 240 ticks x 32 viewers = 7,680 client-ticks
+    s.oracle_every = 1;
+    s.seed = 19;
+    options.bake_cell_size = 64.0f; // bakes in seconds; the figures use 32
+    expect_no_popin_and_culling(run_baked(options, "oa_dm4"), "oa_dm4", 0.75);
+}
+
+TEST(DsocWithoutAPvs, ZeroPopInWithTheBakedStageOnAGeneratedCity) {
+    // No PVS: the table comes from the brushes alone.
+    EvalOptions options;
+    Scenario& s = options.scenario;
+    s.name = "dsoc-baked-city";
+    s.map = "gen:city";
+    s.city_blocks = 4;
+    s.viewers = 16;
+    s.bots = 300;
+    s.tick_rate = 30;
+    s.rtt_ms = 100;
+    s.interpolation_ms = 50;
+    s.duration_s = 11.0; // 330 ticks x 16 viewers = 5,280 client-ticks
+    s.oracle_every = 1;
+    s.seed = 29;
+    options.bake_cell_size = 128.0f; // an open city: coarse cells keep the bake short
+    expect_no_popin_and_culling(run_baked(options, "city"), "gen:city:4", 0.9);
+}
+
 } // namespace
 } // namespace dsoc::eval

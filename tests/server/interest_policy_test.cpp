@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <filesystem>
 #include <memory>
 
 namespace dsoc::server {
@@ -136,6 +138,59 @@ TEST_F(InterestPolicyOnOaDm4, PortalDepthReachesTheCullerAndOnlyAddsProofs) {
         }
     }
     EXPECT_LT(totals[1], totals[0]) << "portal tests hide more on oa_dm4";
+}
+
+TEST_F(InterestPolicyOnOaDm4, BakedStageOnlyAddsProofsAndAloneCullsLess) {
+    const GameWorld& world = *world_;
+    const auto dir = std::filesystem::temp_directory_path() / "dsoc-interest-policy-bakes";
+    std::filesystem::remove_all(dir);
+    // 0: PVS + shaft; 1: baked table + PVS + shaft; 2: the baked table alone.
+    std::size_t totals[3] = {0, 0, 0};
+    std::vector<std::vector<Interest>> sets[3];
+    for (int k = 0; k < 3; ++k) {
+        ServerConfig config = bots(200);
+        config.policy = "occlusion"; // each set is this tick's culler verdict
+        config.baked_stage = k > 0;
+        config.exact_stages = k < 2;
+        config.bake_cell_size = 96.0f; // a coarse table bakes in seconds
+        config.bake_dir = dir.string();
+        config.insecure = true; // validate() wants a key otherwise
+        const auto problems = validate(config);
+        ASSERT_TRUE(problems.empty()) << problems.front();
+        auto policy = make_policy(config, world);
+        for (std::uint32_t v = 0; v < 16; ++v) {
+            policy->add_viewer(v, world.entities()[v].id);
+        }
+        policy->begin_tick(world, 1);
+        for (std::uint32_t v = 0; v < 16; ++v) {
+            const Entity& viewer = world.entities()[v];
+            std::vector<Interest> out;
+            policy->select(world, Viewer{v, viewer.id, world.eye_of(viewer)}, out);
+            totals[k] += out.size();
+            sets[k].push_back(out);
+        }
+    }
+    for (std::size_t v = 0; v < sets[0].size(); ++v) {
+        for (const Interest& i : sets[1][v]) {
+            EXPECT_TRUE(contains(sets[0][v], i.id)) << "viewer " << v << " entity " << i.id;
+            EXPECT_TRUE(contains(sets[2][v], i.id)) << "viewer " << v << " entity " << i.id;
+        }
+    }
+    EXPECT_LE(totals[1], totals[0]);
+    EXPECT_GE(totals[2], totals[1]);
+    // The table alone culls too (about a third at these coarse 96-unit cells).
+    EXPECT_LT(totals[2], 16u * world.entities().size() * 8 / 10);
+    std::printf("16 viewers on oa_dm4: PVS + shaft %zu, table + PVS + shaft %zu, table alone %zu "
+                "of %zu pairs\n",
+                totals[0], totals[1], totals[2], 16u * world.entities().size());
+    // exact_stages = false needs the table.
+    ServerConfig bad = bots(200);
+    bad.insecure = true;
+    EXPECT_TRUE(validate(bad).empty());
+    bad.exact_stages = false;
+    ASSERT_EQ(validate(bad).size(), 1u);
+    EXPECT_NE(validate(bad).front().find("baked_stage"), std::string::npos);
+    std::filesystem::remove_all(dir);
 }
 
 TEST(GameWorld, EntitiesNeverExceedMaxSpeedHorizontally) {

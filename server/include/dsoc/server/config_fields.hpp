@@ -21,6 +21,10 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("culler", config.culler);
     visit("portal_depth", config.portal_depth);
     visit("pvs_stage", config.pvs_stage);
+    visit("baked_stage", config.baked_stage);
+    visit("bake_cell_size", config.bake_cell_size);
+    visit("bake_dir", config.bake_dir);
+    visit("exact_stages", config.exact_stages);
     visit("region_reuse_margin", config.region_reuse_margin);
     visit("latency_allowance_ms", config.latency_allowance_ms);
     visit("trace_file", config.trace_file);

@@ -9,6 +9,8 @@
 
 #include "dsoc/server/game_world.hpp"
 #include "dsoc/server/server_config.hpp"
+#include "dsoc/visibility/cell_visibility.hpp"
+#include "dsoc/visibility/occluder_region_visibility.hpp"
 
 #include <cstdint>
 #include <memory>
@@ -98,5 +100,11 @@ private:
 
 /// The policy named by config.policy, for `world`; config must have passed validate().
 std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const GameWorld& world);
+
+/// The map's baked cell visibility table for config.baked_stage: from the cache, or
+/// baked (progress on stderr) and saved. Throws std::runtime_error when it cannot be had.
+[[nodiscard]] std::shared_ptr<const visibility::CellVisibilityTable>
+baked_table(const ServerConfig& config, const GameWorld& world,
+            const visibility::OccluderScene& scene);
 
 } // namespace dsoc::server

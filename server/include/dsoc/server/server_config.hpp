@@ -49,6 +49,18 @@ struct ServerConfig {
     /// dsoc and occlusion: reject first what the map's PVS (Quake 3 maps with vis data)
     /// proves hidden from every cluster of the client's eye region.
     bool pvs_stage = true;
+    /// dsoc and occlusion: the map's baked cell visibility table first
+    /// (docs/baked-visibility.md), loaded from the cache or baked at start (with
+    /// progress on stderr; minutes for a large map, once).
+    bool baked_stage = false;
+    /// Cell edge of the baked table. [Units: world units] [Limit: 4..1024]
+    float bake_cell_size = 32.0f;
+    /// Where baked tables are kept; empty: $DSOC_BAKE_DIR, $XDG_CACHE_HOME/dsoc/bakes or
+    /// ~/.cache/dsoc/bakes.
+    std::string bake_dir;
+    /// false: the baked table alone (no PVS, no shaft test): the cheapest conservative
+    /// answer, for servers that want capacity over tightness. Needs baked_stage.
+    bool exact_stages = true;
     /// The dsoc policy reuses a client's culler region while the client's reachable
     /// eye region stays inside it grown by this margin: larger margins re-test hidden
     /// entities' TBVs less often but cull less. [Units: world units] [Limit: 0..512]
