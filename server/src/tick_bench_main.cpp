@@ -90,6 +90,13 @@ int main(int argc, char** argv) {
     app.add_option("--portal-depth", config.portal_depth,
                    "Levels of portal tests in the culler (ServerConfig::portal_depth)")
         ->capture_default_str();
+    app.add_option("--baked-stage", config.baked_stage,
+                   "The map's baked cell table first (ServerConfig::baked_stage)")
+        ->capture_default_str();
+    app.add_option("--exact-stages", config.exact_stages,
+                   "false: the baked table alone (ServerConfig::exact_stages)")
+        ->capture_default_str();
+    app.add_option("--bake-dir", config.bake_dir, "Cache of baked tables");
     CLI11_PARSE(app, argc, argv);
     config.insecure = true; // no connections here: the token settings do not matter
     if (const auto problems = server::validate(config); !problems.empty()) {

@@ -48,7 +48,7 @@ struct CellBakeConfig {
     /// When a segment between two blocks of at most 2^witness_stop_level cells per
     /// side is clear, every pair of their cells is marked visible without refining
     /// (0: refine to single cells, the tightest table). [Limit: 0 .. 3]
-    int witness_stop_level = 1;
+    int witness_stop_level = 0;
     /// Segments cast between two blocks (the first joins their representative
     /// points, the others random open points of random open cells of theirs) before
     /// an exact test: one
