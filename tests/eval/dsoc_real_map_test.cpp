@@ -13,22 +13,31 @@
 namespace dsoc::eval {
 namespace {
 
+/// Walking viewers and bots at 30 Hz with a 100 ms round trip and 50 ms of
+/// interpolation, every tick judged by the oracle.
+EvalOptions judged_every_tick(const char* name, const char* map, int viewers, int bots,
+                              double seconds, std::uint64_t seed) {
+    EvalOptions options;
+    Scenario& s = options.scenario;
+    s.name = name;
+    s.map = map;
+    s.viewers = viewers;
+    s.bots = bots;
+    s.tick_rate = 30;
+    s.rtt_ms = 100;
+    s.interpolation_ms = 50;
+    s.duration_s = seconds;
+    s.oracle_every = 1;
+    s.seed = seed;
+    return options;
+}
+
 TEST(DsocOnARealMap, ZeroPopInOverTwentyThousandClientTicks) {
     if (!std::filesystem::exists("/usr/share/games/openarena/baseoa/pak1-maps.pk3")) {
         GTEST_SKIP() << "OpenArena maps not installed (scripts/setup installs openarena-081-maps)";
     }
-    EvalOptions options;
-    Scenario& s = options.scenario;
-    s.name = "dsoc-acceptance";
-    s.map = "oa_dm4";
-    s.viewers = 32;
-    s.bots = 96;
-    s.tick_rate = 30;
-    s.rtt_ms = 100;
-    s.interpolation_ms = 50;
-    s.duration_s = 21.0; // 630 ticks x 32 viewers = 20,160 client-ticks
-    s.oracle_every = 1;  // judge every tick
-    s.seed = 17;
+    // 630 ticks x 32 viewers = 20,160 client-ticks
+    EvalOptions options = judged_every_tick("dsoc-acceptance", "oa_dm4", 32, 96, 21.0, 17);
     options.policies = {"broadcast", "dsoc"};
     const EvalResult result = run_evaluation(options, nullptr);
 
@@ -58,19 +67,9 @@ TEST(DsocOnARealMap, ZeroPopInOverTwentyThousandClientTicks) {
 TEST(DsocWithoutAPvs, ZeroPopInOnAGeneratedCityWithEntityClusters) {
     // gen:city has no PVS: every hidden entity is proven by the shaft stage (with
     // fusion), crowds by their cluster's box, and their TBVs are shared group TBVs.
-    EvalOptions options;
-    Scenario& s = options.scenario;
-    s.name = "dsoc-city";
-    s.map = "gen:city";
-    s.city_blocks = 6;
-    s.viewers = 16;
-    s.bots = 600;
-    s.tick_rate = 30;
-    s.rtt_ms = 100;
-    s.interpolation_ms = 50;
-    s.duration_s = 6.0; // 180 ticks x 16 viewers = 2,880 client-ticks
-    s.oracle_every = 1;
-    s.seed = 23;
+    // 180 ticks x 16 viewers = 2,880 client-ticks
+    EvalOptions options = judged_every_tick("dsoc-city", "gen:city", 16, 600, 6.0, 23);
+    options.scenario.city_blocks = 6;
     options.policies = {"broadcast", "occlusion", "dsoc"};
     const EvalResult result = run_evaluation(options, nullptr);
 
@@ -129,37 +128,17 @@ TEST(DsocOnARealMap, ZeroPopInWithTheBakedStage) {
     if (!std::filesystem::exists("/usr/share/games/openarena/baseoa/pak1-maps.pk3")) {
         GTEST_SKIP() << "OpenArena maps not installed (scripts/setup installs openarena-081-maps)";
     }
-    EvalOptions options;
-    Scenario& s = options.scenario;
-    s.name = "dsoc-baked-acceptance";
-    s.map = "oa_dm4";
-    s.viewers = 32;
-    s.bots = 96;
-    s.tick_rate = 30;
-    s.rtt_ms = 100;
-    s.interpolation_ms = 50;
-    s.duration_s = 8.0; // 240 ticks x 32 viewers = 7,680 client-ticks
-    s.oracle_every = 1;
-    s.seed = 19;
+    // 240 ticks x 32 viewers = 7,680 client-ticks
+    EvalOptions options = judged_every_tick("dsoc-baked-acceptance", "oa_dm4", 32, 96, 8.0, 19);
     options.bake_cell_size = 64.0f; // bakes in seconds; the figures use 32
     expect_no_popin_and_culling(run_baked(options, "oa_dm4"), "oa_dm4", 0.75);
 }
 
 TEST(DsocWithoutAPvs, ZeroPopInWithTheBakedStageOnAGeneratedCity) {
     // No PVS: the table comes from the brushes alone.
-    EvalOptions options;
-    Scenario& s = options.scenario;
-    s.name = "dsoc-baked-city";
-    s.map = "gen:city";
-    s.city_blocks = 4;
-    s.viewers = 16;
-    s.bots = 300;
-    s.tick_rate = 30;
-    s.rtt_ms = 100;
-    s.interpolation_ms = 50;
-    s.duration_s = 11.0; // 330 ticks x 16 viewers = 5,280 client-ticks
-    s.oracle_every = 1;
-    s.seed = 29;
+    // 330 ticks x 16 viewers = 5,280 client-ticks
+    EvalOptions options = judged_every_tick("dsoc-baked-city", "gen:city", 16, 300, 11.0, 29);
+    options.scenario.city_blocks = 4;
     options.bake_cell_size = 128.0f; // an open city: coarse cells keep the bake short
     expect_no_popin_and_culling(run_baked(options, "city"), "gen:city:4", 0.9);
 }

@@ -77,6 +77,29 @@ protected:
     std::unique_ptr<GameWorld> world_;
 };
 
+/// One tick of `config`'s policy for the first 16 entities as viewers: each viewer's
+/// set, and their total size.
+struct ViewerSets {
+    std::vector<std::vector<Interest>> sets;
+    std::size_t total = 0;
+};
+ViewerSets sets_of(const ServerConfig& config, const GameWorld& world) {
+    auto policy = make_policy(config, world);
+    for (std::uint32_t v = 0; v < 16; ++v) {
+        policy->add_viewer(v, world.entities()[v].id);
+    }
+    policy->begin_tick(world, 1);
+    ViewerSets out;
+    for (std::uint32_t v = 0; v < 16; ++v) {
+        const Entity& viewer = world.entities()[v];
+        std::vector<Interest> set;
+        policy->select(world, Viewer{v, viewer.id, world.eye_of(viewer)}, set);
+        out.total += set.size();
+        out.sets.push_back(std::move(set));
+    }
+    return out;
+}
+
 TEST_F(InterestPolicyOnOaDm4, PvsKeepsTheViewersClusterAndCullsOthers) {
     const GameWorld& world = *world_;
     const std::shared_ptr<const maps::Map>& map = map_;
@@ -119,18 +142,9 @@ TEST_F(InterestPolicyOnOaDm4, PortalDepthReachesTheCullerAndOnlyAddsProofs) {
         ServerConfig config = bots(200);
         config.policy = "occlusion";
         config.portal_depth = k == 0 ? 0 : 2;
-        auto policy = make_policy(config, world);
-        for (std::uint32_t v = 0; v < 16; ++v) {
-            policy->add_viewer(v, world.entities()[v].id);
-        }
-        policy->begin_tick(world, 1);
-        for (std::uint32_t v = 0; v < 16; ++v) {
-            const Entity& viewer = world.entities()[v];
-            std::vector<Interest> out;
-            policy->select(world, Viewer{v, viewer.id, world.eye_of(viewer)}, out);
-            totals[k] += out.size();
-            sets[k].push_back(out);
-        }
+        auto run = sets_of(config, world);
+        totals[k] = run.total;
+        sets[k] = std::move(run.sets);
     }
     for (std::size_t v = 0; v < sets[0].size(); ++v) {
         for (const Interest& i : sets[1][v]) {
@@ -157,18 +171,9 @@ TEST_F(InterestPolicyOnOaDm4, BakedStageOnlyAddsProofsAndAloneCullsLess) {
         config.insecure = true; // validate() wants a key otherwise
         const auto problems = validate(config);
         ASSERT_TRUE(problems.empty()) << problems.front();
-        auto policy = make_policy(config, world);
-        for (std::uint32_t v = 0; v < 16; ++v) {
-            policy->add_viewer(v, world.entities()[v].id);
-        }
-        policy->begin_tick(world, 1);
-        for (std::uint32_t v = 0; v < 16; ++v) {
-            const Entity& viewer = world.entities()[v];
-            std::vector<Interest> out;
-            policy->select(world, Viewer{v, viewer.id, world.eye_of(viewer)}, out);
-            totals[k] += out.size();
-            sets[k].push_back(out);
-        }
+        auto run = sets_of(config, world);
+        totals[k] = run.total;
+        sets[k] = std::move(run.sets);
     }
     for (std::size_t v = 0; v < sets[0].size(); ++v) {
         for (const Interest& i : sets[1][v]) {

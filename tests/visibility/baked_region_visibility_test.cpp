@@ -140,10 +140,22 @@ TEST(BakedRegionVisibility, PreparedRunsAnswerAsCellsAndMergedKeysHideOnlyTogeth
         for (auto& p : boxes) {
             const Aabb box = random_box(rng, b.play_area, 16.0f, 200.0f);
             stage.prepare(box, p);
-            // The runs hold exactly the open cells of the box.
+            // The runs hold exactly the open cells of the box (cell by cell here).
             std::vector<OpenCell> cells;
-            const bool covered = t.open_cells_of(box, cells);
-            ASSERT_EQ(covered, p.prepared);
+            glm::ivec3 lo;
+            glm::ivec3 hi;
+            const bool in_grid = t.grid().range_of(box, lo, hi);
+            for (int z = lo.z; in_grid && z <= hi.z; ++z) {
+                for (int y = lo.y; y <= hi.y; ++y) {
+                    for (int x = lo.x; x <= hi.x; ++x) {
+                        const OpenCell c = t.open_index(t.grid().index({x, y, z}));
+                        if (c != kSolidCell) {
+                            cells.push_back(c);
+                        }
+                    }
+                }
+            }
+            ASSERT_EQ(in_grid && !cells.empty(), p.prepared);
             std::vector<OpenCell> from_runs;
             for (std::size_t k = 0; k + 1 < p.keys.size(); k += 2) {
                 for (OpenCell c = p.keys[k]; c < p.keys[k + 1]; ++c) {

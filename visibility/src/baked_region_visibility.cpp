@@ -1,6 +1,7 @@
 #include "dsoc/visibility/baked_region_visibility.hpp"
 
 #include <algorithm>
+#include <utility>
 
 namespace dsoc::visibility {
 
@@ -139,6 +140,26 @@ Visibility BakedRegionVisibility::test_prepared_hinted(const PreparedBox& p,
 
 Visibility BakedRegionVisibility::test_prepared_coarse(const PreparedBox& p) const {
     return active_ && p.prepared && hidden(p.keys) ? Visibility::occluded : Visibility::visible;
+}
+
+void BakedRegionVisibility::merge_prepared(PreparedBox& into, const PreparedBox& more) const {
+    std::vector<std::pair<std::int32_t, std::int32_t>> runs;
+    runs.reserve((into.keys.size() + more.keys.size()) / 2);
+    for (const std::vector<std::int32_t>* keys : {&std::as_const(into.keys), &more.keys}) {
+        for (std::size_t k = 0; k + 1 < keys->size(); k += 2) {
+            runs.emplace_back((*keys)[k], (*keys)[k + 1]);
+        }
+    }
+    std::sort(runs.begin(), runs.end());
+    into.keys.clear();
+    for (const auto& [first, end] : runs) {
+        if (!into.keys.empty() && first <= into.keys.back()) {
+            into.keys.back() = std::max(into.keys.back(), end);
+        } else {
+            into.keys.push_back(first);
+            into.keys.push_back(end);
+        }
+    }
 }
 
 RegionVisibilityFactory with_baked_stage(std::shared_ptr<const CellVisibilityTable> table,

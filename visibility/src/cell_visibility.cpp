@@ -42,27 +42,6 @@ void CellVisibilityTable::set_visible_atomic(OpenCell a, OpenCell b) {
     set(b, a);
 }
 
-bool CellVisibilityTable::open_cells_of(const Aabb& box, std::vector<OpenCell>& out) const {
-    out.clear();
-    glm::ivec3 lo;
-    glm::ivec3 hi;
-    if (!grid_.range_of(box, lo, hi)) {
-        return false;
-    }
-    for (int z = lo.z; z <= hi.z; ++z) {
-        for (int y = lo.y; y <= hi.y; ++y) {
-            const std::uint32_t first = grid_.index({lo.x, y, z});
-            for (int x = 0; x <= hi.x - lo.x; ++x) {
-                const OpenCell c = open_of_[first + static_cast<std::uint32_t>(x)];
-                if (c != kSolidCell) {
-                    out.push_back(c);
-                }
-            }
-        }
-    }
-    return !out.empty();
-}
-
 bool CellVisibilityTable::open_runs_of(const Aabb& box, std::vector<std::int32_t>& out) const {
     out.clear();
     glm::ivec3 lo;

@@ -37,11 +37,10 @@ public:
                                                   std::uint32_t& hint) const override;
     /// The table alone: `visible` whenever it passes the box (the next stage is skipped).
     [[nodiscard]] Visibility test_prepared_coarse(const PreparedBox& p) const override;
-    /// Keys are runs of open cells (CellVisibilityTable::open_runs_of): the union is
-    /// both lists of runs.
-    void merge_prepared(PreparedBox& into, const PreparedBox& more) const override {
-        into.keys.insert(into.keys.end(), more.keys.begin(), more.keys.end());
-    }
+    /// Keys are runs of open cells (CellVisibilityTable::open_runs_of): the union of
+    /// both lists, sorted, overlapping and adjacent runs joined, so that a group that
+    /// keeps merging holds at most one run per row of cells it covers.
+    void merge_prepared(PreparedBox& into, const PreparedBox& more) const override;
 
     /// True when the last build() found the region covered by the table.
     [[nodiscard]] bool active() const { return active_; }

@@ -53,14 +53,12 @@ public:
     [[nodiscard]] std::span<const std::uint64_t> words() const { return bits_; }
     [[nodiscard]] std::span<std::uint64_t> words() { return bits_; }
 
-    /// The open cells a closed box touches, into `out` (cleared first). False when the
-    /// grid does not cover the whole box, or when every cell it touches is solid: then
-    /// the table must not answer for it.
-    bool open_cells_of(const Aabb& box, std::vector<OpenCell>& out) const;
-    /// The same cells as runs of open-cell indexes: pairs (first, end) appended to
-    /// `out` (cleared first), one run per row of the box's cells at most (open cells are
-    /// numbered in grid order, so the open cells of one row are consecutive), adjacent
-    /// runs joined. Same return value as open_cells_of().
+    /// The open cells a closed box touches, as runs of open-cell indexes: pairs
+    /// (first, end) appended to `out` (cleared first), one run per row of the box's
+    /// cells at most (open cells are numbered in grid order, so the open cells of one
+    /// row are consecutive), adjacent runs joined. False when the grid does not cover
+    /// the whole box, or when every cell it touches is solid: then the table must not
+    /// answer for it.
     bool open_runs_of(const Aabb& box, std::vector<std::int32_t>& out) const;
 
     /// Pairs (ordered, self pairs included) whose bit is clear, i.e. proven hidden.
