@@ -143,23 +143,26 @@ Visibility BakedRegionVisibility::test_prepared_coarse(const PreparedBox& p) con
 }
 
 void BakedRegionVisibility::merge_prepared(PreparedBox& into, const PreparedBox& more) const {
-    std::vector<std::pair<std::int32_t, std::int32_t>> runs;
-    runs.reserve((into.keys.size() + more.keys.size()) / 2);
-    for (const std::vector<std::int32_t>* keys : {&std::as_const(into.keys), &more.keys}) {
-        for (std::size_t k = 0; k + 1 < keys->size(); k += 2) {
-            runs.emplace_back((*keys)[k], (*keys)[k + 1]);
-        }
-    }
-    std::sort(runs.begin(), runs.end());
-    into.keys.clear();
-    for (const auto& [first, end] : runs) {
-        if (!into.keys.empty() && first <= into.keys.back()) {
-            into.keys.back() = std::max(into.keys.back(), end);
+    // Both lists are sorted (open_runs_of() makes them so, and so does this): one pass.
+    thread_local std::vector<std::int32_t> merged;
+    merged.clear();
+    const auto& a = into.keys;
+    const auto& b = more.keys;
+    std::size_t i = 0;
+    std::size_t j = 0;
+    while (i + 1 < a.size() || j + 1 < b.size()) {
+        const bool take_a = j + 1 >= b.size() || (i + 1 < a.size() && a[i] <= b[j]);
+        const std::int32_t first = take_a ? a[i] : b[j];
+        const std::int32_t end = take_a ? a[i + 1] : b[j + 1];
+        (take_a ? i : j) += 2;
+        if (!merged.empty() && first <= merged.back()) {
+            merged.back() = std::max(merged.back(), end);
         } else {
-            into.keys.push_back(first);
-            into.keys.push_back(end);
+            merged.push_back(first);
+            merged.push_back(end);
         }
     }
+    into.keys.assign(merged.begin(), merged.end());
 }
 
 RegionVisibilityFactory with_baked_stage(std::shared_ptr<const CellVisibilityTable> table,
