@@ -1,5 +1,5 @@
 #pragma once
-// The map's PVS as the first stage of a region culler (shared/notes/latency-safety.md
+// The map's PVS as the first stage of a region culler (docs/latency-safety.md
 // §3): the union of the PVS rows of every cluster the client's eye region touches is
 // conservative for the whole region, so a box none of whose clusters is in it is
 // hidden from every eye of the region. Cheap and coarse; boxes it passes go to the

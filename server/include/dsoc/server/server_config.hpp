@@ -68,7 +68,7 @@ struct ServerConfig {
     /// Time the server must cover a client's own movement for: round trip plus the
     /// client's interpolation delay. Rounded up to whole ticks. [Units: ms] [Limit: 0..2000]
     int latency_allowance_ms = 150;
-    /// Write a replication trace (shared/specs/replication-trace.md) to this file; empty: none.
+    /// Write a replication trace (docs/replication-trace.md) to this file; empty: none.
     std::string trace_file;
     /// Record every k-th tick in the trace. [Limit: >= 1]
     int trace_every = 1;

@@ -1,5 +1,5 @@
 #pragma once
-// The contents of a replication trace, version 1 (shared/specs/replication-trace.md).
+// The contents of a replication trace, version 1 (docs/replication-trace.md).
 // Units: world units, z up. Ids: unsigned 32-bit.
 
 #include "dsoc/visibility/geometry.hpp"

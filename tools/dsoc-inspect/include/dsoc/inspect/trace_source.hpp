@@ -1,6 +1,6 @@
 #pragma once
 // The trace input of dsoc-inspect: a replication trace
-// (shared/specs/replication-trace.md) read with dsoc::trace::TraceReader. A trace
+// (docs/replication-trace.md) read with dsoc::trace::TraceReader. A trace
 // records eyes, boxes and replication sets, not TBVs or reachable regions, so its
 // views hold replicated_visible / replicated_lookahead (split by the occluder culler
 // from the eye, over the trace's own occluders) and not_replicated, and an empty
