@@ -100,6 +100,15 @@ ViewerSets sets_of(const ServerConfig& config, const GameWorld& world) {
     return out;
 }
 
+/// Every viewer's `smaller` set is part of its `larger` set.
+void expect_subsets(const ViewerSets& smaller, const ViewerSets& larger) {
+    for (std::size_t v = 0; v < smaller.sets.size(); ++v) {
+        for (const Interest& i : smaller.sets[v]) {
+            EXPECT_TRUE(contains(larger.sets[v], i.id)) << "viewer " << v << " entity " << i.id;
+        }
+    }
+}
+
 TEST_F(InterestPolicyOnOaDm4, PvsKeepsTheViewersClusterAndCullsOthers) {
     const GameWorld& world = *world_;
     const std::shared_ptr<const maps::Map>& map = map_;
@@ -136,22 +145,15 @@ TEST_F(InterestPolicyOnOaDm4, PvsKeepsTheViewersClusterAndCullsOthers) {
 TEST_F(InterestPolicyOnOaDm4, PortalDepthReachesTheCullerAndOnlyAddsProofs) {
     const GameWorld& world = *world_;
     // `occlusion`: no temporal coherence, so each set is this tick's culler verdict.
-    std::size_t totals[2] = {0, 0};
-    std::vector<std::vector<Interest>> sets[2];
+    ViewerSets runs[2];
     for (int k = 0; k < 2; ++k) {
         ServerConfig config = bots(200);
         config.policy = "occlusion";
         config.portal_depth = k == 0 ? 0 : 2;
-        auto run = sets_of(config, world);
-        totals[k] = run.total;
-        sets[k] = std::move(run.sets);
+        runs[k] = sets_of(config, world);
     }
-    for (std::size_t v = 0; v < sets[0].size(); ++v) {
-        for (const Interest& i : sets[1][v]) {
-            EXPECT_TRUE(contains(sets[0][v], i.id)) << "viewer " << v << " entity " << i.id;
-        }
-    }
-    EXPECT_LT(totals[1], totals[0]) << "portal tests hide more on oa_dm4";
+    expect_subsets(runs[1], runs[0]);
+    EXPECT_LT(runs[1].total, runs[0].total) << "portal tests hide more on oa_dm4";
 }
 
 TEST_F(InterestPolicyOnOaDm4, BakedStageOnlyAddsProofsAndAloneCullsLess) {
@@ -159,8 +161,7 @@ TEST_F(InterestPolicyOnOaDm4, BakedStageOnlyAddsProofsAndAloneCullsLess) {
     const auto dir = std::filesystem::temp_directory_path() / "dsoc-interest-policy-bakes";
     std::filesystem::remove_all(dir);
     // 0: PVS + shaft; 1: baked table + PVS + shaft; 2: the baked table alone.
-    std::size_t totals[3] = {0, 0, 0};
-    std::vector<std::vector<Interest>> sets[3];
+    ViewerSets runs[3];
     for (int k = 0; k < 3; ++k) {
         ServerConfig config = bots(200);
         config.policy = "occlusion"; // each set is this tick's culler verdict
@@ -171,16 +172,11 @@ TEST_F(InterestPolicyOnOaDm4, BakedStageOnlyAddsProofsAndAloneCullsLess) {
         config.insecure = true; // validate() wants a key otherwise
         const auto problems = validate(config);
         ASSERT_TRUE(problems.empty()) << problems.front();
-        auto run = sets_of(config, world);
-        totals[k] = run.total;
-        sets[k] = std::move(run.sets);
+        runs[k] = sets_of(config, world);
     }
-    for (std::size_t v = 0; v < sets[0].size(); ++v) {
-        for (const Interest& i : sets[1][v]) {
-            EXPECT_TRUE(contains(sets[0][v], i.id)) << "viewer " << v << " entity " << i.id;
-            EXPECT_TRUE(contains(sets[2][v], i.id)) << "viewer " << v << " entity " << i.id;
-        }
-    }
+    expect_subsets(runs[1], runs[0]);
+    expect_subsets(runs[1], runs[2]);
+    const std::size_t totals[3] = {runs[0].total, runs[1].total, runs[2].total};
     EXPECT_LE(totals[1], totals[0]);
     EXPECT_GE(totals[2], totals[1]);
     // The table alone culls too (about a third at these coarse 96-unit cells).
