@@ -2,6 +2,7 @@
 
 #include "dsoc/maps/pvs_bake_pruner.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
@@ -43,11 +44,18 @@ static std::unique_ptr<PvsBakePruner> pvs_pruner(const Map& map) {
 visibility::CellGrid bake_grid(const Map& map, const visibility::OccluderScene& scene,
                                float cell_size, std::uint64_t max_table_bytes) {
     const auto pruner = pvs_pruner(map);
+    // Cells grow (by 1.25x) until the grid is one the reader accepts and the dense
+    // table of its open cells fits the budget; past 1024 units the last grid is kept.
     for (;; cell_size *= 1.25f) {
         const auto grid = visibility::CellGrid::covering(map.bounds, cell_size);
+        if (grid.cell_count() > kMaxBakeGridCells && cell_size <= 1024.0f) {
+            continue; // too many cells to even look at
+        }
         const auto open =
             static_cast<std::uint64_t>(visibility::open_cells_of(scene, grid, pruner.get()).size());
-        if (open * ((open + 63) / 64) * 8 <= max_table_bytes || cell_size > 1024.0f) {
+        const bool readable =
+            grid.cell_count() <= kMaxBakeCellsPerOpenCell * std::max<std::uint64_t>(open, 64);
+        if ((readable && open * ((open + 63) / 64) * 8 <= max_table_bytes) || cell_size > 1024.0f) {
             return grid;
         }
     }

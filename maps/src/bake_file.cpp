@@ -1,11 +1,14 @@
 #include "dsoc/maps/bake_file.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <system_error>
+
+#include <unistd.h>
 
 namespace dsoc::maps {
 
@@ -14,12 +17,8 @@ namespace {
 constexpr char kMagic[8] = {'D', 'S', 'O', 'C', 'B', 'A', 'K', 'E'};
 constexpr std::size_t kHeaderBytes = 80;
 constexpr std::size_t kChecksumOffset = 64;
-/// Grids larger than this many cells are refused (2^24: 16.7M cells, 128 MiB of
-/// per-cell indexes when loaded; the bake's 64 MiB table budget keeps real grids far
-/// below it).
-constexpr std::uint64_t kMaxGridCells = std::uint64_t{1} << 24;
-/// Grid cells allowed per open cell (at least 64 open cells counted).
-constexpr std::uint64_t kCellsPerOpenCell = 1024;
+constexpr std::uint64_t kMaxGridCells = kMaxBakeGridCells;
+constexpr std::uint64_t kCellsPerOpenCell = kMaxBakeCellsPerOpenCell;
 
 static_assert(std::endian::native == std::endian::little,
               "the .dsocbake layout is little-endian; add byte swaps for this target");
@@ -46,11 +45,21 @@ std::size_t open_list_bytes(std::uint64_t open) {
 
 struct Hasher {
     std::uint64_t h = 0xcbf29ce484222325ull;
-    void word(std::uint64_t w) { h = (h ^ w) * 0x100000001b3ull; }
+    void word(std::uint64_t w) { h = bake_checksum(std::as_bytes(std::span(&w, 1)), h); }
     void f32(float v) { word(std::bit_cast<std::uint32_t>(v)); }
     void i64(std::int64_t v) { word(static_cast<std::uint64_t>(v)); }
 };
 
+} // namespace
+
+namespace {
+/// splitmix64's finaliser: a bijection in which every input bit changes about half of
+/// the output bits.
+std::uint64_t mix(std::uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
 } // namespace
 
 std::uint64_t bake_checksum(std::span<const std::byte> bytes, std::uint64_t seed) {
@@ -59,12 +68,12 @@ std::uint64_t bake_checksum(std::span<const std::byte> bytes, std::uint64_t seed
     for (; i + 8 <= bytes.size(); i += 8) {
         std::uint64_t w;
         std::memcpy(&w, bytes.data() + i, 8);
-        h = (h ^ w) * 0x100000001b3ull;
+        h = mix(h ^ w) + 0x9e3779b97f4a7c15ull;
     }
     if (i < bytes.size()) {
         std::uint64_t w = 0;
         std::memcpy(&w, bytes.data() + i, bytes.size() - i);
-        h = (h ^ w) * 0x100000001b3ull;
+        h = mix(h ^ w) + 0x9e3779b97f4a7c15ull;
     }
     return h;
 }
@@ -73,6 +82,7 @@ std::uint64_t bake_key(const Map& map, const visibility::CellGrid& grid,
                        const visibility::CellBakeConfig& config) {
     Hasher k;
     k.word(kBakeFormatVersion);
+    k.word(kBakeAlgorithmVersion);
     k.word(map.occluders.size());
     for (const auto& occluder : map.occluders) {
         k.word(occluder.planes().size());
@@ -235,6 +245,11 @@ Result<visibility::CellVisibilityTable> decode_bake(std::span<const std::byte> b
         std::memcpy(words.data(), bytes.data() + kHeaderBytes + open_list_bytes(open),
                     words.size() * 8);
     }
+    for (std::size_t r = 0; r < open; ++r) {
+        if ((words[r * words_per_row + r / 64] >> (r % 64) & 1u) == 0) {
+            return fail("rows", "open cell " + std::to_string(r) + " does not see itself");
+        }
+    }
     if (open % 64 != 0) {
         const std::uint64_t beyond = ~std::uint64_t{0} << (open % 64);
         for (std::size_t r = 0; r < open; ++r) {
@@ -277,13 +292,22 @@ std::optional<std::string> write_bake_file(const std::filesystem::path& path,
             return "cannot create " + path.parent_path().string() + ": " + ec.message();
         }
     }
+    // A name of its own, so that two bakers at once never write into one file.
+    static std::atomic<unsigned> counter{0};
     auto temp = path;
-    temp += ".tmp";
+    std::string suffix = std::to_string(::getpid());
+    suffix += '.';
+    suffix += std::to_string(counter++);
+    suffix += ".tmp";
+    temp += '.';
+    temp += suffix;
     {
         std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-        if (!out.write(reinterpret_cast<const char*>(bytes.data()),
-                       static_cast<std::streamsize>(bytes.size())) ||
-            !out.flush()) {
+        out.write(reinterpret_cast<const char*>(bytes.data()),
+                  static_cast<std::streamsize>(bytes.size()));
+        out.close();
+        if (!out) {
+            std::filesystem::remove(temp, ec);
             return "cannot write " + temp.string();
         }
     }

@@ -19,9 +19,18 @@ Pvs::Pvs(const q3::Q3Bsp& bsp)
 }
 
 bool Pvs::clusters_of(const visibility::Aabb& box, std::vector<std::int32_t>& out) const {
+    return walk(box, out) == Walk::found;
+}
+
+bool Pvs::touches_no_cluster(const visibility::Aabb& box) const {
+    thread_local std::vector<std::int32_t> clusters;
+    return walk(box, clusters) == Walk::none;
+}
+
+Pvs::Walk Pvs::walk(const visibility::Aabb& box, std::vector<std::int32_t>& out) const {
     out.clear();
     if (leaf_cluster_.empty()) {
-        return false;
+        return Walk::unknown;
     }
     // Walk the node tree with the box: both children where the plane cuts it. The
     // stack bound is the tree depth; parse_q3_bsp guarantees children follow parents.
@@ -45,7 +54,7 @@ bool Pvs::clusters_of(const visibility::Aabb& box, std::vector<std::int32_t>& ou
             std::abs(n.normal.x) * h.x + std::abs(n.normal.y) * h.y + std::abs(n.normal.z) * h.z;
         if (top + 2 > 1024) {
             out.clear(); // pathological depth: answer "may see"
-            return false;
+            return Walk::unknown;
         }
         if (d >= -r) {
             stack[top++] = n.children[0];
@@ -56,7 +65,7 @@ bool Pvs::clusters_of(const visibility::Aabb& box, std::vector<std::int32_t>& ou
     }
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
-    return !out.empty();
+    return out.empty() ? Walk::none : Walk::found;
 }
 
 void Pvs::union_of_rows(const std::vector<std::int32_t>& clusters,

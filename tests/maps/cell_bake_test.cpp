@@ -89,7 +89,7 @@ bool pvs_apart(const Pvs& pvs, glm::vec3 p, glm::vec3 q) {
     }
     for (const std::int32_t x : a) {
         for (const std::int32_t y : b) {
-            if (pvs.cluster_visible(x, y)) {
+            if (pvs.cluster_visible(x, y) || pvs.cluster_visible(y, x)) {
                 return false;
             }
         }

@@ -163,6 +163,7 @@ void BakedRegionVisibility::merge_prepared(PreparedBox& into, const PreparedBox&
         }
     }
     into.keys.assign(merged.begin(), merged.end());
+    into.inner.clear(); // the next stage's preparation was of one member's box only
 }
 
 RegionVisibilityFactory with_baked_stage(std::shared_ptr<const CellVisibilityTable> table,

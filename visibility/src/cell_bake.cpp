@@ -67,13 +67,23 @@ private:
         ShaftOcclusion::Scratch shaft;
         OccluderGrid::Scratch segment;
         CellBakeStats stats;
-        std::mt19937 random{0x5eed};
     };
 
     void build_levels();
     /// Up to kSamplesPerCell points of each open cell outside every occluder.
     void build_samples();
-    [[nodiscard]] glm::vec3 random_sample(Worker& w, Node n) const;
+    /// A deterministic stream of random numbers for one pair of blocks, so that the
+    /// table does not depend on which worker resolved which pair (splitmix64).
+    struct PairRandom {
+        std::uint64_t state;
+        std::uint64_t next() {
+            std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+            z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+            z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+            return z ^ (z >> 31);
+        }
+    };
+    [[nodiscard]] glm::vec3 random_sample(PairRandom& random, Node n) const;
     void resolve_self(Worker& w, Node a);
     void resolve(Worker& w, Node a, Node b);
     void mark_all(Node a, Node b);
@@ -130,13 +140,12 @@ void Baker::build_samples() {
     }
 }
 
-glm::vec3 Baker::random_sample(Worker& w, Node n) const {
+glm::vec3 Baker::random_sample(PairRandom& random, Node n) const {
     const auto cells = levels_[static_cast<std::size_t>(n.level)].cells(n.index);
-    const auto c = static_cast<std::size_t>(
-        cells[std::uniform_int_distribution<std::size_t>(0, cells.size() - 1)(w.random)]);
+    const auto c = static_cast<std::size_t>(cells[random.next() % cells.size()]);
     const std::uint32_t first = sample_start_[c];
     const std::uint32_t count = sample_start_[c + 1] - first;
-    return samples_[first + std::uniform_int_distribution<std::uint32_t>(0, count - 1)(w.random)];
+    return samples_[first + static_cast<std::uint32_t>(random.next() % count)];
 }
 
 void Baker::build_levels() {
@@ -262,9 +271,12 @@ bool Baker::witness(Worker& w, Node a, Node b) const {
     if (segment_clear(w, la.rep[a.index], lb.rep[b.index])) {
         return true;
     }
+    PairRandom random{(static_cast<std::uint64_t>(a.level) << 60) ^
+                      (static_cast<std::uint64_t>(a.index) << 32) ^
+                      (static_cast<std::uint64_t>(b.level) << 28) ^ b.index};
     for (int k = 1; k < config_.witness_segments; ++k) {
         ++w.stats.witness_rays;
-        if (segment_clear(w, random_sample(w, a), random_sample(w, b))) {
+        if (segment_clear(w, random_sample(random, a), random_sample(random, b))) {
             return true;
         }
     }

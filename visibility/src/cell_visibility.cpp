@@ -20,15 +20,6 @@ CellVisibilityTable::CellVisibilityTable(const CellGrid& grid, std::vector<std::
     open_before_.back() = count;
 }
 
-void CellVisibilityTable::set_visible(OpenCell a, OpenCell b) {
-    const auto set = [this](OpenCell from, OpenCell to) {
-        bits_[static_cast<std::size_t>(from) * words_per_row_ +
-              (static_cast<std::size_t>(to) >> 6)] |= std::uint64_t{1} << (to & 63);
-    };
-    set(a, b);
-    set(b, a);
-}
-
 void CellVisibilityTable::set_visible_atomic(OpenCell a, OpenCell b) {
     const auto set = [this](OpenCell from, OpenCell to) {
         std::atomic_ref<std::uint64_t> word(bits_[static_cast<std::size_t>(from) * words_per_row_ +

@@ -31,7 +31,7 @@ constexpr std::uint64_t kTbvRetryTicks = 8;
 constexpr std::uint32_t kNoCluster = 0xffffffffu;
 constexpr std::size_t kMinClusterMembers = 3;
 
-/// `into` becomes the union of `into` and `more`, both sorted and free of duplicates.
+/// A box the manager accepts: finite and not empty.
 bool valid_box(const Aabb& b) {
     return std::isfinite(b.min.x) && std::isfinite(b.min.y) && std::isfinite(b.min.z) &&
            std::isfinite(b.max.x) && std::isfinite(b.max.y) && std::isfinite(b.max.z) &&

@@ -21,17 +21,29 @@
 namespace dsoc::maps {
 
 /// Bumped on any change of the layout or of what the bits mean.
-inline constexpr std::uint32_t kBakeFormatVersion = 1;
+inline constexpr std::uint32_t kBakeFormatVersion = 2;
+/// Part of every key: bumped on any change to what the bake may prove (the bake, the
+/// exact region tests it runs, the open-cell rules, the PVS pruner), so that tables
+/// baked by older code are baked again, never trusted.
+inline constexpr std::uint32_t kBakeAlgorithmVersion = 1;
+/// Grids larger than this many cells are refused (2^24: 16.7M cells, 128 MiB of
+/// per-cell indexes when loaded). [Units: cells]
+inline constexpr std::uint64_t kMaxBakeGridCells = std::uint64_t{1} << 24;
+/// Grid cells allowed per open cell (counting at least 64 open cells): a small file
+/// cannot make the reader allocate much.
+inline constexpr std::uint64_t kMaxBakeCellsPerOpenCell = 1024;
 /// Largest file read or written. [Units: bytes]
 inline constexpr std::uint64_t kMaxBakeFileBytes = std::uint64_t{1} << 30;
 
-/// The key a table is filed under: a 64-bit hash of the format version, the map's
+/// The key a table is filed under: a 64-bit hash of the format and algorithm versions,
+/// the map's
 /// occluders (every solid plane), its PVS (cluster count and every cluster pair's
 /// bit), the grid and the settings that change the result (not `threads`).
 [[nodiscard]] std::uint64_t bake_key(const Map& map, const visibility::CellGrid& grid,
                                      const visibility::CellBakeConfig& config);
 
-/// The file's checksum function over `bytes` (see the spec): 64-bit words, FNV-style.
+/// The file's checksum function over `bytes` (see the spec): 64-bit words, each mixed
+/// into the state with splitmix64's finaliser.
 [[nodiscard]] std::uint64_t bake_checksum(std::span<const std::byte> bytes,
                                           std::uint64_t seed = 0xcbf29ce484222325ull);
 

@@ -32,6 +32,10 @@ public:
     /// (cleared first). Returns false when the box overlaps no clustered leaf.
     bool clusters_of(const visibility::Aabb& box, std::vector<std::int32_t>& out) const;
 
+    /// True only when `box` surely touches no leaf with a cluster (in solid, or outside
+    /// the map): false without vis data or when the tree walk gives up.
+    [[nodiscard]] bool touches_no_cluster(const visibility::Aabb& box) const;
+
     /// The union of the PVS rows of `clusters`, as a bitset of cluster_count() bits
     /// (one byte per 8 clusters), into `out`.
     void union_of_rows(const std::vector<std::int32_t>& clusters,
@@ -52,6 +56,11 @@ public:
     [[nodiscard]] bool cluster_visible(int from, int to) const;
 
 private:
+    enum class Walk { found, none, unknown };
+    /// The clusters of the leaves `box` overlaps into `out`; `unknown` (out empty)
+    /// without vis data or when the walk is deeper than its stack.
+    Walk walk(const visibility::Aabb& box, std::vector<std::int32_t>& out) const;
+
     struct Node {
         glm::vec3 normal;
         float dist;

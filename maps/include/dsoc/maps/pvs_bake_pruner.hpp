@@ -15,10 +15,9 @@ public:
     /// `pvs` must have visibility (has_visibility()).
     explicit PvsBakePruner(std::shared_ptr<const Pvs> pvs) : pvs_(std::move(pvs)) {}
 
-    /// A box that touches no clustered leaf is in solid or outside the map (pvs.hpp).
+    /// A box that surely touches no clustered leaf is in solid or outside the map.
     [[nodiscard]] bool empty_space(const visibility::Aabb& box) const override {
-        thread_local std::vector<std::int32_t> clusters;
-        return !pvs_->clusters_of(box, clusters);
+        return pvs_->touches_no_cluster(box);
     }
     void keys(const visibility::Aabb& box, std::vector<std::int32_t>& out) const override {
         if (!pvs_->clusters_of(box, out)) {
@@ -32,7 +31,9 @@ public:
         }
         for (const std::int32_t from : a) {
             for (const std::int32_t to : b) {
-                if (pvs_->cluster_visible(from, to)) {
+                // Both ways: the bake clears both bits of a pair, and the compiler's
+                // vis need not be symmetric.
+                if (pvs_->cluster_visible(from, to) || pvs_->cluster_visible(to, from)) {
                     return false;
                 }
             }

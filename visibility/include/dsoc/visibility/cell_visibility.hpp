@@ -44,9 +44,7 @@ public:
     [[nodiscard]] bool may_see(OpenCell from, OpenCell to) const {
         return (row(from)[static_cast<std::size_t>(to) >> 6] >> (to & 63) & 1u) != 0;
     }
-    /// Sets (a, b) and (b, a) to "may see". Not thread-safe: see set_visible_atomic().
-    void set_visible(OpenCell a, OpenCell b);
-    /// set_visible() for several threads writing at once.
+    /// Sets (a, b) and (b, a) to "may see"; several threads may write at once.
     void set_visible_atomic(OpenCell a, OpenCell b);
 
     /// Every row, open_count() * words_per_row() words (for storage).

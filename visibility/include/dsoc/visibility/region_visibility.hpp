@@ -73,9 +73,9 @@ public:
     /// Makes `into` (prepared by this culler) stand for the union of its box and
     /// `more`'s (also prepared by it, `prepared` both): test_prepared_coarse() of the
     /// result is `occluded` only when it is for both. Only the first stage's keys are
-    /// merged (`inner` is left as it is). The default takes the sorted union of the
-    /// keys (a key set such as clusters: hidden when no key is visible); `box` is the
-    /// caller's to set.
+    /// merged (a culler that uses `inner` clears it: it was of one box only). The default takes the
+    /// sorted union of the keys (a key set such as clusters: hidden when no key is visible); `box`
+    /// is the caller's to set.
     virtual void merge_prepared(PreparedBox& into, const PreparedBox& more) const {
         into.keys.insert(into.keys.end(), more.keys.begin(), more.keys.end());
         std::sort(into.keys.begin(), into.keys.end());
