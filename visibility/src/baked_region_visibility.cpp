@@ -68,6 +68,10 @@ bool BakedRegionVisibility::hidden(const std::vector<std::int32_t>& runs) const 
     return true;
 }
 
+bool BakedRegionVisibility::prepared_hidden(const PreparedBox& p) const {
+    return active_ && p.prepared && hidden(p.keys);
+}
+
 bool BakedRegionVisibility::box_hidden(const Aabb& box) const {
     return active_ && table_->open_runs_of(box, scratch_) && hidden(scratch_);
 }
@@ -106,7 +110,7 @@ void BakedRegionVisibility::prepare(const Aabb& box, PreparedBox& out) const {
 
 // The next stage gets its own preparation of the box when it has one (same box).
 Visibility BakedRegionVisibility::test_prepared(const PreparedBox& p) const {
-    if (active_ && p.prepared && hidden(p.keys)) {
+    if (prepared_hidden(p)) {
         return Visibility::occluded;
     }
     if (!next_) {
@@ -116,7 +120,7 @@ Visibility BakedRegionVisibility::test_prepared(const PreparedBox& p) const {
 }
 
 Visibility BakedRegionVisibility::test_prepared_quick(const PreparedBox& p) const {
-    if (active_ && p.prepared && hidden(p.keys)) {
+    if (prepared_hidden(p)) {
         return Visibility::occluded;
     }
     if (!next_) {
@@ -128,7 +132,7 @@ Visibility BakedRegionVisibility::test_prepared_quick(const PreparedBox& p) cons
 
 Visibility BakedRegionVisibility::test_prepared_hinted(const PreparedBox& p,
                                                        std::uint32_t& hint) const {
-    if (active_ && p.prepared && hidden(p.keys)) {
+    if (prepared_hidden(p)) {
         return Visibility::occluded;
     }
     if (!next_) {
@@ -139,7 +143,7 @@ Visibility BakedRegionVisibility::test_prepared_hinted(const PreparedBox& p,
 }
 
 Visibility BakedRegionVisibility::test_prepared_coarse(const PreparedBox& p) const {
-    return active_ && p.prepared && hidden(p.keys) ? Visibility::occluded : Visibility::visible;
+    return prepared_hidden(p) ? Visibility::occluded : Visibility::visible;
 }
 
 void BakedRegionVisibility::merge_prepared(PreparedBox& into, const PreparedBox& more) const {

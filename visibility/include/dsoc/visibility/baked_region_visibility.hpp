@@ -50,6 +50,8 @@ private:
     /// built region.
     [[nodiscard]] bool hidden(const std::vector<std::int32_t>& runs) const;
     [[nodiscard]] bool box_hidden(const Aabb& box) const;
+    /// The table proves a box prepared by this stage hidden from the built region.
+    [[nodiscard]] bool prepared_hidden(const PreparedBox& p) const;
 
     std::shared_ptr<const CellVisibilityTable> table_;
     std::unique_ptr<RegionVisibility> next_;
