@@ -3,15 +3,22 @@
 #include "dsoc/protocol/codec.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace dsoc::server {
 
 namespace {
 
 void run_one(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
-             const ClientTick& job) {
+             const ClientTick& job, CullingBudget* budget) {
     std::vector<Interest>& interest = *job.interest;
-    policy.select(world, job.viewer, interest);
+    if (budget != nullptr && budget->enabled &&
+        std::chrono::steady_clock::now() > budget->deadline) {
+        policy.select_cheapest(world, job.viewer, interest);
+        budget->cheapest.fetch_add(1, std::memory_order_relaxed);
+    } else {
+        policy.select(world, job.viewer, interest);
+    }
     const auto own =
         std::lower_bound(interest.begin(), interest.end(), job.viewer.entity_id,
                          [](const Interest& a, std::uint32_t id) { return a.id < id; });
@@ -35,19 +42,31 @@ void run_one(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
     }
 }
 
+/// The job that takes turn `i` of `n` at `tick`: the order starts at a point that moves
+/// by the golden ratio of the job count every tick, so no client is always served last.
+std::size_t job_at_turn(std::size_t i, std::size_t n, std::uint64_t tick) {
+    const auto start = static_cast<std::size_t>(
+        std::fmod(static_cast<double>(tick) * 0.6180339887498949, 1.0) * static_cast<double>(n));
+    return (i + start) % n;
+}
+
 } // namespace
 
 void run_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
-                      std::span<const ClientTick> jobs, WorkerPool& pool) {
-    pool.run(jobs.size(), [&](std::size_t i) { run_one(world, policy, tick, jobs[i]); });
+                      std::span<const ClientTick> jobs, WorkerPool& pool, CullingBudget* budget) {
+    pool.run(jobs.size(), [&](std::size_t i) {
+        run_one(world, policy, tick, jobs[job_at_turn(i, jobs.size(), tick)], budget);
+    });
 }
 
 void start_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
                         std::span<const ClientTick> jobs, WorkerPool& pool,
-                        std::function<void(std::exception_ptr)> done) {
+                        std::function<void(std::exception_ptr)> done, CullingBudget* budget) {
     pool.start(
         jobs.size(),
-        [&world, &policy, tick, jobs](std::size_t i) { run_one(world, policy, tick, jobs[i]); },
+        [&world, &policy, tick, jobs, budget](std::size_t i) {
+            run_one(world, policy, tick, jobs[job_at_turn(i, jobs.size(), tick)], budget);
+        },
         std::move(done));
 }
 

@@ -62,12 +62,22 @@ void CullingPolicy::begin_tick(const GameWorld& world, std::uint64_t tick) {
 
 void CullingPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
                            std::vector<Interest>& out) {
+    select_with(viewer, visibility::UpdateEffort::full, out);
+}
+
+void CullingPolicy::select_cheapest(const GameWorld& /*world*/, const Viewer& viewer,
+                                    std::vector<Interest>& out) {
+    select_with(viewer, visibility::UpdateEffort::cheapest, out);
+}
+
+void CullingPolicy::select_with(const Viewer& viewer, visibility::UpdateEffort effort,
+                                std::vector<Interest>& out) {
     out.clear();
     const auto index = client_index_.find(viewer.client_id);
     if (index == client_index_.end()) {
         return; // joined after begin_tick(): first decisions next tick
     }
-    manager_.update_client(index->second);
+    manager_.update_client(index->second, effort);
     if (const auto* d = manager_.decisions(viewer.client_id)) {
         for (const auto& r : d->replicated) {
             // update_interval 1, 2, 4 -> tier 0, 1, 2

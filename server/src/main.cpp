@@ -56,12 +56,19 @@ void add_options(CLI::App& app, dsoc::server::ServerConfig& config, ProgramOptio
         ->capture_default_str();
     app.add_option("--baked-stage", config.baked_stage,
                    "The map's baked cell visibility table first (true/false; baked and cached "
-                   "on first start: dsoc-bake MAP does it ahead)");
+                   "on first start: dsoc-bake MAP does it ahead)")
+        ->capture_default_str();
     app.add_option("--bake-cell-size", config.bake_cell_size, "Cell edge of the baked table")
         ->capture_default_str();
     app.add_option("--bake-dir", config.bake_dir, "Cache of baked tables");
     app.add_option("--exact-stages", config.exact_stages,
-                   "false: the baked table alone, no PVS or shaft test (true/false)");
+                   "With the baked stage: true runs the PVS and shaft tests after the table "
+                   "(tighter, dearer); false is the table alone")
+        ->capture_default_str();
+    app.add_option("--culling-budget", config.culling_budget,
+                   "Share of the tick period for culling; clients after it get the cheapest "
+                   "conservative answer (0 = off)")
+        ->capture_default_str();
     app.add_option("--pvs-stage", config.pvs_stage,
                    "Reject with the map's PVS before the culler (true/false)")
         ->capture_default_str();

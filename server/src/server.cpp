@@ -149,11 +149,17 @@ void Server::start_tick() {
     // The parallel phase: on the pool's threads; this thread goes back to the sockets.
     phase_running_ = true;
     phase_work_.emplace(io_.get_executor());
+    culling_budget_.enabled = config_.culling_budget > 0.0;
+    culling_budget_.deadline = tick_start_ + std::chrono::duration_cast<Clock::duration>(
+                                                 tick_period_ * config_.culling_budget);
+    culling_budget_.cheapest.store(0, std::memory_order_relaxed);
     start_client_ticks(
-        world_, *policy_, tick_, client_ticks_, pool_, [this](std::exception_ptr error) {
+        world_, *policy_, tick_, client_ticks_, pool_,
+        [this](std::exception_ptr error) {
             const auto phase_end = Clock::now();
             asio::post(io_, [this, phase_end, error] { finish_tick(phase_end, error); });
-        });
+        },
+        &culling_budget_);
 }
 
 void Server::finish_tick(Clock::time_point phase_end, std::exception_ptr error) {
@@ -165,6 +171,7 @@ void Server::finish_tick(Clock::time_point phase_end, std::exception_ptr error) 
     }
     stats_.culling_duration.observe(
         std::chrono::duration<double>(phase_end - culling_start_).count());
+    stats_.cheapest_client_ticks += culling_budget_.cheapest.load(std::memory_order_relaxed);
     send_snapshots();
     if (trace_ && !shutting_down_ && tick_ % static_cast<std::uint64_t>(config_.trace_every) == 0) {
         write_trace_tick();

@@ -37,6 +37,10 @@ std::string Server::render_metrics() const {
     out.counter("dsoc_skipped_ticks_total",
                 "Ticks dropped because the loop fell a whole period or more behind.",
                 d(stats_.skipped_ticks));
+    out.counter("dsoc_culling_cheapest_client_ticks_total",
+                "Client-ticks given the policy's cheapest conservative answer because their turn "
+                "came after the tick's culling budget (culling_budget).",
+                d(stats_.cheapest_client_ticks));
     out.gauge("dsoc_clients", "Clients in the game (after a valid hello).", d(clients_.size()));
     out.gauge("dsoc_connections", "Open connections, including those still in the handshake.",
               d(sessions_.size()));

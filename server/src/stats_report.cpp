@@ -11,14 +11,14 @@ std::string format_summary(const ServerStats& stats, const ServerConfig& config)
     const auto cost = common::summarize(stats.tick_cost_us);
     std::string out = fmt::format(
         "server: policy={} bots={} tick_rate={} Hz\n"
-        "  ticks            {} ({} late, {} skipped)\n"
+        "  ticks            {} ({} late, {} skipped; {} client-ticks over the culling budget)\n"
         "  tick cost        p50 {:.1f} us  p99 {:.1f} us  max {:.1f} us  (budget {:.0f} us)\n"
         "  sent             {} bytes, {} snapshots, {} entity updates\n"
         "  received         {} bytes from {} client(s)\n",
         config.policy, config.bots, config.tick_rate, stats.ticks, stats.late_ticks,
-        stats.skipped_ticks, cost.p50, cost.p99, cost.max, 1e6 / config.tick_rate, stats.bytes_sent,
-        stats.snapshots_sent, stats.entity_updates_sent, stats.bytes_received,
-        stats.clients_accepted);
+        stats.skipped_ticks, stats.cheapest_client_ticks, cost.p50, cost.p99, cost.max,
+        1e6 / config.tick_rate, stats.bytes_sent, stats.snapshots_sent, stats.entity_updates_sent,
+        stats.bytes_received, stats.clients_accepted);
     out += "  disconnects     ";
     if (stats.disconnects.empty()) {
         out += " none";
@@ -39,6 +39,7 @@ std::string format_json(const ServerStats& stats, const ServerConfig& config) {
     j["ticks"] = stats.ticks;
     j["late_ticks"] = stats.late_ticks;
     j["skipped_ticks"] = stats.skipped_ticks;
+    j["cheapest_client_ticks"] = stats.cheapest_client_ticks;
     j["tick_cost_us"] = {{"mean", cost.mean},
                          {"p50", cost.p50},
                          {"p95", cost.p95},

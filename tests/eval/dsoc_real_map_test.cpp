@@ -89,8 +89,50 @@ TEST(DsocWithoutAPvs, ZeroPopInOnAGeneratedCityWithEntityClusters) {
     }
 }
 
+TEST(DsocOnARealMap, ZeroPopInWhenHalfTheClientTicksGetTheCheapestAnswer) {
+    if (!std::filesystem::exists("/usr/share/games/openarena/baseoa/pak1-maps.pk3")) {
+        GTEST_SKIP() << "OpenArena maps not installed (scripts/setup installs openarena-081-maps)";
+    }
+    // The server's fail-open, emulated: half the client-ticks over budget get the
+    // culler's prepared stage alone (the map's PVS). 120 ticks x 32 viewers.
+    EvalOptions options = judged_every_tick("dsoc-fail-open", "oa_dm4", 32, 96, 4.0, 31);
+    options.policies = {"broadcast", "dsoc"};
+    const EvalResult full = run_evaluation(options, nullptr);
+    options.cheapest_share = 0.5;
+    const EvalResult loaded = run_evaluation(options, nullptr);
+    const auto metrics = [](const EvalResult& r, const char* name) {
+        for (const auto& m : r.policies) {
+            if (m.name == name) {
+                return m;
+            }
+        }
+        ADD_FAILURE() << "no " << name;
+        return PolicyMetrics{};
+    };
+    const PolicyMetrics dsoc_full = metrics(full, "dsoc");
+    const PolicyMetrics dsoc_loaded = metrics(loaded, "dsoc");
+    const PolicyMetrics broadcast = metrics(loaded, "broadcast");
+    EXPECT_EQ(dsoc_loaded.popin_present, 0u);
+    EXPECT_EQ(dsoc_loaded.popin_lookahead, 0u);
+    // About half the client-ticks were degraded, and counted.
+    const auto client_ticks = static_cast<double>(loaded.oracle_client_ticks);
+    EXPECT_GT(static_cast<double>(dsoc_loaded.tbv.cheapest_updates), 0.4 * client_ticks);
+    EXPECT_LT(static_cast<double>(dsoc_loaded.tbv.cheapest_updates), 0.6 * client_ticks);
+    EXPECT_EQ(dsoc_full.tbv.cheapest_updates, 0u);
+    // Looser than the full answer, and still culling.
+    EXPECT_GT(dsoc_loaded.replicated_pairs, dsoc_full.replicated_pairs);
+    EXPECT_LT(dsoc_loaded.replicated_pairs, broadcast.replicated_pairs * 8 / 10);
+    std::printf("dsoc on oa_dm4 with half its client-ticks at the cheapest effort: pop-in "
+                "%llu / %llu, %llu pairs (full effort %llu, broadcast %llu)\n",
+                static_cast<unsigned long long>(dsoc_loaded.popin_present),
+                static_cast<unsigned long long>(dsoc_loaded.popin_lookahead),
+                static_cast<unsigned long long>(dsoc_loaded.replicated_pairs),
+                static_cast<unsigned long long>(dsoc_full.replicated_pairs),
+                static_cast<unsigned long long>(broadcast.replicated_pairs));
+}
+
 /// dsoc-baked (the baked table, then the exact stages) and dsoc-table (the table
-/// alone, TBVs proven by it) judged every tick; returns the metrics by name.
+/// alone) judged every tick; returns the metrics by name.
 std::vector<PolicyMetrics> run_baked(EvalOptions options, const std::string& tag) {
     const auto dir = std::filesystem::temp_directory_path() / ("dsoc-eval-bakes-" + tag);
     std::filesystem::remove_all(dir);

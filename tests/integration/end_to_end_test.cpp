@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 namespace dsoc {
 namespace {
 
@@ -77,6 +79,42 @@ TEST(EndToEnd, ShutdownTellsEveryClientWhy) {
     EXPECT_EQ(report.unexpected_disconnects, 0);
     EXPECT_EQ(report.disconnect_reasons.at("server_shutdown"), 4u);
     EXPECT_EQ(server.stats().disconnects.at("server_shutdown"), 4u);
+}
+
+TEST(EndToEnd, ClientsPastTheCullingBudgetGetTheCheapestAnswerAndAreCounted) {
+    // A budget no tick can meet: every client's culling starts after it, so every
+    // client-tick gets the dsoc policy's prepared stage alone (the map's PVS), and the
+    // server still runs on time and sends every client its snapshots.
+    server::ServerConfig sc;
+    sc.bots = 60;
+    sc.tick_rate = 30;
+    sc.policy = "dsoc";
+    sc.culling_budget = 1e-9;
+    testing::RunningServer server(sc);
+
+    simclient::LoadConfig lc;
+    lc.port = server.port();
+    lc.clients = 4;
+    lc.duration_s = 1.5;
+    lc.ramp_up_s = 0.1;
+    lc.progress = false;
+    boost::asio::io_context io;
+    simclient::LoadRun run(io, lc);
+    run.start();
+    io.run();
+    server.stop();
+
+    const auto report = run.report();
+    EXPECT_EQ(report.connected, 4);
+    EXPECT_EQ(report.protocol_errors, 0u) << simclient::format_summary(report);
+    EXPECT_TRUE(report.passed());
+    EXPECT_EQ(report.missing_own_entity, 0);
+    const auto& stats = server.stats();
+    EXPECT_GT(stats.cheapest_client_ticks, 4u * 20u); // ~1.4 s at 30 Hz, 4 clients
+    EXPECT_LE(stats.cheapest_client_ticks, 4u * stats.ticks);
+    std::printf("%llu of at most %llu client-ticks served the cheapest answer\n",
+                static_cast<unsigned long long>(stats.cheapest_client_ticks),
+                static_cast<unsigned long long>(4u * stats.ticks));
 }
 
 } // namespace

@@ -224,6 +224,8 @@ TEST(IoDuringTick, PingsHellosAndMetricsAreAnsweredWhileTheParallelPhaseRuns) {
     config.insecure = true;
     config.map = "oa_dm4";
     config.policy = "dsoc";
+    config.baked_stage = false;  // the exact stages: long phases, no bake
+    config.culling_budget = 0.0; // and no fail-open to shorten them
     config.bots = 300;
     config.threads = 1;    // one pool thread: long phases on any machine
     config.tick_rate = 60; // more than the phase allows: ticks run back to back

@@ -42,6 +42,7 @@ std::vector<std::string> run_server_ticks(const std::string& policy, int threads
     ServerConfig config;
     config.bots = 120;
     config.policy = policy;
+    config.baked_stage = false; // the exact stages (no bake in this test)
     config.threads = threads;
     config.seed = 9;
     GameWorld world(config, testing::rooms_map());

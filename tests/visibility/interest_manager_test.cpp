@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -544,6 +545,131 @@ TEST(Tbv, FallBoundUnderGravityStartsFromTheFloorSpeedPlusTheMargin) {
     const Aabb reach = reachable_box(point, limits, 0.5f, 1.0f, 0.0f);
     EXPECT_FLOAT_EQ(reach.max.z, 135.0f + 18.0f);
     EXPECT_FLOAT_EQ(reach.min.z, -210.25f);
+}
+
+/// The wall world with a prepared stage that costs a bit test and is looser than the
+/// full test, as a baked table or a PVS is: it proves a box hidden only when the box is
+/// far behind the wall (min.x >= kFar) and the region left of it; the full test is exact.
+/// `shortcuts_pay` is what it says of itself (RegionVisibility::pair_shortcuts_pay()).
+class FarCellVisibility final : public RegionVisibility {
+public:
+    static constexpr float kFar = 1000.0f;
+    explicit FarCellVisibility(int* builds, bool shortcuts_pay = true)
+        : wall_(builds), shortcuts_pay_(shortcuts_pay) {}
+    void build(const Aabb& region) override {
+        wall_.build(region);
+        left_ = region.max.x <= -WallVisibility::kWall;
+    }
+    [[nodiscard]] Visibility test_box(const Aabb& box) const override {
+        return wall_.test_box(box);
+    }
+    [[nodiscard]] bool has_prepared_stage() const override { return true; }
+    [[nodiscard]] bool pair_shortcuts_pay() const override { return shortcuts_pay_; }
+    void prepare(const Aabb& box, PreparedBox& out) const override {
+        out.box = box;
+        out.keys = {box.min.x >= kFar ? 1 : 0};
+        out.prepared = true;
+    }
+    [[nodiscard]] Visibility test_prepared(const PreparedBox& p) const override {
+        return test_prepared_coarse(p) == Visibility::occluded ? Visibility::occluded
+                                                               : wall_.test_box(p.box);
+    }
+    [[nodiscard]] Visibility test_prepared_coarse(const PreparedBox& p) const override {
+        return left_ && p.keys == std::vector<std::int32_t>{1} ? Visibility::occluded
+                                                               : Visibility::visible;
+    }
+
+private:
+    WallVisibility wall_;
+    bool shortcuts_pay_;
+    bool left_ = false;
+};
+
+std::vector<EntityId> replicated_ids(const InterestManager& m, ClientId client) {
+    std::vector<EntityId> ids;
+    for (const Replicated& r : m.decisions(client)->replicated) {
+        ids.push_back(r.id);
+    }
+    return ids;
+}
+
+/// A viewer (entity 1, client 100) at x = -500 and 30 walkers on both sides of the wall,
+/// near it and far behind it, in groups of three (entity clusters).
+void add_walkers(InterestManager& m) {
+    ClientDesc d;
+    d.viewer = 1;
+    d.lookahead_ticks = 2;
+    ASSERT_TRUE(m.add_entity(1, EntityDesc{kHalf, {}}, box_at({-500, 0, 0})));
+    ASSERT_TRUE(m.add_client(100, d));
+    for (EntityId id = 2; id < 32; ++id) {
+        const float x = std::array<float, 3>{-300.0f, 400.0f, 1500.0f}[id % 3];
+        ASSERT_TRUE(m.add_entity(id, EntityDesc{kHalf, {}},
+                                 box_at({x, 20.0f * static_cast<float>((id - 2) / 3), 0})));
+    }
+}
+
+void move_walkers(InterestManager& m, std::uint64_t tick) {
+    for (EntityId id = 2; id < 32; ++id) {
+        const float x = std::array<float, 3>{-300.0f, 400.0f, 1500.0f}[id % 3];
+        const float dx = 4.0f * static_cast<float>((tick + id) % 8);
+        m.set_entity_box(id, box_at({x + dx, 20.0f * static_cast<float>((id - 2) / 3), 0}));
+    }
+}
+
+TEST(InterestManagerShortcuts, ACullerWhoseTestsAreBitTestsGetsNoTbvsOrClustersAndTheSameSets) {
+    DSOCConfig c;
+    c.entity_cluster_size = 64.0f;
+    c.validate_state = true;
+    int builds = 0;
+    const Aabb world{glm::vec3(-4096.0f), glm::vec3(4096.0f)};
+    InterestManager with(c, world, [&] { return std::make_unique<FarCellVisibility>(&builds); });
+    InterestManager without(c, world,
+                            [&] { return std::make_unique<FarCellVisibility>(&builds, false); });
+    add_walkers(with);
+    add_walkers(without);
+    for (std::uint64_t tick = 1; tick <= 40; ++tick) {
+        move_walkers(with, tick);
+        move_walkers(without, tick);
+        with.update(tick);
+        without.update(tick);
+        ASSERT_EQ(replicated_ids(with, 100), replicated_ids(without, 100)) << "tick " << tick;
+        // Something is culled: the 20 walkers behind the wall.
+        ASSERT_EQ(replicated_ids(without, 100).size(), 11u) << "tick " << tick;
+    }
+    EXPECT_GT(with.stats(100)->tbvs_created, 0u);
+    EXPECT_GT(with.stats(100)->cluster_tests, 0u);
+    EXPECT_EQ(without.stats(100)->tbvs_created, 0u);
+    EXPECT_EQ(without.stats(100)->cluster_tests, 0u);
+    EXPECT_EQ(without.tbv_count(100), 0u);
+}
+
+TEST(InterestManagerEffort, TheCheapestEffortIsThePreparedStageAloneAndStaysConservative) {
+    DSOCConfig c;
+    c.validate_state = true;
+    int builds = 0;
+    InterestManager m(c, Aabb{glm::vec3(-4096.0f), glm::vec3(4096.0f)},
+                      [&] { return std::make_unique<FarCellVisibility>(&builds); });
+    add_walkers(m);
+    const auto near_behind = [](EntityId id) { return id % 3 == 1; };
+    const auto far_behind = [](EntityId id) { return id % 3 == 2; };
+    for (std::uint64_t tick = 1; tick <= 30; ++tick) {
+        move_walkers(m, tick);
+        m.begin_update(tick);
+        // Ticks 11-20 are over budget.
+        const bool cheapest = tick > 10 && tick <= 20;
+        m.update_client(0, cheapest ? UpdateEffort::cheapest : UpdateEffort::full);
+        const auto problems = m.validate_state();
+        ASSERT_TRUE(problems.empty()) << problems.front();
+        for (EntityId id = 2; id < 32; ++id) {
+            const auto ids = replicated_ids(m, 100);
+            const bool sent = std::find(ids.begin(), ids.end(), id) != ids.end();
+            // Far behind the wall: hidden at either effort. Near behind it: hidden by the
+            // full test only. In front: always sent.
+            const bool expected = !far_behind(id) && !(near_behind(id) && !cheapest);
+            ASSERT_EQ(sent, expected) << "entity " << id << " at tick " << tick;
+        }
+    }
+    EXPECT_EQ(m.stats(100)->cheapest_updates, 10u);
 }
 
 } // namespace

@@ -162,6 +162,9 @@ InterestManager::InterestManager(const DSOCConfig& config, const Aabb& world_bou
         preparer_ = make_visibility_();
         coarse_tbvs_ = preparer_ != nullptr && preparer_->has_prepared_stage();
     }
+    const bool shortcuts_pay = preparer_ == nullptr || preparer_->pair_shortcuts_pay();
+    tbvs_enabled_ = config_.tbvs_enabled && shortcuts_pay;
+    clusters_enabled_ = config_.entity_cluster_size > 0.0f && shortcuts_pay;
 }
 
 InterestManager::~InterestManager() = default;
@@ -367,7 +370,7 @@ void InterestManager::begin_update(std::uint64_t tick) {
             e.prepared.box = e.box;
         }
         // Refresh the shared candidates when half the longest has run out (or it jumped).
-        if (coarse_tbvs_ && config_.tbvs_enabled &&
+        if (coarse_tbvs_ && tbvs_enabled_ &&
             (!e.has_candidates || e.teleported_at == tick ||
              tick >= e.candidates_tick + static_cast<std::uint64_t>(e.tbv_durations[0] / 2))) {
             e.has_candidates = true;
@@ -391,7 +394,7 @@ void InterestManager::build_clusters() {
         clusters_[k].members.clear();
     }
     cluster_count_ = 0;
-    if (config_.entity_cluster_size <= 0.0f) {
+    if (!clusters_enabled_) {
         return;
     }
     cluster_cells_.clear();
@@ -463,8 +466,10 @@ Aabb InterestManager::eye_region_for(const ClientSlot& c, glm::vec3& eye) const 
                     : region;
 }
 
-void InterestManager::update_client(std::size_t index) {
+void InterestManager::update_client(std::size_t index, UpdateEffort effort) {
     ClientSlot& c = *clients_[index];
+    const bool cheapest = effort == UpdateEffort::cheapest;
+    c.stats.cheapest_updates += cheapest ? 1 : 0;
     c.region = eye_region_for(c, c.eye);
     if (c.region.is_empty()) { // no eye: nothing may be known
         for (auto& pair : c.pairs) {
@@ -476,12 +481,14 @@ void InterestManager::update_client(std::size_t index) {
         return;
     }
 
-    // 1. The culler: reuse it while the reachable region stays inside its region.
+    // 1. The culler: reuse it while the reachable region stays inside its region. Only
+    //    TBVs need a culler for a larger region than this tick's; without them (and with
+    //    exact_region_tests) it is built for this tick's region alone.
+    const bool reuse = config_.reuse_buffers && (tbvs_enabled_ || !config_.exact_region_tests);
     bool rebuilt = false;
-    if (!config_.reuse_buffers || c.buffer_region.is_empty() ||
-        !c.buffer_region.contains(c.region)) {
+    if (!reuse || c.buffer_region.is_empty() || !c.buffer_region.contains(c.region)) {
         c.buffer_region = c.region;
-        if (config_.reuse_buffers && config_.region_reuse_margin > 0.0f) {
+        if (reuse && config_.region_reuse_margin > 0.0f) {
             const Aabb grown = clip(c.region.expanded(config_.region_reuse_margin));
             c.buffer_region = clipper_ ? clipper_(c.eye, grown, EyeReach{}) : grown;
         }
@@ -492,8 +499,9 @@ void InterestManager::update_client(std::size_t index) {
 
     // The current boxes need only be hidden from this tick's region: with a reused
     // (larger) buffer region, test them against a culler built for exactly it.
+    // (The cheapest effort tests against the buffer's region, which holds this one.)
     RegionVisibility* now = c.visibility.get();
-    if (config_.exact_region_tests &&
+    if (config_.exact_region_tests && !cheapest &&
         (c.buffer_region.min != c.region.min || c.buffer_region.max != c.region.max)) {
         if (!c.exact) {
             c.exact = make_visibility_();
@@ -564,7 +572,7 @@ void InterestManager::update_client(std::size_t index) {
     // 5a. Clusters with at least two members due a full test: one test of the union
     //     of their boxes may hide them all.
     c.cluster_hidden.assign(cluster_count_, 0);
-    for (std::uint32_t k = 0; k < cluster_count_; ++k) {
+    for (std::uint32_t k = 0; k < (cheapest ? 0 : cluster_count_); ++k) {
         const EntityCluster& cluster = clusters_[k];
         if (cluster.members.size() < kMinClusterMembers) {
             continue;
@@ -610,6 +618,13 @@ void InterestManager::update_client(std::size_t index) {
             continue;
         }
         ++c.stats.box_tests;
+        if (cheapest) {
+            // A box set after begin_update() has no preparation: visible, never guessed.
+            const bool hidden =
+                fresh && now->test_prepared_coarse(e.prepared) == Visibility::occluded;
+            pair.state = hidden ? PairState::hidden_expired : PairState::visible;
+            continue;
+        }
         const bool quick = quick_test(slot);
         const Visibility v =
             quick ? (fresh ? now->test_prepared_quick(e.prepared) : now->test_box_quick(e.box))
@@ -657,7 +672,7 @@ Aabb InterestManager::tbv_box(const EntitySlot& e, int duration) const {
 
 void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
     auto& pair = c.pairs[slot];
-    if (!config_.tbvs_enabled || tick_ < pair.next_tbv_tick ||
+    if (!tbvs_enabled_ || tick_ < pair.next_tbv_tick ||
         entities_[slot].tbvs_at_tick_start >= config_.max_tbvs_per_object) {
         pair.state = PairState::hidden_expired;
         return;
@@ -788,7 +803,7 @@ void InterestManager::hide_cluster(ClientSlot& c, std::uint32_t cluster,
         }
     }
     // With a prepared stage each member's own TBV costs a few bit tests: no group.
-    if (coarse_tbvs_ || !config_.tbvs_enabled) {
+    if (coarse_tbvs_ || !tbvs_enabled_) {
         for (const std::uint32_t slot : members) {
             hide(c, slot);
         }

@@ -144,6 +144,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
     env.fusion = options.fusion;
     env.portal_depth = options.portal_depth;
     env.entity_cluster_size = options.entity_cluster_size;
+    env.cheapest_share = options.cheapest_share;
 
     std::vector<std::string> names = options.policies;
     if (names.empty()) {

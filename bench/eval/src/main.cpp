@@ -65,6 +65,10 @@ int main(int argc, char** argv) {
     app.add_option("--dsoc-set", options.dsoc_overrides,
                    "DSOCConfig KEY=VALUE for the dsoc policies (repeatable), e.g. "
                    "region_reuse_margin=8");
+    app.add_option("--cheapest-share", options.cheapest_share,
+                   "emulate an overloaded server: this share of the culling policies' "
+                   "client-ticks gets the cheapest conservative answer (the server's fail-open)")
+        ->check(CLI::Range(0.0, 1.0));
     app.add_option("--entity-clusters", options.entity_cluster_size,
                    "DSOCConfig::entity_cluster_size for occlusion and dsoc alike (0 = off)")
         ->capture_default_str();

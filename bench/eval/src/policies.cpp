@@ -124,8 +124,8 @@ public:
     CullingPolicy(std::string name, const visibility::DSOCConfig& config, const PolicyEnv& env,
                   CullerStages stages = CullerStages::pvs_exact)
         : name_(std::move(name)), lookahead_(env.lookahead_ticks),
-          clipper_(std::make_shared<const sim::ReachClipper>(env.map->collision_brushes,
-                                                             env.world->move())),
+          cheapest_share_(env.cheapest_share), clipper_(std::make_shared<const sim::ReachClipper>(
+                                                   env.map->collision_brushes, env.world->move())),
           manager_(config, env.map->bounds.expanded(64.0f), make_culler(stages, env),
                    [clipper = clipper_](glm::vec3 eye, const visibility::Aabb& region,
                                         const visibility::EyeReach& reach) {
@@ -169,10 +169,12 @@ public:
         manager_.begin_update(frame.tick);
     }
 
-    void select(std::size_t client, const WorldFrame& /*frame*/,
+    void select(std::size_t client, const WorldFrame& frame,
                 std::vector<std::uint32_t>& out) override {
         // Clients were added in order, so index i is client i.
-        manager_.update_client(client);
+        manager_.update_client(client, over_budget(client, frame.tick)
+                                           ? visibility::UpdateEffort::cheapest
+                                           : visibility::UpdateEffort::full);
         out.clear();
         if (const auto* d = manager_.decisions(static_cast<visibility::ClientId>(client))) {
             for (const auto& r : d->replicated) {
@@ -203,6 +205,7 @@ public:
             t.tbvs_expired += s->tbvs_expired;
             t.evictions += s->evictions;
             t.teleports += s->teleports;
+            t.cheapest_updates += s->cheapest_updates;
         }
         return t;
     }
@@ -216,8 +219,22 @@ public:
     }
 
 private:
+    /// Whether this client-tick is one of the emulated overload's (cheapest_share_ of
+    /// them, chosen by a hash: the same in every run and at any thread count).
+    [[nodiscard]] bool over_budget(std::size_t client, std::uint64_t tick) const {
+        if (cheapest_share_ <= 0.0) {
+            return false;
+        }
+        std::uint64_t z = tick << 32 ^ client;
+        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+        z ^= z >> 31;
+        return static_cast<double>(z >> 11) * 0x1.0p-53 < cheapest_share_;
+    }
+
     std::string name_;
     int lookahead_;
+    double cheapest_share_;
     std::shared_ptr<const sim::ReachClipper> clipper_;
     visibility::InterestManager manager_;
     visibility::EntityDesc entity_desc_;

@@ -254,6 +254,7 @@ std::string to_json(const EvalResult& r, const std::string& command) {
                         {"tbv_tests", m.tbv.tbv_tests},
                         {"cluster_tests", m.tbv.cluster_tests},
                         {"cluster_hits", m.tbv.cluster_hits},
+                        {"cheapest_updates", m.tbv.cheapest_updates},
                         {"created", m.tbv.tbvs_created},
                         {"created_per_client_s", d.tbvs_created_per_client_s},
                         {"merged", m.tbv.tbvs_merged},

@@ -11,6 +11,8 @@
 #include "dsoc/server/replication_state.hpp"
 #include "dsoc/server/worker_pool.hpp"
 
+#include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <exception>
 #include <functional>
@@ -39,20 +41,34 @@ struct ClientTick {
     bool network_lod = true; ///< false: every entity on tier 0
 };
 
+/// Fail-open for one tick's parallel phase: a job whose turn comes after `deadline` gets
+/// the policy's select_cheapest() instead of select() (still conservative, far cheaper),
+/// and is counted in `cheapest`. The jobs start in an order that moves every tick, so
+/// the late turns fall on different clients. Without a deadline the bytes do not
+/// depend on timing.
+struct CullingBudget {
+    bool enabled = false;
+    std::chrono::steady_clock::time_point deadline;
+    std::atomic<std::uint64_t> cheapest{0}; ///< jobs given the cheapest answer
+};
+
 /// For every job: policy.select() (plus the viewer's own entity), then, when
 /// `build`, the snapshot of `tick` (and its frame when `frame` is set). policy.begin_tick(world,
 /// tick) must have run; `world` and the policy's shared state are only read meanwhile.
+/// `budget` (may be null: no deadline) must outlive the call.
 void run_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
-                      std::span<const ClientTick> jobs, WorkerPool& pool);
+                      std::span<const ClientTick> jobs, WorkerPool& pool,
+                      CullingBudget* budget = nullptr);
 
 /// The same jobs, on the pool's own threads (WorkerPool::start): returns at once, and
 /// `done(error)` runs on a pool thread once every job has returned (error: the first
 /// exception a job threw, or null). Until then the jobs own `world`, `policy`, the
 /// span's memory and everything the jobs point to: the caller must neither write nor
-/// destroy any of it (reading `world` is fine), and must keep all of it alive. The
-/// bytes are the same as run_client_ticks() gives.
+/// destroy any of it (reading `world` is fine), and must keep all of it alive (`budget`
+/// too, when not null). The bytes are the same as run_client_ticks() gives.
 void start_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
                         std::span<const ClientTick> jobs, WorkerPool& pool,
-                        std::function<void(std::exception_ptr)> done);
+                        std::function<void(std::exception_ptr)> done,
+                        CullingBudget* budget = nullptr);
 
 } // namespace dsoc::server

@@ -25,6 +25,7 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("bake_cell_size", config.bake_cell_size);
     visit("bake_dir", config.bake_dir);
     visit("exact_stages", config.exact_stages);
+    visit("culling_budget", config.culling_budget);
     visit("region_reuse_margin", config.region_reuse_margin);
     visit("latency_allowance_ms", config.latency_allowance_ms);
     visit("trace_file", config.trace_file);

@@ -29,6 +29,9 @@ public:
     [[nodiscard]] std::string_view name() const override { return name_; }
     void begin_tick(const GameWorld& world, std::uint64_t tick) override;
     void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
+    /// The culler's prepared stage alone (visibility::UpdateEffort::cheapest).
+    void select_cheapest(const GameWorld& world, const Viewer& viewer,
+                         std::vector<Interest>& out) override;
     void add_viewer(std::uint32_t client_id, std::uint32_t entity_id) override;
     void remove_viewer(std::uint32_t client_id) override;
     [[nodiscard]] std::size_t tbvs_alive() const override;
@@ -37,6 +40,8 @@ public:
 
 private:
     void sync_entities(const GameWorld& world);
+    void select_with(const Viewer& viewer, visibility::UpdateEffort effort,
+                     std::vector<Interest>& out);
 
     std::string name_;
     std::shared_ptr<const sim::ReachClipper> clipper_;

@@ -47,6 +47,13 @@ public:
     /// once per viewer per tick; concurrent calls for distinct viewers are safe.
     virtual void select(const GameWorld& world, const Viewer& viewer,
                         std::vector<Interest>& out) = 0;
+    /// select() at the least CPU the policy can answer with, still conservative for
+    /// policies that are (a tick over its culling budget). The same call rules as
+    /// select(), which it replaces for that viewer and tick. Default: select().
+    virtual void select_cheapest(const GameWorld& world, const Viewer& viewer,
+                                 std::vector<Interest>& out) {
+        select(world, viewer, out);
+    }
     /// A client joined, viewing from `entity_id`; it gets its first snapshot after the
     /// next begin_tick().
     virtual void add_viewer(std::uint32_t /*client_id*/, std::uint32_t /*entity_id*/) {}

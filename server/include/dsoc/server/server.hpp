@@ -85,6 +85,9 @@ struct ServerStats {
     /// last job returns): interest evaluation (culling) and snapshot building of every
     /// client on the worker pool.
     DurationHistogram culling_duration;
+    /// Client-ticks served the policy's cheapest answer: their turn came after the
+    /// tick's culling budget (ServerConfig::culling_budget).
+    std::uint64_t cheapest_client_ticks = 0;
 };
 
 class Server final : private SessionHost {
@@ -173,6 +176,7 @@ private:
         phase_work_; // keeps io_context::run() going until the hand-over
     std::chrono::steady_clock::time_point tick_start_;
     std::chrono::steady_clock::time_point culling_start_;
+    CullingBudget culling_budget_; ///< this tick's fail-open deadline (config culling_budget)
     std::vector<ClientTick> client_ticks_; // this tick's jobs, in client id order
     std::vector<Client*> tick_clients_;    // the client of each job (clients_ is a std::map)
     SharedPoses shared_poses_;             // this tick's quantized poses, for every job

@@ -51,16 +51,23 @@ struct ServerConfig {
     bool pvs_stage = true;
     /// dsoc and occlusion: the map's baked cell visibility table first
     /// (docs/baked-visibility.md), loaded from the cache or baked at start (with
-    /// progress on stderr; minutes for a large map, once).
-    bool baked_stage = false;
+    /// progress on stderr; about a minute for oa_dm4 on two cores, once per map and
+    /// cell size: `dsoc-bake MAP` does it ahead).
+    bool baked_stage = true;
     /// Cell edge of the baked table. [Units: world units] [Limit: 4..1024]
     float bake_cell_size = 32.0f;
     /// Where baked tables are kept; empty: $DSOC_BAKE_DIR, $XDG_CACHE_HOME/dsoc/bakes or
     /// ~/.cache/dsoc/bakes.
     std::string bake_dir;
-    /// false: the baked table alone (no PVS, no shaft test): the cheapest conservative
-    /// answer, for servers that want capacity over tightness. Needs baked_stage.
-    bool exact_stages = true;
+    /// With baked_stage: whether the PVS and shaft stages follow the table. The default
+    /// (false) is the table alone, the cheapest conservative answer (docs/operations.md
+    /// has what true costs and buys). Without baked_stage the exact stages always run.
+    bool exact_stages = false;
+    /// Fail-open: clients whose culling has not started this share of the tick period
+    /// after the tick began get the policy's cheapest conservative answer (the baked
+    /// table or the PVS alone, no exact stage) instead of making the tick late; counted
+    /// in dsoc_culling_cheapest_client_ticks_total. 0: off. [Limit: 0..1]
+    double culling_budget = 0.5;
     /// The dsoc policy reuses a client's culler region while the client's reachable
     /// eye region stays inside it grown by this margin: larger margins re-test hidden
     /// entities' TBVs less often but cull less. [Units: world units] [Limit: 0..512]

@@ -35,6 +35,8 @@ public:
     [[nodiscard]] Visibility test_prepared_quick(const PreparedBox& p) const override;
     [[nodiscard]] Visibility test_prepared_hinted(const PreparedBox& p,
                                                   std::uint32_t& hint) const override;
+    /// A pair's first answer is a few bit tests: TBVs and entity clusters do not pay.
+    [[nodiscard]] bool pair_shortcuts_pay() const override { return false; }
     /// The table alone: `visible` whenever it passes the box (the next stage is skipped).
     [[nodiscard]] Visibility test_prepared_coarse(const PreparedBox& p) const override;
     /// Keys are runs of open cells (CellVisibilityTable::open_runs_of): the union of

@@ -73,12 +73,14 @@ struct DSOCConfig {
     /// Entities whose box centres fall in the same cell of this size (at least 3 of
     /// them) are first tested together, per client: when the union of their boxes is
     /// hidden, so is each of them, with one test instead of one each, and (without a
-    /// prepared stage) they share one TBV group made with one test. 0 = off.
-    /// [Units: world units] [Limit: 0 or >= 16]
+    /// prepared stage) they share one TBV group made with one test. 0 = off; also off
+    /// when the culler says they do not pay (RegionVisibility::pair_shortcuts_pay(): a
+    /// baked table first). [Units: world units] [Limit: 0 or >= 16]
     float entity_cluster_size = 512.0f;
 
     /// false: no TBVs at all - every hidden entity is re-tested every tick (the plain
-    /// "occlusion" policy, for comparison). [Units: flag]
+    /// "occlusion" policy, for comparison). Also none when the culler says they do not
+    /// pay (RegionVisibility::pair_shortcuts_pay(): a baked table first). [Units: flag]
     bool tbvs_enabled = true;
     /// false: rebuild every client's culler every tick (no region reuse). [Units: flag]
     bool reuse_buffers = true;

@@ -104,6 +104,16 @@ struct ClientDecisions {
     std::vector<EntityId> leave;        ///< no longer replicated
 };
 
+/// How much of the culler one client's update may use.
+enum class UpdateEffort : std::uint8_t {
+    full, ///< every stage
+    /// The culler's cheap prepared stage alone (a baked table, else the map's PVS) for
+    /// every box, and no new TBVs or clusters: still conservative (a box is hidden only
+    /// when that stage proves it), looser, and cheap; for a tick over its CPU budget.
+    /// Without a prepared stage it is the full test.
+    cheapest,
+};
+
 /// Counters since the client joined.
 struct ClientStats {
     std::uint64_t buffer_builds = 0;
@@ -118,6 +128,7 @@ struct ClientStats {
     std::uint64_t teleports = 0;     ///< TBVs voided by a jump beyond the limits
     std::uint64_t cluster_tests = 0; ///< entity clusters tested (DSOCConfig::entity_cluster_size)
     std::uint64_t cluster_hits = 0;  ///< clusters proven hidden: their entities need no own test
+    std::uint64_t cheapest_updates = 0; ///< updates run with UpdateEffort::cheapest
 };
 
 class InterestManager {
@@ -160,7 +171,7 @@ public:
     /// by all clients (each box prepared for the culler; the entity's candidate TBVs).
     void begin_update(std::uint64_t tick);
     /// Per-client part; distinct indexes may run concurrently. index < client_count().
-    void update_client(std::size_t index);
+    void update_client(std::size_t index, UpdateEffort effort = UpdateEffort::full);
 
     [[nodiscard]] std::size_t client_count() const { return clients_.size(); }
     [[nodiscard]] ClientId client_at(std::size_t index) const;
@@ -192,6 +203,7 @@ private:
 
     [[nodiscard]] int tbv_duration(const EntitySlot& e) const;
     [[nodiscard]] Aabb tbv_box(const EntitySlot& e, int duration) const;
+    /// Hides `slot` from `c`: with a TBV when one is allowed and proven, else expired.
     void hide(ClientSlot& c, std::uint32_t slot);
     /// Hides every member of a cluster proven hidden that still needs a decision this
     /// tick: one TBV group for all of them when the union of their TBVs is hidden,
@@ -223,6 +235,10 @@ private:
     std::unique_ptr<RegionVisibility> preparer_;
     /// The culler has a cheap prepared stage: TBVs are proven and re-proven by it alone.
     bool coarse_tbvs_ = false;
+    /// TBVs and entity clusters are used: the config asks for them and the culler's
+    /// tests are dear enough for them to pay (RegionVisibility::pair_shortcuts_pay()).
+    bool tbvs_enabled_ = true;
+    bool clusters_enabled_ = true;
     float tick_seconds_;
     std::uint64_t tick_ = 0;
     std::vector<EntitySlot> entities_;

@@ -81,6 +81,12 @@ public:
         std::sort(into.keys.begin(), into.keys.end());
         into.keys.erase(std::unique(into.keys.begin(), into.keys.end()), into.keys.end());
     }
+    /// False when every test starts with a stage that answers most pairs for a few bit
+    /// tests (a baked cell table): the InterestManager's per-pair shortcuts, TBVs and
+    /// entity clusters, exist to skip dear tests and then cost more than they save, so
+    /// the manager does without them. The answers are the same either way (a TBV proven
+    /// by this stage hides only what it would hide); only the cost differs.
+    [[nodiscard]] virtual bool pair_shortcuts_pay() const { return true; }
     /// The cheap first stage alone (for long-lived TBVs, re-proven after every rebuild):
     /// `occluded` only when that stage proves it, so it proves less than test_prepared().
     /// Without a prepared stage this is test_prepared().

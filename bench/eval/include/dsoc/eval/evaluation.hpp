@@ -37,6 +37,10 @@ struct EvalOptions {
     int portal_depth = visibility::ShaftOcclusion::kDefaultPortalDepth;
     /// DSOCConfig::entity_cluster_size for every InterestManager policy. [Units: world units]
     float entity_cluster_size = visibility::DSOCConfig{}.entity_cluster_size;
+    /// An overloaded server, emulated: this share of the culling policies' client-ticks
+    /// (the same ones in every run) gets UpdateEffort::cheapest, as the server's
+    /// fail-open gives clients past its culling budget. [Limit: 0..1]
+    double cheapest_share = 0.0;
     /// Also judge every pair from a lattice of eyes over the client's reachable eye region
     /// (the region the culling policies cover): the region bound. Costly.
     bool region_bound = false;

@@ -44,6 +44,8 @@ struct PolicyEnv {
     int portal_depth = visibility::ShaftOcclusion::kDefaultPortalDepth;
     /// DSOCConfig::entity_cluster_size for the culling policies. [Units: world units]
     float entity_cluster_size = visibility::DSOCConfig{}.entity_cluster_size;
+    /// EvalOptions::cheapest_share. [Limit: 0..1]
+    double cheapest_share = 0.0;
     /// The latency allowance the culling policies promise. [Units: ticks]
     int lookahead_ticks = 5;
     /// The map's baked cell visibility table, for the dsoc-baked and dsoc-table
@@ -66,6 +68,7 @@ struct TbvSummary {
     std::uint64_t tbvs_expired = 0;
     std::uint64_t evictions = 0;
     std::uint64_t teleports = 0;
+    std::uint64_t cheapest_updates = 0; ///< client-ticks at UpdateEffort::cheapest
 };
 
 class Policy {
