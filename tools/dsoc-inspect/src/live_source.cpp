@@ -17,6 +17,9 @@ server::ServerConfig server_config(const LiveOptions& o) {
     c.latency_allowance_ms = o.latency_allowance_ms;
     c.culler = o.culler;
     c.seed = o.seed;
+    // The exact stages, as the classifier below: the pictures show TBVs and what the
+    // PVS and shaft stages decide (behind the baked table there are no TBVs).
+    c.baked_stage = false;
     return c;
 }
 
