@@ -3,6 +3,7 @@
 #include "dsoc/sim/motion_limits.hpp"
 
 #include <algorithm>
+#include <string>
 
 namespace dsoc::server {
 
@@ -52,6 +53,10 @@ void CullingPolicy::sync_entities(const GameWorld& world) {
 }
 
 void CullingPolicy::begin_tick(const GameWorld& world, std::uint64_t tick) {
+    // ValidateDSOCState of the last tick, once every client has been updated.
+    if (manager_.config().validate_state) {
+        manager_.require_valid_state("before tick " + std::to_string(tick));
+    }
     sync_entities(world);
     manager_.begin_update(tick);
     client_index_.clear();

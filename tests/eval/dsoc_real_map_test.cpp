@@ -29,6 +29,7 @@ EvalOptions judged_every_tick(const char* name, const char* map, int viewers, in
     s.duration_s = seconds;
     s.oracle_every = 1;
     s.seed = seed;
+    options.dsoc_overrides = {"validate_state=true"}; // ValidateDSOCState every tick
     return options;
 }
 

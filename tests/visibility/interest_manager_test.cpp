@@ -672,5 +672,90 @@ TEST(InterestManagerEffort, TheCheapestEffortIsThePreparedStageAloneAndStaysCons
     EXPECT_EQ(m.stats(100)->cheapest_updates, 10u);
 }
 
+/// The client (100) looks from x = -500 with no lookahead: a box is visible exactly when
+/// it reaches the viewer's side of the wall (min.x < 8).
+bool visible_from_the_left(const Aabb& box) {
+    return box.min.x < WallVisibility::kWall;
+}
+
+bool sent(const InterestManager& m, EntityId id) {
+    const auto ids = replicated_ids(m, 100);
+    return std::find(ids.begin(), ids.end(), id) != ids.end();
+}
+
+TEST(FuzzyTbvs, AnEntityOutsideItsPredictedTbvIsCaughtCountedAndTestedThatTick) {
+    DSOCConfig c;
+    c.strategy = TbvStrategy::fuzzy;
+    c.tbv_merge_distance = 0.0f;
+    c.validate_state = true; // update() throws if an invariant still fails after it
+    int builds = 0;
+    InterestManager m(c, Aabb{glm::vec3(-4096.0f), glm::vec3(4096.0f)},
+                      [&] { return std::make_unique<WallVisibility>(&builds); });
+    ASSERT_TRUE(m.add_entity(1, EntityDesc{kHalf, {}}, box_at({-500, 0, 0})));
+    ClientDesc d;
+    d.viewer = 1;
+    d.lookahead_ticks = 0;
+    ASSERT_TRUE(m.add_client(100, d));
+    // Entity 2 strolls away from the wall behind it at 1 unit per tick, slow enough
+    // for the longest TBVs, which the fuzzy strategy predicts along that stroll; then
+    // it turns and runs back through the wall at 10 units per tick (within its 320 u/s,
+    // 10.7 per tick): out of its predicted TBV long before that TBV expires.
+    float x = 300.0f;
+    ASSERT_TRUE(m.add_entity(2, EntityDesc{kHalf, {}}, box_at({x, 0, 0})));
+    int broken_before_update = 0;
+    bool seen = false;
+    for (std::uint64_t tick = 1; tick <= 52; ++tick) {
+        x += tick <= 20 ? 1.0f : -10.0f;
+        const Aabb box = box_at({x, 0, 0});
+        m.set_entity_box(2, box);
+        // ValidateDSOCState sees the escape before the update catches it.
+        const auto escapes = m.stats(100)->fuzzy_escapes;
+        bool broken = false;
+        for (const std::string& problem : m.validate_state()) {
+            broken = broken || problem.find("left its TBV") != std::string::npos;
+        }
+        m.update(tick);
+        broken_before_update += broken && m.stats(100)->fuzzy_escapes > escapes ? 1 : 0;
+        EXPECT_EQ(sent(m, 2), visible_from_the_left(box)) << "tick " << tick;
+        seen = seen || visible_from_the_left(box);
+    }
+    EXPECT_TRUE(seen); // it did come into view
+    EXPECT_GT(broken_before_update, 0);
+    EXPECT_GT(m.stats(100)->fuzzy_escapes, 0u);
+    EXPECT_GT(m.stats(100)->tbvs_created, 0u); // it was hidden with TBVs on the first leg
+}
+
+TEST(OscillatingEntity, IsSentExactlyWhileVisibleAndItsFailedTbvsBackOff) {
+    // The guide's edge case: an entity that keeps crossing the edge of visibility (here
+    // two ticks on the viewer's side of the wall, two behind it). Each time it hides its
+    // TBV would be visible at once; after a rejected TBV the manager only box-tests it
+    // for a while, so the failed TBV tests stay few.
+    DSOCConfig c;
+    c.validate_state = true;
+    int builds = 0;
+    InterestManager m(c, Aabb{glm::vec3(-4096.0f), glm::vec3(4096.0f)},
+                      [&] { return std::make_unique<WallVisibility>(&builds); });
+    ASSERT_TRUE(m.add_entity(1, EntityDesc{kHalf, {}}, box_at({-500, 0, 0})));
+    ClientDesc d;
+    d.viewer = 1;
+    d.lookahead_ticks = 0;
+    ASSERT_TRUE(m.add_client(100, d));
+    ASSERT_TRUE(m.add_entity(2, EntityDesc{kHalf, {}}, box_at({20, 0, 0})));
+    constexpr std::uint64_t kTicks = 64;
+    for (std::uint64_t tick = 1; tick <= kTicks; ++tick) {
+        // Centre at 20 (min.x 5: visible) or 26 (min.x 11: hidden), 6 units a tick.
+        const float cx = (tick / 2) % 2 == 0 ? 20.0f : 26.0f;
+        const Aabb box = box_at({cx, 0, 0});
+        m.set_entity_box(2, box);
+        m.update(tick);
+        EXPECT_EQ(sent(m, 2), visible_from_the_left(box)) << "tick " << tick;
+    }
+    const ClientStats& stats = *m.stats(100);
+    EXPECT_GT(stats.tbvs_rejected, 0u);
+    // It hides 32 times; without the back-off each would try up to 3 TBVs.
+    EXPECT_LE(stats.tbv_tests, 3u * (kTicks / 8 + 1));
+    EXPECT_EQ(stats.tbvs_created, 0u);
+}
+
 } // namespace
 } // namespace dsoc::visibility

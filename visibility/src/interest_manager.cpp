@@ -331,12 +331,15 @@ void InterestManager::update(std::uint64_t tick) {
         update_client(i);
     }
     if (config_.validate_state) {
-        const auto problems = validate_state();
-        if (!problems.empty()) {
-            throw std::logic_error("ValidateDSOCState at tick " + std::to_string(tick) + ": " +
-                                   problems.front() + " (and " +
-                                   std::to_string(problems.size() - 1) + " more)");
-        }
+        require_valid_state("at tick " + std::to_string(tick));
+    }
+}
+
+void InterestManager::require_valid_state(const std::string& when) const {
+    const auto problems = validate_state();
+    if (!problems.empty()) {
+        throw std::logic_error("ValidateDSOCState " + when + ": " + problems.front() + " (and " +
+                               std::to_string(problems.size() - 1) + " more)");
     }
 }
 
@@ -515,14 +518,22 @@ void InterestManager::update_client(std::size_t index, UpdateEffort effort) {
         c.stats.tbvs_expired += expire_earliest_group(c);
     }
 
-    // 3. Teleports void the TBVs of the entity that jumped.
+    // 3. Teleports void the TBVs of the entity that jumped. A fuzzy TBV is a prediction,
+    //    not a bound: one the entity has left is void too (caught the first tick it is
+    //    outside, so its box is tested before it could be seen).
+    const bool fuzzy = config_.strategy == TbvStrategy::fuzzy;
     for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
         const EntitySlot& e = entities_[slot];
-        if (e.alive && e.teleported_at == tick_ &&
-            c.pairs[slot].state == PairState::hidden_with_tbv) {
+        auto& pair = c.pairs[slot];
+        if (!e.alive || pair.state != PairState::hidden_with_tbv) {
+            continue;
+        }
+        const bool jumped = e.teleported_at == tick_;
+        const bool escaped = !jumped && fuzzy && !c.groups[pair.group].box.contains(e.box);
+        if (jumped || escaped) {
             release_group_member(c, slot);
-            c.pairs[slot].state = PairState::hidden_expired;
-            ++c.stats.teleports;
+            pair.state = PairState::hidden_expired;
+            ++(jumped ? c.stats.teleports : c.stats.fuzzy_escapes);
         }
     }
 

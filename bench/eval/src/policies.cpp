@@ -147,6 +147,10 @@ public:
     [[nodiscard]] int lookahead_ticks() const override { return lookahead_; }
 
     void begin_tick(const WorldFrame& frame) override {
+        // ValidateDSOCState of the last tick, once every client has been updated.
+        if (manager_.config().validate_state) {
+            manager_.require_valid_state("before tick " + std::to_string(frame.tick));
+        }
         if (!started_) {
             for (std::uint32_t id = 0; id < frame.entities.size(); ++id) {
                 if (!manager_.add_entity(id, entity_desc_, frame.entities[id].box)) {
@@ -206,6 +210,7 @@ public:
             t.evictions += s->evictions;
             t.teleports += s->teleports;
             t.cheapest_updates += s->cheapest_updates;
+            t.fuzzy_escapes += s->fuzzy_escapes;
         }
         return t;
     }

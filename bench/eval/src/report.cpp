@@ -265,6 +265,7 @@ std::string to_json(const EvalResult& r, const std::string& command) {
                         {"expired_rate", d.tbv_expired_rate},
                         {"evictions", m.tbv.evictions},
                         {"teleports", m.tbv.teleports},
+                        {"fuzzy_escapes", m.tbv.fuzzy_escapes},
                         {"live_groups_per_client", d.live_tbvs_per_client}};
         }
         json ex = json::array();

@@ -101,8 +101,14 @@ struct DSOCConfig {
     int full_test_interval = 4;
 
     /// Run ValidateDSOCState after every update() and throw std::logic_error naming
-    /// the first broken invariant (debug and test runs; costs O(clients x entities)).
+    /// the first broken invariant (the server's and the eval's policies run it before
+    /// each tick). On by default in debug builds (NDEBUG not defined); the tests turn it
+    /// on. Costs O(clients x entities) per tick.
+#ifdef NDEBUG
     bool validate_state = false;
+#else
+    bool validate_state = true;
+#endif
 };
 
 /// Guide's implicit expiration: `max_adaptive_duration` below velocity_threshold, else

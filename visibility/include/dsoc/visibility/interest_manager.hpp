@@ -125,7 +125,10 @@ struct ClientStats {
     std::uint64_t tbv_hits = 0;      ///< groups found visible after a rebuild
     std::uint64_t tbvs_expired = 0;
     std::uint64_t evictions = 0;
-    std::uint64_t teleports = 0;     ///< TBVs voided by a jump beyond the limits
+    std::uint64_t teleports = 0; ///< TBVs voided by a jump beyond the limits
+    /// Fuzzy TBVs (TbvStrategy::fuzzy, predicted, not bounded) the entity was found
+    /// outside of: voided and the entity's box tested that tick.
+    std::uint64_t fuzzy_escapes = 0;
     std::uint64_t cluster_tests = 0; ///< entity clusters tested (DSOCConfig::entity_cluster_size)
     std::uint64_t cluster_hits = 0;  ///< clusters proven hidden: their entities need no own test
     std::uint64_t cheapest_updates = 0; ///< updates run with UpdateEffort::cheapest
@@ -194,6 +197,11 @@ public:
     /// unexpired, in the client's octree with its box, and contains the entity's
     /// current box; group member lists match pair states.
     [[nodiscard]] std::vector<std::string> validate_state() const;
+    /// validate_state(); throws std::logic_error naming the first broken invariant (and
+    /// how many more) and `when` (e.g. "at tick 12") if any. update() calls it when
+    /// DSOCConfig::validate_state is on; callers that run begin_update() and
+    /// update_client() themselves call it once every client is updated.
+    void require_valid_state(const std::string& when) const;
 
 private:
     struct EntitySlot;

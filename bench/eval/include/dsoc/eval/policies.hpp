@@ -69,6 +69,7 @@ struct TbvSummary {
     std::uint64_t evictions = 0;
     std::uint64_t teleports = 0;
     std::uint64_t cheapest_updates = 0; ///< client-ticks at UpdateEffort::cheapest
+    std::uint64_t fuzzy_escapes = 0;    ///< entities caught outside their fuzzy TBV
 };
 
 class Policy {
