@@ -103,6 +103,15 @@ baked_table(const ServerConfig& config, const GameWorld& world,
     return baked->table;
 }
 
+bool use_exact_stages(const ServerConfig& config, const visibility::CellVisibilityTable& table) {
+    if (config.exact_stages != "auto") {
+        return config.exact_stages == "true";
+    }
+    // The bake grows cells by 1.25x steps until the table fits its budget: a grown
+    // table was made coarse by the map's size, not chosen.
+    return table.grid().cell_size > config.bake_cell_size * 1.01f;
+}
+
 std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const GameWorld& world) {
     if (config.policy == "broadcast") {
         return std::make_unique<BroadcastPolicy>();
@@ -125,9 +134,13 @@ std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const Ga
         make_culler = maps::with_pvs_stage(world.map().pvs, std::move(make_culler));
     }
     if (config.baked_stage) { // the baked cell table before them (or alone)
-        make_culler =
-            visibility::with_baked_stage(baked_table(config, world, *scene),
-                                         config.exact_stages ? std::move(make_culler) : nullptr);
+        auto table = baked_table(config, world, *scene);
+        const bool exact = use_exact_stages(config, *table);
+        spdlog::info("baked stage: {} (exact_stages = {})",
+                     exact ? "the table, then the exact stages" : "the table alone",
+                     config.exact_stages);
+        make_culler = visibility::with_baked_stage(std::move(table),
+                                                   exact ? std::move(make_culler) : nullptr);
     }
     return std::make_unique<CullingPolicy>(config.policy, dsoc, world, std::move(make_culler),
                                            lookahead_ticks(config));

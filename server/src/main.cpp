@@ -63,7 +63,8 @@ void add_options(CLI::App& app, dsoc::server::ServerConfig& config, ProgramOptio
     app.add_option("--bake-dir", config.bake_dir, "Cache of baked tables");
     app.add_option("--exact-stages", config.exact_stages,
                    "With the baked stage: true runs the PVS and shaft tests after the table "
-                   "(tighter, dearer); false is the table alone")
+                   "(tighter, dearer); false is the table alone; auto: alone unless the map "
+                   "needed cells coarser than --bake-cell-size")
         ->capture_default_str();
     app.add_option("--culling-budget", config.culling_budget,
                    "Share of the tick period for culling; clients after it get the cheapest "

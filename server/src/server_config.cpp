@@ -42,6 +42,8 @@ std::vector<std::string> validate(const ServerConfig& c) {
           std::isfinite(c.bake_cell_size) && c.bake_cell_size >= 4.0f &&
               c.bake_cell_size <= 1024.0f,
           "bake_cell_size", "must be 4..1024 units");
+    check(p, c.exact_stages == "auto" || c.exact_stages == "true" || c.exact_stages == "false",
+          "exact_stages", "must be one of auto, true, false; got '" + c.exact_stages + "'");
     check(p, std::isfinite(c.culling_budget) && c.culling_budget >= 0.0 && c.culling_budget <= 1.0,
           "culling_budget", "must be 0..1 (a share of the tick period; 0 = off)");
     check(p,

@@ -93,9 +93,9 @@ int main(int argc, char** argv) {
     app.add_option("--baked-stage", config.baked_stage,
                    "The map's baked cell table first (ServerConfig::baked_stage)")
         ->capture_default_str();
-    app.add_option(
-           "--exact-stages", config.exact_stages,
-           "With the baked stage, the PVS and shaft stages after it (ServerConfig::exact_stages)")
+    app.add_option("--exact-stages", config.exact_stages,
+                   "With the baked stage, the PVS and shaft stages after it: auto | true | false "
+                   "(ServerConfig::exact_stages)")
         ->capture_default_str();
     app.add_option("--bake-dir", config.bake_dir, "Cache of baked tables");
     CLI11_PARSE(app, argc, argv);

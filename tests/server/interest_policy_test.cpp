@@ -167,7 +167,7 @@ TEST_F(InterestPolicyOnOaDm4, BakedStageOnlyAddsProofsAndAloneCullsLess) {
         ServerConfig config = bots(200);
         config.policy = "occlusion"; // each set is this tick's culler verdict
         config.baked_stage = k > 0;
-        config.exact_stages = k < 2;
+        config.exact_stages = k < 2 ? "true" : "false";
         config.bake_cell_size = 96.0f; // a coarse table bakes in seconds
         config.bake_dir = dir.string();
         config.insecure = true; // validate() wants a key otherwise
@@ -186,6 +186,27 @@ TEST_F(InterestPolicyOnOaDm4, BakedStageOnlyAddsProofsAndAloneCullsLess) {
                 "of %zu pairs\n",
                 totals[0], totals[1], totals[2], 16u * world.entities().size());
     std::filesystem::remove_all(dir);
+}
+
+TEST(InterestPolicy, ExactStagesAutoFollowATableOnlyWhenTheBakeHadToCoarsenItsCells) {
+    const auto table_of = [](float cell_size) {
+        const visibility::CellGrid grid = visibility::CellGrid::covering(
+            visibility::Aabb{glm::vec3(0.0f), glm::vec3(256.0f)}, cell_size);
+        return visibility::CellVisibilityTable(grid, {0});
+    };
+    ServerConfig config;
+    config.bake_cell_size = 32.0f;
+    EXPECT_FALSE(use_exact_stages(config, table_of(32.0f))); // as fine as asked: alone
+    EXPECT_TRUE(use_exact_stages(config, table_of(40.0f)));  // grown to fit: exact too
+    config.exact_stages = "false";
+    EXPECT_FALSE(use_exact_stages(config, table_of(40.0f)));
+    config.exact_stages = "true";
+    EXPECT_TRUE(use_exact_stages(config, table_of(32.0f)));
+    config.exact_stages = "sometimes";
+    config.insecure = true;
+    const auto problems = validate(config);
+    ASSERT_EQ(problems.size(), 1u);
+    EXPECT_NE(problems.front().find("exact_stages"), std::string::npos);
 }
 
 TEST(GameWorld, EntitiesNeverExceedMaxSpeedHorizontally) {

@@ -108,6 +108,11 @@ private:
 /// The policy named by config.policy, for `world`; config must have passed validate().
 std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const GameWorld& world);
 
+/// Whether the exact stages follow `table` (ServerConfig::exact_stages; "auto": when
+/// the bake had to make its cells coarser than config.bake_cell_size).
+[[nodiscard]] bool use_exact_stages(const ServerConfig& config,
+                                    const visibility::CellVisibilityTable& table);
+
 /// The map's baked cell visibility table for config.baked_stage: from the cache, or
 /// baked (progress on stderr) and saved. Throws std::runtime_error when it cannot be had.
 [[nodiscard]] std::shared_ptr<const visibility::CellVisibilityTable>

@@ -59,10 +59,13 @@ struct ServerConfig {
     /// Where baked tables are kept; empty: $DSOC_BAKE_DIR, $XDG_CACHE_HOME/dsoc/bakes or
     /// ~/.cache/dsoc/bakes.
     std::string bake_dir;
-    /// With baked_stage: whether the PVS and shaft stages follow the table. The default
-    /// (false) is the table alone, the cheapest conservative answer (docs/operations.md
-    /// has what true costs and buys). Without baked_stage the exact stages always run.
-    bool exact_stages = false;
+    /// With baked_stage: whether the PVS and shaft stages follow the table. "false": the
+    /// table alone, the cheapest conservative answer; "true": the exact stages on what
+    /// the table passes (tighter, dearer); "auto": the table alone when its cells are as
+    /// fine as bake_cell_size, the exact stages too when the map needed coarser cells to
+    /// fit the table's memory budget (open and large maps, where a coarse table hides
+    /// little). Without baked_stage the exact stages always run. See docs/operations.md.
+    std::string exact_stages = "auto";
     /// Fail-open: clients whose culling has not started this share of the tick period
     /// after the tick began get the policy's cheapest conservative answer (the baked
     /// table or the PVS alone, no exact stage) instead of making the tick late; counted
