@@ -2,7 +2,7 @@
 # relocatable CMake package (dsocConfig.cmake + dsocConfigVersion.cmake) so that
 #   find_package(dsoc 0.1 CONFIG REQUIRED [COMPONENTS visibility maps ...])
 # gives the same namespaced targets as add_subdirectory(dsoc): dsoc::visibility,
-# dsoc::maps, dsoc::sim, dsoc::trace, dsoc::protocol.
+# dsoc::maps, dsoc::sim, dsoc::interest, dsoc::trace, dsoc::protocol.
 #
 # One export set per component, so that a consumer without protobuf (say) can still
 # use dsoc::visibility by asking only for the components it needs. What each
@@ -23,7 +23,7 @@ set(DSOC_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/dsoc
 mark_as_advanced(DSOC_INSTALL_CMAKEDIR)
 
 # Components in dependency order (a component only needs those before it).
-set(dsoc_install_components visibility maps sim trace protocol)
+set(dsoc_install_components visibility maps sim interest trace protocol)
 set(dsoc_installed_components "")
 
 foreach(component ${dsoc_install_components})

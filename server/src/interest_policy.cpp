@@ -1,11 +1,9 @@
 #include "dsoc/server/interest_policy.hpp"
 
+#include "dsoc/interest/culler_stages.hpp"
 #include "dsoc/maps/bake_cache.hpp"
-#include "dsoc/maps/pvs_region_visibility.hpp"
 #include "dsoc/server/culling_policy.hpp"
 #include "dsoc/server/dsoc_settings.hpp"
-#include "dsoc/visibility/baked_region_visibility.hpp"
-#include "dsoc/visibility/occluder_region_visibility.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -124,25 +122,23 @@ std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const Ga
     }
     // Flat keys, the occlusion policy's presets, then the [dsoc] table (dsoc_settings.hpp).
     const visibility::DSOCConfig dsoc = dsoc_config(config);
-    visibility::RegionCullerConfig culler;
-    culler.pyramid = config.culler != "shaft";
-    culler.shaft = config.culler != "pyramid";
-    culler.portal_depth = config.portal_depth;
+    interest::CullerStages stages;
+    stages.exact_config.pyramid = config.culler != "shaft";
+    stages.exact_config.shaft = config.culler != "pyramid";
+    stages.exact_config.portal_depth = config.portal_depth;
+    if (config.pvs_stage) { // the map's PVS over the reachable clusters
+        stages.pvs = world.map().pvs;
+    }
     auto scene = visibility::OccluderScene::build(world.map().occluders);
-    auto make_culler = visibility::occluder_region_visibility(scene, culler);
-    if (config.pvs_stage) { // the map's PVS over the reachable clusters first
-        make_culler = maps::with_pvs_stage(world.map().pvs, std::move(make_culler));
-    }
     if (config.baked_stage) { // the baked cell table before them (or alone)
-        auto table = baked_table(config, world, *scene);
-        const bool exact = use_exact_stages(config, *table);
+        stages.table = baked_table(config, world, *scene);
+        stages.exact = use_exact_stages(config, *stages.table);
         spdlog::info("baked stage: {} (exact_stages = {})",
-                     exact ? "the table, then the exact stages" : "the table alone",
+                     stages.exact ? "the table, then the exact stages" : "the table alone",
                      config.exact_stages);
-        make_culler = visibility::with_baked_stage(std::move(table),
-                                                   exact ? std::move(make_culler) : nullptr);
     }
-    return std::make_unique<CullingPolicy>(config.policy, dsoc, world, std::move(make_culler),
+    return std::make_unique<CullingPolicy>(config.policy, dsoc, world,
+                                           interest::make_culler(std::move(scene), stages),
                                            lookahead_ticks(config));
 }
 

@@ -462,10 +462,15 @@ Aabb InterestManager::eye_region_for(const ClientSlot& c, glm::vec3& eye) const 
     if (c.desc.viewer != kNoEntity) {
         down_velocity = entities_[entity_slot_.at(c.desc.viewer)].down_velocity;
     }
-    const float seconds = static_cast<float>(c.desc.lookahead_ticks) * tick_seconds_;
+    return reachable_eye_region(c.desc, eye, down_velocity);
+}
+
+Aabb InterestManager::reachable_eye_region(const ClientDesc& desc, glm::vec3 eye,
+                                           float down_velocity) const {
+    const float seconds = static_cast<float>(desc.lookahead_ticks) * tick_seconds_;
     const Aabb region =
-        clip(reachable_box(Aabb{eye, eye}, c.desc.eye_motion, seconds, 1.0f, down_velocity));
-    return clipper_ ? clipper_(eye, region, EyeReach{&c.desc.eye_motion, seconds, down_velocity})
+        clip(reachable_box(Aabb{eye, eye}, desc.eye_motion, seconds, 1.0f, down_velocity));
+    return clipper_ ? clipper_(eye, region, EyeReach{&desc.eye_motion, seconds, down_velocity})
                     : region;
 }
 

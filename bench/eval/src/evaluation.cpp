@@ -5,11 +5,9 @@
 #include "dsoc/eval/replication.hpp"
 #include "dsoc/eval/visibility_truth.hpp"
 #include "dsoc/eval/world_sim.hpp"
+#include "dsoc/interest/walking_interest.hpp"
 #include "dsoc/maps/bake_cache.hpp"
-#include "dsoc/sim/motion_limits.hpp"
-#include "dsoc/sim/reach_clipper.hpp"
 #include "dsoc/trace/trace_writer.hpp"
-#include "dsoc/visibility/tbv.hpp"
 
 #include <chrono>
 #include <ctime>
@@ -221,29 +219,23 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
     const int every = sc.oracle_every;
     const auto stride = static_cast<std::size_t>(sc.oracle_client_stride());
     // The region bound: eyes over the reachable eye region exactly as the culling
-    // policies compute it (motion limits over the allowance, clipped to the map and by
-    // sim::ReachClipper), an n x n x n lattice of them.
+    // policies compute it (interest::WalkingInterest::eye_region()), an n x n x n
+    // lattice of them.
     result.region_bound = options.region_bound;
     result.region_lattice = options.region_lattice;
     VisibilityTruth::RegionEyes region_eyes;
-    std::shared_ptr<const sim::ReachClipper> clipper;
+    std::shared_ptr<const interest::WalkingInterest> walking;
     if (options.region_bound) {
-        clipper = std::make_shared<const sim::ReachClipper>(map.collision_brushes, world.move());
-        const visibility::MotionLimits limits =
-            sim::walking_limits(world.move(), 1.0f / static_cast<float>(sc.tick_rate));
-        const float seconds = static_cast<float>(lookahead) / static_cast<float>(sc.tick_rate);
-        const visibility::Aabb bounds = map.bounds.expanded(64.0f);
+        visibility::DSOCConfig walking_config;
+        walking_config.tick_rate = sc.tick_rate;
+        walking = std::make_shared<const interest::WalkingInterest>(
+            walking_config, map, world.move(), nullptr, lookahead);
         const int n = options.region_lattice;
-        region_eyes = [&world, clipper, limits, seconds, bounds, n](std::size_t c,
-                                                                    std::vector<glm::vec3>& eyes) {
+        region_eyes = [&world, walking, n](std::size_t c, std::vector<glm::vec3>& eyes) {
             const WorldFrame& now = world.current();
             const glm::vec3 eye = world.eye(now, c);
             const float down = std::max(0.0f, -now.entities[c].velocity.z);
-            visibility::Aabb region =
-                visibility::reachable_box(visibility::Aabb{eye, eye}, limits, seconds, 1.0f, down);
-            region = visibility::Aabb{glm::max(region.min, bounds.min),
-                                      glm::min(region.max, bounds.max)};
-            region = clipper->clip(eye, region, visibility::EyeReach{&limits, seconds, down});
+            const visibility::Aabb region = walking->eye_region(eye, down);
             const float step = 1.0f / static_cast<float>(n - 1);
             for (int k = 0; k < n * n * n; ++k) {
                 const glm::vec3 f(static_cast<float>(k % n), static_cast<float>((k / n) % n),

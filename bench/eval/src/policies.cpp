@@ -1,10 +1,7 @@
 #include "dsoc/eval/policies.hpp"
 
-#include "dsoc/maps/pvs_region_visibility.hpp"
-#include "dsoc/sim/motion_limits.hpp"
-#include "dsoc/sim/reach_clipper.hpp"
-#include "dsoc/visibility/baked_region_visibility.hpp"
-#include "dsoc/visibility/interest_manager.hpp"
+#include "dsoc/interest/culler_stages.hpp"
+#include "dsoc/interest/walking_interest.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
 
 #include <glm/common.hpp>
@@ -104,19 +101,15 @@ enum class CullerStages {
     baked_only,  ///< the baked table alone
 };
 
-visibility::RegionVisibilityFactory make_culler(CullerStages stages, const PolicyEnv& env) {
-    auto exact = visibility::occluder_region_visibility(
-        env.scene, culler_config(env.fusion, env.portal_depth));
-    switch (stages) {
-    case CullerStages::pvs_exact:
-        return maps::with_pvs_stage(env.map->pvs, std::move(exact));
-    case CullerStages::baked_exact:
-        return visibility::with_baked_stage(env.table,
-                                            maps::with_pvs_stage(env.map->pvs, std::move(exact)));
-    case CullerStages::baked_only:
-        return visibility::with_baked_stage(env.table, {});
+interest::CullerStages stages_of(CullerStages stages, const PolicyEnv& env) {
+    interest::CullerStages out;
+    out.exact_config = culler_config(env.fusion, env.portal_depth);
+    out.pvs = env.map->pvs;
+    if (stages != CullerStages::pvs_exact) {
+        out.table = env.table;
+        out.exact = stages == CullerStages::baked_exact;
     }
-    return exact;
+    return out;
 }
 
 class CullingPolicy final : public Policy {
@@ -124,63 +117,33 @@ public:
     CullingPolicy(std::string name, const visibility::DSOCConfig& config, const PolicyEnv& env,
                   CullerStages stages = CullerStages::pvs_exact)
         : name_(std::move(name)), lookahead_(env.lookahead_ticks),
-          cheapest_share_(env.cheapest_share), clipper_(std::make_shared<const sim::ReachClipper>(
-                                                   env.map->collision_brushes, env.world->move())),
-          manager_(config, env.map->bounds.expanded(64.0f), make_culler(stages, env),
-                   [clipper = clipper_](glm::vec3 eye, const visibility::Aabb& region,
-                                        const visibility::EyeReach& reach) {
-                       return clipper->clip(eye, region, reach);
-                   }) {
-        const sim::MoveConfig& move = env.world->move();
-        entity_desc_.half_extents = (move.maxs - move.mins) * 0.5f;
-        entity_desc_.motion =
-            sim::walking_limits(move, 1.0f / static_cast<float>(config.tick_rate));
-        client_desc_.eye_motion = entity_desc_.motion;
-        client_desc_.lookahead_ticks = env.lookahead_ticks;
-        // The manager's eye is the box centre plus this offset (= origin + eye_height).
-        client_desc_.eye_offset =
-            glm::vec3(0.0f, 0.0f, move.eye_height - (move.mins.z + move.maxs.z) * 0.5f);
-        viewers_ = env.world->viewer_count();
-    }
+          cheapest_share_(env.cheapest_share),
+          interest_(config, *env.map, env.world->move(),
+                    interest::make_culler(env.scene, stages_of(stages, env)), env.lookahead_ticks),
+          viewers_(env.world->viewer_count()) {}
 
     [[nodiscard]] std::string_view name() const override { return name_; }
     [[nodiscard]] int lookahead_ticks() const override { return lookahead_; }
 
     void begin_tick(const WorldFrame& frame) override {
-        // ValidateDSOCState of the last tick, once every client has been updated.
-        if (manager_.config().validate_state) {
-            manager_.require_valid_state("before tick " + std::to_string(frame.tick));
-        }
-        if (!started_) {
+        interest_.begin_tick(frame.tick, [&](visibility::InterestManager& manager) {
+            if (!started_) {
+                add_everyone(frame);
+            }
             for (std::uint32_t id = 0; id < frame.entities.size(); ++id) {
-                if (!manager_.add_entity(id, entity_desc_, frame.entities[id].box)) {
-                    throw std::runtime_error("InterestManager refused entity " +
-                                             std::to_string(id));
-                }
+                manager.set_entity_box(id, frame.entities[id].box, frame.entities[id].velocity);
             }
-            for (std::uint32_t c = 0; c < viewers_; ++c) {
-                auto desc = client_desc_;
-                desc.viewer = c;
-                if (!manager_.add_client(c, desc)) {
-                    throw std::runtime_error("InterestManager refused client " + std::to_string(c));
-                }
-            }
-            started_ = true;
-        }
-        for (std::uint32_t id = 0; id < frame.entities.size(); ++id) {
-            manager_.set_entity_box(id, frame.entities[id].box, frame.entities[id].velocity);
-        }
-        manager_.begin_update(frame.tick);
+        });
     }
 
     void select(std::size_t client, const WorldFrame& frame,
                 std::vector<std::uint32_t>& out) override {
         // Clients were added in order, so index i is client i.
-        manager_.update_client(client, over_budget(client, frame.tick)
-                                           ? visibility::UpdateEffort::cheapest
-                                           : visibility::UpdateEffort::full);
+        manager().update_client(client, over_budget(client, frame.tick)
+                                            ? visibility::UpdateEffort::cheapest
+                                            : visibility::UpdateEffort::full);
         out.clear();
-        if (const auto* d = manager_.decisions(static_cast<visibility::ClientId>(client))) {
+        if (const auto* d = manager().decisions(static_cast<visibility::ClientId>(client))) {
             for (const auto& r : d->replicated) {
                 if (r.id != client) {
                     out.push_back(r.id);
@@ -193,7 +156,7 @@ public:
         TbvSummary t;
         t.available = true;
         for (std::uint32_t c = 0; c < viewers_; ++c) {
-            const auto* s = manager_.stats(c);
+            const auto* s = manager().stats(c);
             if (s == nullptr) {
                 continue;
             }
@@ -218,7 +181,7 @@ public:
     [[nodiscard]] std::uint64_t live_tbvs() const override {
         std::uint64_t n = 0;
         for (std::uint32_t c = 0; c < viewers_; ++c) {
-            n += manager_.tbv_count(c);
+            n += manager().tbv_count(c);
         }
         return n;
     }
@@ -237,13 +200,27 @@ private:
         return static_cast<double>(z >> 11) * 0x1.0p-53 < cheapest_share_;
     }
 
+    void add_everyone(const WorldFrame& frame) {
+        for (std::uint32_t id = 0; id < frame.entities.size(); ++id) {
+            if (!interest_.add_walker(id, frame.entities[id].box)) {
+                throw std::runtime_error("InterestManager refused entity " + std::to_string(id));
+            }
+        }
+        for (std::uint32_t c = 0; c < viewers_; ++c) {
+            if (!interest_.add_viewer(c, c)) {
+                throw std::runtime_error("InterestManager refused client " + std::to_string(c));
+            }
+        }
+        started_ = true;
+    }
+
+    [[nodiscard]] visibility::InterestManager& manager() { return interest_.manager(); }
+    [[nodiscard]] const visibility::InterestManager& manager() const { return interest_.manager(); }
+
     std::string name_;
     int lookahead_;
     double cheapest_share_;
-    std::shared_ptr<const sim::ReachClipper> clipper_;
-    visibility::InterestManager manager_;
-    visibility::EntityDesc entity_desc_;
-    visibility::ClientDesc client_desc_;
+    interest::WalkingInterest interest_;
     std::size_t viewers_ = 0;
     bool started_ = false;
 };

@@ -7,9 +7,8 @@
 // on the server's worker pool). The manager's network level-of-detail hint
 // (update_interval 1/2/4) becomes Interest::tier 0/1/2.
 
+#include "dsoc/interest/walking_interest.hpp"
 #include "dsoc/server/interest_policy.hpp"
-#include "dsoc/sim/reach_clipper.hpp"
-#include "dsoc/visibility/interest_manager.hpp"
 
 #include <memory>
 #include <string_view>
@@ -36,18 +35,17 @@ public:
     void remove_viewer(std::uint32_t client_id) override;
     [[nodiscard]] std::size_t tbvs_alive() const override;
 
-    [[nodiscard]] const visibility::InterestManager& manager() const { return manager_; }
+    [[nodiscard]] const visibility::InterestManager& manager() const { return interest_.manager(); }
 
 private:
     void sync_entities(const GameWorld& world);
     void select_with(const Viewer& viewer, visibility::UpdateEffort effort,
                      std::vector<Interest>& out);
 
+    [[nodiscard]] visibility::InterestManager& manager() { return interest_.manager(); }
+
     std::string name_;
-    std::shared_ptr<const sim::ReachClipper> clipper_;
-    visibility::InterestManager manager_;
-    visibility::EntityDesc entity_desc_;
-    visibility::ClientDesc client_desc_;
+    interest::WalkingInterest interest_;
     std::vector<std::uint32_t> known_entities_; // increasing
     std::vector<std::uint32_t> scratch_;
     /// Client id -> the manager's client index, rebuilt by begin_tick(); read-only

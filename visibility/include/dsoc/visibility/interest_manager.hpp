@@ -186,6 +186,11 @@ public:
     [[nodiscard]] PairState state(ClientId client, EntityId entity) const;
     /// The client's reachable eye region at the last update (empty before it).
     [[nodiscard]] Aabb eye_region(ClientId id) const;
+    /// The rule behind it: every eye a client described by `desc` can reach from `eye`
+    /// over its lookahead, falling at `down_velocity` (< 0: unknown), within the world
+    /// bounds and clipped by the EyeRegionClipper.
+    [[nodiscard]] Aabb reachable_eye_region(const ClientDesc& desc, glm::vec3 eye,
+                                            float down_velocity) const;
     /// The TBV box holding `entity` for `client`, or an empty box.
     [[nodiscard]] Aabb tbv_of(ClientId client, EntityId entity) const;
     /// Live TBV groups of a client.
