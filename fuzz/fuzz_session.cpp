@@ -6,7 +6,7 @@
 // close exactly once, and the send queue stays within its bound.
 
 #include "dsoc/protocol/codec.hpp"
-#include "dsoc/server/connect_token.hpp"
+#include "dsoc/protocol/connect_token.hpp"
 #include "dsoc/server/session.hpp"
 
 #include <boost/asio/io_context.hpp>
@@ -23,9 +23,9 @@ namespace {
 namespace pb = dsoc::protocol::pb;
 using dsoc::server::Session;
 
-const dsoc::server::TokenKey& fuzz_key() {
-    static const dsoc::server::TokenKey key = [] {
-        dsoc::server::TokenKey k;
+const dsoc::protocol::TokenKey& fuzz_key() {
+    static const dsoc::protocol::TokenKey key = [] {
+        dsoc::protocol::TokenKey k;
         for (std::size_t i = 0; i < k.bytes.size(); ++i) {
             k.bytes[i] = static_cast<std::uint8_t>(i * 7 + 1);
         }
@@ -38,11 +38,11 @@ class FuzzHost final : public dsoc::server::SessionHost {
 public:
     void on_hello(Session& session, const pb::ClientHello& hello) override {
         const auto& token = hello.connect_token();
-        const auto check = dsoc::server::verify_connect_token(
+        const auto check = dsoc::protocol::verify_connect_token(
             fuzz_key(),
             std::span(reinterpret_cast<const std::uint8_t*>(token.data()), token.size()),
             1'700'000'000);
-        if (!token.empty() && check.status != dsoc::server::TokenStatus::valid) {
+        if (!token.empty() && check.status != dsoc::protocol::TokenStatus::valid) {
             session.disconnect(pb::DISCONNECT_REASON_UNAUTHORIZED, check.why);
             return;
         }

@@ -1,7 +1,7 @@
 #include "dsoc/server/server.hpp"
 
 #include "dsoc/protocol/codec.hpp"
-#include "dsoc/server/connect_token.hpp"
+#include "dsoc/protocol/connect_token.hpp"
 
 #include <boost/asio/post.hpp>
 #include <spdlog/spdlog.h>
@@ -36,9 +36,9 @@ std::uint16_t Server::start() {
     const asio::ip::tcp::endpoint endpoint(asio::ip::make_address(config_.bind_address),
                                            config_.port);
     if (!config_.insecure) {
-        token_key_ = std::make_unique<TokenKey>();
+        token_key_ = std::make_unique<protocol::TokenKey>();
         std::string error;
-        if (!load_token_key(config_.token_key_file, *token_key_, error)) {
+        if (!protocol::load_token_key(config_.token_key_file, *token_key_, error)) {
             throw std::runtime_error(error);
         }
     } else {
@@ -318,11 +318,11 @@ void Server::on_hello(Session& session, const pb::ClientHello& client_hello) {
     }
     if (token_key_) {
         const auto& token = client_hello.connect_token();
-        const auto check = verify_connect_token(
+        const auto check = protocol::verify_connect_token(
             *token_key_,
             std::span(reinterpret_cast<const std::uint8_t*>(token.data()), token.size()),
-            unix_now_s());
-        if (check.status != TokenStatus::valid) {
+            protocol::unix_now_s());
+        if (check.status != protocol::TokenStatus::valid) {
             session.disconnect(pb::DISCONNECT_REASON_UNAUTHORIZED, check.why);
             return;
         }

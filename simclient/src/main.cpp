@@ -47,9 +47,9 @@ int main(int argc, char** argv) {
         ->excludes("--token-key-file");
     CLI11_PARSE(app, argc, argv);
     if (!token_key_file.empty()) {
-        dsoc::server::TokenKey key;
+        dsoc::protocol::TokenKey key;
         std::string error;
-        if (!dsoc::server::load_token_key(token_key_file, key, error)) {
+        if (!dsoc::protocol::load_token_key(token_key_file, key, error)) {
             std::cerr << "--token-key-file: " << error << "\n";
             return 2;
         }
@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
         // Valid through the whole run: ramp-up, duration and a margin for clock skew.
         config.token_ttl_s = static_cast<std::uint64_t>(config.duration_s) + 60;
     }
-    if (!token_hex.empty() && !dsoc::server::from_hex(token_hex, config.connect_token)) {
+    if (!token_hex.empty() && !dsoc::protocol::from_hex(token_hex, config.connect_token)) {
         std::cerr << "--token: expected hex digits\n";
         return 2;
     }

@@ -59,10 +59,10 @@ void SimClient::on_connected() {
     hello.mutable_client_hello()->set_protocol_version(protocol::kProtocolVersion);
     hello.mutable_client_hello()->set_name(config_.name_prefix + std::to_string(index_));
     if (config_.token_key) {
-        const server::ConnectToken grant{config_.client_id_base +
-                                             static_cast<std::uint64_t>(index_),
-                                         server::unix_now_s() + config_.token_ttl_s};
-        const auto token = server::mint_connect_token(*config_.token_key, grant);
+        const protocol::ConnectToken grant{config_.client_id_base +
+                                               static_cast<std::uint64_t>(index_),
+                                           protocol::unix_now_s() + config_.token_ttl_s};
+        const auto token = protocol::mint_connect_token(*config_.token_key, grant);
         hello.mutable_client_hello()->set_connect_token(token.data(), token.size());
     } else if (!config_.connect_token.empty()) {
         hello.mutable_client_hello()->set_connect_token(config_.connect_token.data(),

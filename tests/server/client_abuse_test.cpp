@@ -5,7 +5,7 @@
 #include "integration/server_fixture.hpp"
 #include "server/raw_client.hpp"
 
-#include "dsoc/server/connect_token.hpp"
+#include "dsoc/protocol/connect_token.hpp"
 
 #include <gtest/gtest.h>
 
@@ -60,20 +60,20 @@ void expect_reason(RawClient& client, pb::DisconnectReason reason, const char* t
 /// A token key in a temporary file, for servers that check tokens.
 class KeyFile {
 public:
-    KeyFile() : key_(server::generate_token_key()) {
+    KeyFile() : key_(protocol::generate_token_key()) {
         path_ = std::filesystem::temp_directory_path() /
                 ("dsoc-test-" + std::to_string(::getpid()) + "-" +
                  std::to_string(reinterpret_cast<std::uintptr_t>(this)) + ".key");
-        std::ofstream(path_) << server::format_token_key(key_) << "\n";
+        std::ofstream(path_) << protocol::format_token_key(key_) << "\n";
     }
     ~KeyFile() { std::filesystem::remove(path_); }
     KeyFile(const KeyFile&) = delete;
     KeyFile& operator=(const KeyFile&) = delete;
     [[nodiscard]] std::string path() const { return path_.string(); }
-    [[nodiscard]] const server::TokenKey& key() const { return key_; }
+    [[nodiscard]] const protocol::TokenKey& key() const { return key_; }
 
 private:
-    server::TokenKey key_;
+    protocol::TokenKey key_;
     std::filesystem::path path_;
 };
 
@@ -241,12 +241,12 @@ TEST_F(TokenAbuse, BadTokensAreUnauthorized) {
     none.send_message(client_hello());
 
     RawClient other_key(server.port());
-    const auto forged =
-        server::mint_connect_token(server::generate_token_key(), {7, server::unix_now_s() + 60});
+    const auto forged = protocol::mint_connect_token(protocol::generate_token_key(),
+                                                     {7, protocol::unix_now_s() + 60});
     other_key.send_message(client_hello(forged));
 
     RawClient tampered(server.port()); // a real token with its client id changed
-    auto changed = server::mint_connect_token(key_file_.key(), {7, server::unix_now_s() + 60});
+    auto changed = protocol::mint_connect_token(key_file_.key(), {7, protocol::unix_now_s() + 60});
     changed[1] ^= 1;
     tampered.send_message(client_hello(changed));
 
@@ -258,7 +258,7 @@ TEST_F(TokenAbuse, BadTokensAreUnauthorized) {
     RawClient duplicate(server.port());
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
     duplicate.send_message(client_hello(
-        server::mint_connect_token(key_file_.key(), {1001, server::unix_now_s() + 60})));
+        protocol::mint_connect_token(key_file_.key(), {1001, protocol::unix_now_s() + 60})));
 
     expect_reason(none, pb::DISCONNECT_REASON_UNAUTHORIZED, "no connect token");
     expect_reason(other_key, pb::DISCONNECT_REASON_UNAUTHORIZED, "signature");
@@ -276,14 +276,14 @@ TEST_F(TokenAbuse, ExpiredTokenIsUnauthorized) {
     RunningServer server(config());
     GoodClients good(server.port(), kGoodSeconds, key_file_.key());
     RawClient expired(server.port());
-    expired.send_message(
-        client_hello(server::mint_connect_token(key_file_.key(), {9, server::unix_now_s() - 30})));
+    expired.send_message(client_hello(
+        protocol::mint_connect_token(key_file_.key(), {9, protocol::unix_now_s() - 30})));
     expect_reason(expired, pb::DISCONNECT_REASON_UNAUTHORIZED, "expired");
     EXPECT_FALSE(expired.hello_received());
 
     RawClient valid(server.port()); // the same client id with a live token is welcome
-    valid.send_message(
-        client_hello(server::mint_connect_token(key_file_.key(), {9, server::unix_now_s() + 30})));
+    valid.send_message(client_hello(
+        protocol::mint_connect_token(key_file_.key(), {9, protocol::unix_now_s() + 30})));
     expect_served(good);
     server.stop();
     expect_reason(valid, pb::DISCONNECT_REASON_SERVER_SHUTDOWN, "shut");

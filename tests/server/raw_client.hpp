@@ -111,7 +111,7 @@ inline protocol::pb::Envelope client_hello(std::span<const std::uint8_t> token =
 class GoodClients {
 public:
     GoodClients(std::uint16_t port, double seconds,
-                std::optional<server::TokenKey> key = std::nullopt, int clients = 3) {
+                std::optional<protocol::TokenKey> key = std::nullopt, int clients = 3) {
         config_.port = port;
         config_.clients = clients;
         config_.duration_s = seconds;

@@ -7,7 +7,7 @@
 // Tokens are printed as hex: a game backend hands them to its clients, which put the
 // bytes in ClientHello.connect_token (dsoc-simclient --token / --token-key-file).
 
-#include "dsoc/server/connect_token.hpp"
+#include "dsoc/protocol/connect_token.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -19,7 +19,7 @@
 
 namespace {
 
-using namespace dsoc::server;
+using namespace dsoc::protocol;
 
 int keygen(const std::string& out_path) {
     const std::string text = format_token_key(generate_token_key()) + "\n";

@@ -27,9 +27,9 @@
 // reads only I/O-thread state (the TBV count is the one taken at the last hand-over).
 // One tick at a time: the next tick is scheduled at the hand-over.
 
+#include "dsoc/protocol/connect_token.hpp"
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/server/client_tick.hpp"
-#include "dsoc/server/connect_token.hpp"
 #include "dsoc/server/game_world.hpp"
 #include "dsoc/server/interest_policy.hpp"
 #include "dsoc/server/metrics.hpp"
@@ -161,7 +161,7 @@ private:
     std::map<std::uint32_t, Client> clients_;                    // active (after hello)
     std::map<std::uint32_t, std::shared_ptr<Session>> sessions_; // all open connections
     std::uint32_t next_client_id_ = 1;
-    std::unique_ptr<TokenKey> token_key_;                  // null when insecure
+    std::unique_ptr<protocol::TokenKey> token_key_;        // null when insecure
     std::map<std::uint64_t, std::uint32_t> token_clients_; // token client id -> connection
     bool shutting_down_ = false;
     std::function<void()> on_shutdown_done_;

@@ -1,6 +1,6 @@
 #pragma once
 
-#include "dsoc/server/connect_token.hpp"
+#include "dsoc/protocol/connect_token.hpp"
 
 #include <cstdint>
 #include <optional>
@@ -35,7 +35,7 @@ struct LoadConfig {
     /// connect token for client id client_id_base + i, valid for token_ttl_s from its
     /// connect. Without one, every client sends `connect_token` (empty for servers
     /// started with --insecure).
-    std::optional<server::TokenKey> token_key;
+    std::optional<protocol::TokenKey> token_key;
     std::uint64_t client_id_base = 1;
     /// [Units: s] [Limit: >= 1]
     std::uint64_t token_ttl_s = 60;

@@ -22,7 +22,7 @@
 #include <string_view>
 #include <vector>
 
-namespace dsoc::server {
+namespace dsoc::protocol {
 
 inline constexpr std::size_t kTokenKeyBytes = 32;
 inline constexpr std::size_t kConnectTokenBytes = 49;
@@ -83,4 +83,4 @@ struct TokenCheck {
 [[nodiscard]] std::string to_hex(std::span<const std::uint8_t> bytes);
 [[nodiscard]] bool from_hex(std::string_view hex, std::vector<std::uint8_t>& out);
 
-} // namespace dsoc::server
+} // namespace dsoc::protocol

@@ -1,4 +1,4 @@
-#include "dsoc/server/connect_token.hpp"
+#include "dsoc/protocol/connect_token.hpp"
 
 #include <openssl/crypto.h>
 #include <openssl/evp.h>
@@ -13,7 +13,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace dsoc::server {
+namespace dsoc::protocol {
 
 namespace {
 
@@ -194,4 +194,4 @@ bool from_hex(std::string_view hex, std::vector<std::uint8_t>& out) {
     return true;
 }
 
-} // namespace dsoc::server
+} // namespace dsoc::protocol

@@ -1,8 +1,8 @@
-#include "dsoc/server/connect_token.hpp"
+#include "dsoc/protocol/connect_token.hpp"
 
 #include <gtest/gtest.h>
 
-namespace dsoc::server {
+namespace dsoc::protocol {
 namespace {
 
 TEST(ConnectToken, MintedTokenVerifiesWithItsGrant) {
@@ -80,4 +80,4 @@ TEST(ConnectToken, TwoKeysDiffer) {
 }
 
 } // namespace
-} // namespace dsoc::server
+} // namespace dsoc::protocol
