@@ -209,11 +209,55 @@ public:
     void require_valid_state(const std::string& when) const;
 
 private:
+    // Defined in the library's private interest_manager_state.hpp, with the map of
+    // which source file does which job.
     struct EntitySlot;
     struct ClientSlot;
     struct TbvGroup;
     struct EntityCluster;
 
+    // begin_update(), per entity, in this order.
+    /// A move beyond the entity's motion limits over `seconds` is a jump (teleported_at,
+    /// history cleared); its horizontal speed per tick over `elapsed` ticks.
+    void note_movement(EntitySlot& e, std::uint64_t elapsed, float seconds);
+    /// The entity's box prepared once for every client's culler.
+    void prepare_box(EntitySlot& e);
+    /// With a prepared stage: the entity's shared candidate TBVs, made again when half
+    /// the longest has run out or the entity jumped.
+    void refresh_tbv_candidates(EntitySlot& e);
+    /// Groups this tick's entities by cell of entity_cluster_size (begin_update()).
+    void build_clusters();
+
+    // update_client()'s steps, in this order.
+    /// Without an eye: no pair stays visible (nothing may be known).
+    void forget_visible(ClientSlot& c);
+    /// Step 1: rebuilds the client's culler unless it may be reused for this tick's
+    /// region; true when it was rebuilt.
+    bool refresh_culler(ClientSlot& c);
+    /// Step 1: the culler this tick's current boxes are tested against (built for this
+    /// tick's region alone under exact_region_tests).
+    const RegionVisibility& current_box_culler(ClientSlot& c, bool cheapest);
+    /// Step 2: expired TBV groups free their entities (hidden_expired).
+    void expire_tbvs(ClientSlot& c);
+    /// Step 3: TBVs of entities that jumped, and fuzzy TBVs the entity has left, are void.
+    void void_broken_tbvs(ClientSlot& c);
+    /// Step 4, after a rebuild: every TBV group proves itself hidden again or is freed.
+    void reprove_tbvs(ClientSlot& c);
+    /// Step 5a: clusters whose box is hidden from `now` (ClientSlot::cluster_hidden).
+    void test_clusters(ClientSlot& c, const RegionVisibility& now, std::uint32_t viewer,
+                       bool cheapest);
+    /// Step 5b: every entity without a hidden TBV, visible or hidden (hide()).
+    void test_entities(ClientSlot& c, const RegionVisibility& now, std::uint32_t viewer,
+                       bool cheapest);
+    /// Step 6: the replication set, its level of detail, enter and leave.
+    void decide(ClientSlot& c);
+    /// The entity slot of the client's viewer; 0xffffffff for none (a spectator, or a
+    /// viewer entity not added).
+    [[nodiscard]] std::uint32_t viewer_slot_of(const ClientSlot& c) const;
+    /// The entity was visible last tick and is not due its staggered full test.
+    [[nodiscard]] bool takes_quick_test(const ClientSlot& c, std::uint32_t slot) const;
+
+    // TBVs.
     [[nodiscard]] int tbv_duration(const EntitySlot& e) const;
     [[nodiscard]] Aabb tbv_box(const EntitySlot& e, int duration) const;
     /// Hides `slot` from `c`: with a TBV when one is allowed and proven, else expired.
@@ -222,23 +266,24 @@ private:
     /// tick: one TBV group for all of them when the union of their TBVs is hidden,
     /// else each on its own (hide()).
     void hide_cluster(ClientSlot& c, std::uint32_t cluster, std::uint32_t viewer_slot);
+
+    // The TBV group pool.
     /// A new TBV group holding `prepared` until `expiry`, in the octree and the heap.
     std::uint32_t new_group(ClientSlot& c, const PreparedBox& prepared, std::uint64_t expiry);
     /// Makes `slot` a member of `group` (state hidden_with_tbv).
     void join_group(ClientSlot& c, std::uint32_t group, std::uint32_t slot);
-    /// Groups this tick's entities by cell of entity_cluster_size (begin_update()).
-    void build_clusters();
     void release_group_member(ClientSlot& c, std::uint32_t slot);
     void free_group(ClientSlot& c, std::uint32_t group);
     std::uint32_t allocate_group(ClientSlot& c);
     /// Pops the heap's earliest entry; a live group's entities become hidden_expired
     /// and the group is freed. Returns how many entities it held (0: stale entry).
     std::size_t expire_earliest_group(ClientSlot& c);
+
+    // Eye regions.
     /// The reachable eye region of `c` now; `eye` receives the present eye.
     [[nodiscard]] Aabb eye_region_for(const ClientSlot& c, glm::vec3& eye) const;
     /// `box` intersected with the world bounds (entities never leave them).
     [[nodiscard]] Aabb clip(const Aabb& box) const;
-    void decide(ClientSlot& c);
 
     DSOCConfig config_;
     Aabb world_bounds_;

@@ -1,0 +1,348 @@
+// InterestManager: the tick. begin_update() does the serial work shared by all
+// clients; update_client() runs one client's steps in order, each a named function;
+// and the reachable eye region every step works from.
+
+#include "interest_manager_state.hpp"
+
+#include <atomic>
+#include <cmath>
+#include <string>
+
+namespace dsoc::visibility {
+
+using detail::kNoCluster;
+using detail::kNoGroup;
+using detail::kTeleportTolerance;
+
+namespace {
+
+/// The culler's tests of one entity's current box.
+enum class BoxTest : std::uint8_t {
+    quick,  ///< visible last tick and not due a full test (temporal coherence)
+    full,   ///< the full test
+    hinted, ///< the full test, with the pair's hint (DSOCConfig::blocker_hints)
+};
+
+BoxTest box_test_for(bool quick, bool blocker_hints) {
+    if (quick) {
+        return BoxTest::quick;
+    }
+    return blocker_hints ? BoxTest::hinted : BoxTest::full;
+}
+
+/// Runs test `kind` on an entity's current box: on its preparation of this tick when
+/// `fresh`, else on the box itself (set after begin_update(), so not prepared).
+Visibility test_current_box(const RegionVisibility& culler, BoxTest kind,
+                            const PreparedBox& prepared, const Aabb& box, bool fresh,
+                            std::uint32_t& hint) {
+    switch (kind) {
+    case BoxTest::quick:
+        return fresh ? culler.test_prepared_quick(prepared) : culler.test_box_quick(box);
+    case BoxTest::full:
+        return fresh ? culler.test_prepared(prepared) : culler.test_box(box);
+    case BoxTest::hinted:
+        return fresh ? culler.test_prepared_hinted(prepared, hint)
+                     : culler.test_box_hinted(box, hint);
+    }
+    return culler.test_box(box);
+}
+
+} // namespace
+
+void InterestManager::update(std::uint64_t tick) {
+    begin_update(tick);
+    for (std::size_t i = 0; i < clients_.size(); ++i) {
+        update_client(i);
+    }
+    if (config_.validate_state) {
+        require_valid_state("at tick " + std::to_string(tick));
+    }
+}
+
+// ---- begin_update(): serial, shared by all clients ---------------------------------
+
+void InterestManager::begin_update(std::uint64_t tick) {
+    const std::uint64_t elapsed = tick > tick_ && tick_ != 0 ? tick - tick_ : 1;
+    tick_ = tick;
+    const float seconds = static_cast<float>(elapsed) * tick_seconds_;
+    for (EntitySlot& e : entities_) {
+        if (!e.alive) {
+            continue;
+        }
+        note_movement(e, elapsed, seconds);
+        e.tbvs_at_tick_start = tbv_counts_[static_cast<std::size_t>(&e - entities_.data())].load(
+            std::memory_order_relaxed);
+        prepare_box(e);
+        refresh_tbv_candidates(e);
+    }
+    build_clusters();
+}
+
+void InterestManager::note_movement(EntitySlot& e, std::uint64_t elapsed, float seconds) {
+    const glm::vec3 from = e.box_at_last_update.center();
+    const glm::vec3 to = e.box.center();
+    if (e.seen_by_update && !within_reach(from, to, e.desc.motion, seconds, kTeleportTolerance)) {
+        e.teleported_at = tick_;
+        e.history.clear();
+    }
+    const glm::vec3 d = to - from;
+    e.speed_per_tick =
+        e.seen_by_update ? std::sqrt(d.x * d.x + d.y * d.y) / static_cast<float>(elapsed) : 0.0f;
+    e.history.push(to);
+    e.box_at_last_update = e.box;
+    e.seen_by_update = true;
+}
+
+void InterestManager::prepare_box(EntitySlot& e) {
+    if (preparer_) {
+        preparer_->prepare(e.box, e.prepared);
+    } else {
+        e.prepared.box = e.box;
+    }
+}
+
+void InterestManager::refresh_tbv_candidates(EntitySlot& e) {
+    // Refresh the shared candidates when half the longest has run out (or it jumped).
+    const bool due =
+        !e.has_candidates || e.teleported_at == tick_ ||
+        tick_ >= e.candidates_tick + static_cast<std::uint64_t>(e.tbv_durations[0] / 2);
+    if (!coarse_tbvs_ || !tbvs_enabled_ || !due) {
+        return;
+    }
+    e.has_candidates = true;
+    e.candidates_tick = tick_;
+    int duration = tbv_duration(e);
+    for (std::size_t k = 0; k < e.tbv_candidates.size(); ++k, duration /= 2) {
+        e.tbv_durations[k] = duration;
+        if (duration >= 1) {
+            PreparedBox& candidate = e.tbv_candidates[k];
+            preparer_->prepare(tbv_box(e, duration), candidate);
+        }
+    }
+}
+
+// ---- eye regions ---------------------------------------------------------------------
+
+Aabb InterestManager::eye_region_for(const ClientSlot& c, glm::vec3& eye) const {
+    if (c.desc.viewer != kNoEntity) {
+        const auto it = entity_slot_.find(c.desc.viewer);
+        if (it == entity_slot_.end()) {
+            return {};
+        }
+        eye = entities_[it->second].box.center() + c.desc.eye_offset;
+    } else if (c.has_spectator_eye) {
+        eye = c.spectator_eye;
+    } else {
+        return {};
+    }
+    float down_velocity = -1.0f;
+    if (c.desc.viewer != kNoEntity) {
+        down_velocity = entities_[entity_slot_.at(c.desc.viewer)].down_velocity;
+    }
+    return reachable_eye_region(c.desc, eye, down_velocity);
+}
+
+Aabb InterestManager::reachable_eye_region(const ClientDesc& desc, glm::vec3 eye,
+                                           float down_velocity) const {
+    const float seconds = static_cast<float>(desc.lookahead_ticks) * tick_seconds_;
+    const Aabb region =
+        clip(reachable_box(Aabb{eye, eye}, desc.eye_motion, seconds, 1.0f, down_velocity));
+    return clipper_ ? clipper_(eye, region, EyeReach{&desc.eye_motion, seconds, down_velocity})
+                    : region;
+}
+
+Aabb InterestManager::clip(const Aabb& box) const {
+    if (world_bounds_.is_empty()) {
+        return box;
+    }
+    Aabb out{glm::max(box.min, world_bounds_.min), glm::min(box.max, world_bounds_.max)};
+    return out.is_empty() ? box : out;
+}
+
+// ---- update_client(): one client, its steps in order -----------------------------------
+
+void InterestManager::update_client(std::size_t index, UpdateEffort effort) {
+    ClientSlot& c = *clients_[index];
+    const bool cheapest = effort == UpdateEffort::cheapest;
+    c.stats.cheapest_updates += cheapest ? 1 : 0;
+    c.region = eye_region_for(c, c.eye);
+    if (c.region.is_empty()) {
+        forget_visible(c);
+        decide(c);
+        return;
+    }
+    // Steps 1 to 6, in this order (each declared with what it does in the header).
+    const bool rebuilt = refresh_culler(c);
+    const RegionVisibility& now = current_box_culler(c, cheapest);
+    expire_tbvs(c);
+    void_broken_tbvs(c);
+    if (rebuilt) {
+        reprove_tbvs(c);
+    }
+    c.new_groups.clear(); // groups made from here on may take more TBVs this tick (hide())
+    const std::uint32_t viewer = viewer_slot_of(c);
+    test_clusters(c, now, viewer, cheapest);
+    test_entities(c, now, viewer, cheapest);
+    decide(c);
+}
+
+void InterestManager::forget_visible(ClientSlot& c) {
+    // No eye: nothing may be known.
+    for (auto& pair : c.pairs) {
+        if (pair.state == PairState::visible) {
+            pair.state = PairState::unknown;
+        }
+    }
+}
+
+bool InterestManager::refresh_culler(ClientSlot& c) {
+    // 1. The culler: reuse it while the reachable region stays inside its region. Only
+    //    TBVs need a culler for a larger region than this tick's; without them (and with
+    //    exact_region_tests) it is built for this tick's region alone.
+    const bool reuse = config_.reuse_buffers && (tbvs_enabled_ || !config_.exact_region_tests);
+    if (reuse && !c.buffer_region.is_empty() && c.buffer_region.contains(c.region)) {
+        return false;
+    }
+    c.buffer_region = c.region;
+    if (reuse && config_.region_reuse_margin > 0.0f) {
+        const Aabb grown = clip(c.region.expanded(config_.region_reuse_margin));
+        c.buffer_region = clipper_ ? clipper_(c.eye, grown, EyeReach{}) : grown;
+    }
+    c.visibility->build(c.buffer_region);
+    ++c.stats.buffer_builds;
+    return true;
+}
+
+const RegionVisibility& InterestManager::current_box_culler(ClientSlot& c, bool cheapest) {
+    // The current boxes need only be hidden from this tick's region: with a reused
+    // (larger) buffer region, test them against a culler built for exactly it.
+    // (The cheapest effort tests against the buffer's region, which holds this one.)
+    if (config_.exact_region_tests && !cheapest &&
+        (c.buffer_region.min != c.region.min || c.buffer_region.max != c.region.max)) {
+        if (!c.exact) {
+            c.exact = make_visibility_();
+        }
+        c.exact->build(c.region);
+        return *c.exact;
+    }
+    return *c.visibility;
+}
+
+void InterestManager::expire_tbvs(ClientSlot& c) {
+    // 2. Expired TBV groups: their entities must be tested again.
+    while (!c.expiries.empty() && c.expiries.top().tick < tick_) {
+        c.stats.tbvs_expired += expire_earliest_group(c);
+    }
+}
+
+void InterestManager::void_broken_tbvs(ClientSlot& c) {
+    // 3. Teleports void the TBVs of the entity that jumped. A fuzzy TBV is a prediction,
+    //    not a bound: one the entity has left is void too (caught the first tick it is
+    //    outside, so its box is tested before it could be seen).
+    const bool fuzzy = config_.strategy == TbvStrategy::fuzzy;
+    for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
+        const EntitySlot& e = entities_[slot];
+        auto& pair = c.pairs[slot];
+        if (!e.alive || pair.state != PairState::hidden_with_tbv) {
+            continue;
+        }
+        const bool jumped = e.teleported_at == tick_;
+        const bool escaped = !jumped && fuzzy && !c.groups[pair.group].box.contains(e.box);
+        if (jumped || escaped) {
+            release_group_member(c, slot);
+            pair.state = PairState::hidden_expired;
+            ++(jumped ? c.stats.teleports : c.stats.fuzzy_escapes);
+        }
+    }
+}
+
+void InterestManager::reprove_tbvs(ClientSlot& c) {
+    // 4. A new culler region: every TBV must prove itself hidden again. A visible TBV
+    //    triggers a real test of its entities' current boxes (step 5).
+    if (c.live_groups == 0) {
+        return;
+    }
+    c.scratch.clear();
+    if (coarse_tbvs_) {
+        // Each group carries its keys: re-proving it costs a few bit tests, cheaper
+        // than any octree traversal.
+        for (std::uint32_t g = 0; g < c.groups.size(); ++g) {
+            if (c.groups[g].alive &&
+                c.visibility->test_prepared_coarse(c.groups[g].prepared) != Visibility::occluded) {
+                c.scratch.push_back(g);
+            }
+        }
+    } else {
+        c.tree.traverse_front_to_back(c.region.center(), *c.visibility,
+                                      [&](ItemId group) { c.scratch.push_back(group); });
+    }
+    for (const std::uint32_t group : c.scratch) {
+        ++c.stats.tbv_hits;
+        for (const std::uint32_t slot : c.groups[group].members) {
+            c.pairs[slot].state = PairState::hidden_expired;
+        }
+        free_group(c, group);
+    }
+}
+
+std::uint32_t InterestManager::viewer_slot_of(const ClientSlot& c) const {
+    const auto viewer =
+        c.desc.viewer != kNoEntity ? entity_slot_.find(c.desc.viewer) : entity_slot_.end();
+    return viewer != entity_slot_.end() ? viewer->second : kNoGroup;
+}
+
+bool InterestManager::takes_quick_test(const ClientSlot& c, std::uint32_t slot) const {
+    // Temporal coherence: an entity visible last tick most likely still is; give it
+    // the full (slower) test only every full_test_interval ticks, staggered.
+    return c.pairs[slot].state == PairState::visible &&
+           (tick_ + slot) % static_cast<std::uint64_t>(config_.full_test_interval) != 0;
+}
+
+void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
+                                    std::uint32_t viewer, bool cheapest) {
+    // 5b. Every entity without a hidden TBV: test its current box (or take its
+    //     cluster's answer, step 5a).
+    for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
+        const EntitySlot& e = entities_[slot];
+        auto& pair = c.pairs[slot];
+        if (!e.alive || pair.state == PairState::hidden_with_tbv) {
+            continue;
+        }
+        if (slot == viewer) {
+            pair.state = PairState::visible;
+            continue;
+        }
+        // e.prepared (and its cluster's box) is current unless the box was set after
+        // begin_update().
+        const bool fresh = e.prepared_is_current();
+        const std::uint32_t cluster = cluster_of_[slot];
+        if (fresh && cluster != kNoCluster && c.cluster_hidden[cluster] != 0) {
+            // Hidden with its cluster (whose box holds this one's current box).
+            if (c.cluster_hidden[cluster] == 1) {
+                c.cluster_hidden[cluster] = 2;
+                hide_cluster(c, cluster, viewer);
+            }
+            if (pair.state != PairState::hidden_with_tbv) {
+                pair.state = PairState::hidden_expired; // hide_cluster() made no TBV
+            }
+            continue;
+        }
+        ++c.stats.box_tests;
+        if (cheapest) {
+            // A box set after begin_update() has no preparation: visible, never guessed.
+            const bool hidden =
+                fresh && now.test_prepared_coarse(e.prepared) == Visibility::occluded;
+            pair.state = hidden ? PairState::hidden_expired : PairState::visible;
+            continue;
+        }
+        const BoxTest kind = box_test_for(takes_quick_test(c, slot), config_.blocker_hints);
+        if (test_current_box(now, kind, e.prepared, e.box, fresh, pair.hint) ==
+            Visibility::visible) {
+            pair.state = PairState::visible;
+        } else {
+            hide(c, slot);
+        }
+    }
+}
+
+} // namespace dsoc::visibility
