@@ -9,9 +9,9 @@ namespace dsoc::server {
 
 namespace {
 
-void run_one(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
+void run_one(const interest::GameWorld& world, interest::InterestPolicy& policy, std::uint64_t tick,
              const ClientTick& job, CullingBudget* budget) {
-    std::vector<Interest>& interest = *job.interest;
+    std::vector<interest::Interest>& interest = *job.interest;
     if (budget != nullptr && budget->enabled &&
         std::chrono::steady_clock::now() > budget->deadline) {
         policy.select_cheapest(world, job.viewer, interest);
@@ -21,14 +21,14 @@ void run_one(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
     }
     const auto own =
         std::lower_bound(interest.begin(), interest.end(), job.viewer.entity_id,
-                         [](const Interest& a, std::uint32_t id) { return a.id < id; });
+                         [](const interest::Interest& a, std::uint32_t id) { return a.id < id; });
     if (own == interest.end() || own->id != job.viewer.entity_id) {
-        interest.insert(own, Interest{job.viewer.entity_id, 0});
+        interest.insert(own, interest::Interest{job.viewer.entity_id, 0});
     } else {
         own->tier = 0; // a client always gets its own entity every tick, finest
     }
     if (!job.network_lod) {
-        for (Interest& i : interest) {
+        for (interest::Interest& i : interest) {
             i.tier = 0;
         }
     }
@@ -52,15 +52,16 @@ std::size_t job_at_turn(std::size_t i, std::size_t n, std::uint64_t tick) {
 
 } // namespace
 
-void run_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
-                      std::span<const ClientTick> jobs, WorkerPool& pool, CullingBudget* budget) {
+void run_client_ticks(const interest::GameWorld& world, interest::InterestPolicy& policy,
+                      std::uint64_t tick, std::span<const ClientTick> jobs, WorkerPool& pool,
+                      CullingBudget* budget) {
     pool.run(jobs.size(), [&](std::size_t i) {
         run_one(world, policy, tick, jobs[job_at_turn(i, jobs.size(), tick)], budget);
     });
 }
 
-void start_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
-                        std::span<const ClientTick> jobs, WorkerPool& pool,
+void start_client_ticks(const interest::GameWorld& world, interest::InterestPolicy& policy,
+                        std::uint64_t tick, std::span<const ClientTick> jobs, WorkerPool& pool,
                         std::function<void(std::exception_ptr)> done, CullingBudget* budget) {
     pool.start(
         jobs.size(),

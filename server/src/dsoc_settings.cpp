@@ -1,5 +1,7 @@
 #include "dsoc/server/dsoc_settings.hpp"
 
+#include "dsoc/interest/interest_policy.hpp"
+
 #include <algorithm>
 #include <array>
 #include <charconv>
@@ -68,12 +70,7 @@ visibility::DSOCConfig dsoc_config(const ServerConfig& config) {
     [[maybe_unused]] const bool known =
         visibility::parse_tbv_strategy(config.tbv_strategy, dsoc.strategy); // validated
     dsoc.region_reuse_margin = config.region_reuse_margin;
-    if (config.policy == "occlusion") { // every entity's current box, every tick
-        dsoc.tbvs_enabled = false;
-        dsoc.reuse_buffers = false;
-        dsoc.full_test_interval = 1;
-        dsoc.blocker_hints = false; // no temporal coherence at all
-    }
+    interest::apply_policy_presets(config.policy, dsoc);
     for (const DsocSetting& s : config.dsoc) {
         [[maybe_unused]] const auto why = visibility::set_field(dsoc, s.key, s.value);
     }

@@ -6,7 +6,7 @@ namespace dsoc::server {
 
 namespace {
 
-void add_audit(const Entity& e, protocol::pb::Snapshot& snapshot) {
+void add_audit(const interest::Entity& e, protocol::pb::Snapshot& snapshot) {
     protocol::pb::AuditPose& a = *snapshot.add_audit();
     a.set_id(e.id);
     a.set_x(e.move.position.x);
@@ -18,15 +18,15 @@ void add_audit(const Entity& e, protocol::pb::Snapshot& snapshot) {
 
 } // namespace
 
-protocol::Pose pose_of(const Entity& e) {
+protocol::Pose pose_of(const interest::Entity& e) {
     return {e.move.position.x, e.move.position.y, e.move.position.z, e.yaw_deg, e.pitch_deg};
 }
 
-void SharedPoses::compute(const GameWorld& world,
+void SharedPoses::compute(const interest::GameWorld& world,
                           const protocol::QuantizationSettings& quantization) {
     quantization_ = quantization;
     poses_.clear();
-    for (const Entity& e : world.entities()) {
+    for (const interest::Entity& e : world.entities()) {
         const protocol::Pose pose = pose_of(e);
         for (const float quantum : quantization.position_quantum) {
             poses_.push_back(protocol::quantize(pose, quantum, quantization.angle_steps));
@@ -34,7 +34,8 @@ void SharedPoses::compute(const GameWorld& world,
     }
 }
 
-void ReplicationState::build_snapshot(const GameWorld& world, std::span<const Interest> interest,
+void ReplicationState::build_snapshot(const interest::GameWorld& world,
+                                      std::span<const interest::Interest> interest,
                                       std::uint64_t tick, bool audit,
                                       protocol::pb::Snapshot& snapshot, const SharedPoses* poses) {
     assert(poses == nullptr ||
@@ -48,9 +49,9 @@ void ReplicationState::build_snapshot(const GameWorld& world, std::span<const In
     // world's entities are in increasing id order too, so each wanted entity is found
     // by walking forward (no per-entity lookup: this loop runs for every entity of
     // every client every tick).
-    const std::vector<Entity>& entities = world.entities();
+    const std::vector<interest::Entity>& entities = world.entities();
     std::size_t next_entity = 0;
-    const auto find_entity = [&](std::uint32_t id) -> const Entity* {
+    const auto find_entity = [&](std::uint32_t id) -> const interest::Entity* {
         while (next_entity < entities.size() && entities[next_entity].id < id) {
             ++next_entity;
         }
@@ -70,8 +71,8 @@ void ReplicationState::build_snapshot(const GameWorld& world, std::span<const In
             ++i;
             continue;
         }
-        const Interest wanted = interest[j];
-        const Entity* e = find_entity(wanted.id);
+        const interest::Interest wanted = interest[j];
+        const interest::Entity* e = find_entity(wanted.id);
         ++j;
         if (!take_new) {
             ++i; // known and still of interest

@@ -2,6 +2,7 @@
 
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/connect_token.hpp"
+#include "dsoc/server/interest_setup.hpp"
 
 #include <boost/asio/post.hpp>
 #include <spdlog/spdlog.h>
@@ -23,7 +24,7 @@ constexpr std::size_t kMaxTickSamples = 4'000'000;
 Server::Server(asio::io_context& io, ServerConfig config, std::shared_ptr<const maps::Map> map)
     : io_(io), config_(std::move(config)), acceptor_(io), tick_timer_(io),
       tick_period_(std::chrono::nanoseconds(1'000'000'000LL / config_.tick_rate)),
-      schedule_(Clock::now(), tick_period_), world_(config_, std::move(map)),
+      schedule_(Clock::now(), tick_period_), world_(world_settings(config_), std::move(map)),
       policy_(make_policy(config_, world_)), pool_(config_.threads, WorkerPool::Caller::stays_out) {
 }
 
@@ -231,7 +232,7 @@ void Server::prepare_client_ticks() {
         if (!session.active()) {
             continue;
         }
-        const Entity* self = world_.find(session.entity_id());
+        const interest::Entity* self = world_.find(session.entity_id());
         if (self == nullptr) {
             continue;
         }
@@ -242,7 +243,7 @@ void Server::prepare_client_ticks() {
             continue;
         }
         ClientTick job;
-        job.viewer = Viewer{id, session.entity_id(), world_.eye_of(*self)};
+        job.viewer = interest::Viewer{id, session.entity_id(), world_.eye_of(*self)};
         job.replication = &client.replication;
         job.interest = &client.interest;
         job.envelope = &client.envelope;
@@ -295,13 +296,13 @@ void Server::write_trace_tick() {
     trace::TraceTick& t = trace_tick_;
     t.t = tick_;
     t.entities.clear();
-    for (const Entity& e : world_.entities()) {
+    for (const interest::Entity& e : world_.entities()) {
         t.entities.push_back({e.id, world_.box_of(e)});
     }
     t.clients.clear();
     for (const auto& [id, client] : clients_) {
         const Session& session = *client.session;
-        const Entity* self = world_.find(session.entity_id());
+        const interest::Entity* self = world_.find(session.entity_id());
         if (!session.active() || self == nullptr) {
             continue;
         }

@@ -1,5 +1,6 @@
 #include "dsoc/server/server_config.hpp"
 
+#include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/server/dsoc_settings.hpp"
 #include "dsoc/visibility/shaft_occlusion.hpp"
 
@@ -116,7 +117,7 @@ protocol::QuantizationSettings quantization(const ServerConfig& c) {
 }
 
 int lookahead_ticks(const ServerConfig& c) {
-    return static_cast<int>((static_cast<long>(c.latency_allowance_ms) * c.tick_rate + 999) / 1000);
+    return interest::lookahead_ticks(c.latency_allowance_ms, c.tick_rate);
 }
 
 } // namespace dsoc::server

@@ -13,11 +13,12 @@
 // The output is deterministic for a seed except the times (entity updates and
 // bytes are a checksum of the run).
 
+#include "dsoc/interest/game_world.hpp"
+#include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/maps/map_source.hpp"
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/compact_snapshot.hpp"
-#include "dsoc/server/game_world.hpp"
-#include "dsoc/server/interest_policy.hpp"
+#include "dsoc/server/interest_setup.hpp"
 #include "dsoc/server/replication_state.hpp"
 #include "dsoc/server/server_config.hpp"
 
@@ -46,7 +47,7 @@ struct Player {
     std::uint32_t client_id = 0;
     std::uint32_t entity_id = 0;
     server::ReplicationState replication;
-    std::vector<server::Interest> interest;
+    std::vector<interest::Interest> interest;
     protocol::pb::Envelope envelope;
     std::vector<std::uint8_t> frame;
     protocol::SnapshotDecoder decoder; // the client's side
@@ -112,7 +113,7 @@ int main(int argc, char** argv) {
         return 2;
     }
     const auto map = std::make_shared<const maps::Map>(std::move(loaded).value());
-    server::GameWorld world(config, map);
+    interest::GameWorld world(server::world_settings(config), map);
     auto policy = server::make_policy(config, world);
     std::vector<std::unique_ptr<Player>> clients;
     server::SharedPoses poses;
@@ -160,15 +161,15 @@ int main(int argc, char** argv) {
         poses.compute(world, server::quantization(config));
         lap(p.snapshot);
         for (auto& c : clients) {
-            const server::Entity* self = world.find(c->entity_id);
-            const server::Viewer viewer{c->client_id, c->entity_id, world.eye_of(*self)};
+            const interest::Entity* self = world.find(c->entity_id);
+            const interest::Viewer viewer{c->client_id, c->entity_id, world.eye_of(*self)};
             // As run_client_ticks: the policy's set plus the viewer's own entity.
             policy->select(world, viewer, c->interest);
             const auto own = std::lower_bound(
                 c->interest.begin(), c->interest.end(), c->entity_id,
-                [](const server::Interest& a, std::uint32_t id) { return a.id < id; });
+                [](const interest::Interest& a, std::uint32_t id) { return a.id < id; });
             if (own == c->interest.end() || own->id != c->entity_id) {
-                c->interest.insert(own, server::Interest{c->entity_id, 0});
+                c->interest.insert(own, interest::Interest{c->entity_id, 0});
             } else {
                 own->tier = 0;
             }

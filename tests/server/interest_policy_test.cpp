@@ -1,4 +1,5 @@
-#include "dsoc/server/interest_policy.hpp"
+#include "dsoc/interest/interest_policy.hpp"
+#include "dsoc/server/interest_setup.hpp"
 #include "support/test_maps.hpp"
 
 #include "dsoc/maps/map_source.hpp"
@@ -15,6 +16,14 @@
 namespace dsoc::server {
 namespace {
 
+using interest::BroadcastPolicy;
+using interest::DistancePolicy;
+using interest::Entity;
+using interest::GameWorld;
+using interest::Interest;
+using interest::PvsPolicy;
+using interest::Viewer;
+
 bool contains(const std::vector<Interest>& set, std::uint32_t id) {
     return std::any_of(set.begin(), set.end(), [&](const Interest& i) { return i.id == id; });
 }
@@ -27,7 +36,7 @@ ServerConfig bots(int n) {
 }
 
 TEST(InterestPolicy, BroadcastSelectsEverything) {
-    GameWorld world(bots(25), testing::rooms_map());
+    GameWorld world(world_settings(bots(25)), testing::rooms_map());
     BroadcastPolicy policy;
     std::vector<Interest> out;
     policy.select(world, Viewer{1, 1, {0, 0, 0}}, out);
@@ -37,7 +46,7 @@ TEST(InterestPolicy, BroadcastSelectsEverything) {
 }
 
 TEST(InterestPolicy, DistanceKeepsExactlyTheEntitiesWithinRadius) {
-    GameWorld world(bots(300), testing::rooms_map());
+    GameWorld world(world_settings(bots(300)), testing::rooms_map());
     for (int i = 0; i < 60; ++i) { // let the bots spread out
         world.step(1.0f / 30.0f);
     }
@@ -69,7 +78,7 @@ protected:
                          << loaded.error().message();
         }
         map_ = std::make_shared<const maps::Map>(std::move(loaded).value());
-        world_ = std::make_unique<GameWorld>(bots(200), map_);
+        world_ = std::make_unique<GameWorld>(world_settings(bots(200)), map_);
         for (int i = 0; i < 90; ++i) {
             world_->step(1.0f / 30.0f);
         }
@@ -196,12 +205,14 @@ TEST(InterestPolicy, ExactStagesAutoFollowATableOnlyWhenTheBakeHadToCoarsenItsCe
     };
     ServerConfig config;
     config.bake_cell_size = 32.0f;
-    EXPECT_FALSE(use_exact_stages(config, table_of(32.0f))); // as fine as asked: alone
-    EXPECT_TRUE(use_exact_stages(config, table_of(40.0f)));  // grown to fit: exact too
+    EXPECT_FALSE(
+        use_exact_stages(policy_settings(config), table_of(32.0f))); // as fine as asked: alone
+    EXPECT_TRUE(
+        use_exact_stages(policy_settings(config), table_of(40.0f))); // grown to fit: exact too
     config.exact_stages = "false";
-    EXPECT_FALSE(use_exact_stages(config, table_of(40.0f)));
+    EXPECT_FALSE(use_exact_stages(policy_settings(config), table_of(40.0f)));
     config.exact_stages = "true";
-    EXPECT_TRUE(use_exact_stages(config, table_of(32.0f)));
+    EXPECT_TRUE(use_exact_stages(policy_settings(config), table_of(32.0f)));
     config.exact_stages = "sometimes";
     config.insecure = true;
     const auto problems = validate(config);
@@ -210,7 +221,7 @@ TEST(InterestPolicy, ExactStagesAutoFollowATableOnlyWhenTheBakeHadToCoarsenItsCe
 }
 
 TEST(GameWorld, EntitiesNeverExceedMaxSpeedHorizontally) {
-    GameWorld world(bots(50), testing::rooms_map());
+    GameWorld world(world_settings(bots(50)), testing::rooms_map());
     const auto player = world.spawn_player();
     world.set_player_input(player, {10.0f, 10.0f, 0.0f}, true, 720.0f, 200.0f);
     const float dt = 1.0f / 30.0f;

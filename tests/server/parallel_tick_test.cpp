@@ -7,6 +7,7 @@
 
 #include "dsoc/protocol/compact_snapshot.hpp"
 #include "dsoc/server/client_tick.hpp"
+#include "dsoc/server/interest_setup.hpp"
 #include "support/test_maps.hpp"
 
 #include <gtest/gtest.h>
@@ -25,7 +26,7 @@ struct TestClient {
     std::uint32_t client_id = 0;
     std::uint32_t entity_id = 0;
     ReplicationState replication;
-    std::vector<Interest> interest;
+    std::vector<interest::Interest> interest;
     protocol::pb::Envelope envelope;
     std::vector<std::uint8_t> frame;
     protocol::SnapshotDecoder decoder;
@@ -45,7 +46,7 @@ std::vector<std::string> run_server_ticks(const std::string& policy, int threads
     config.baked_stage = false; // the exact stages (no bake in this test)
     config.threads = threads;
     config.seed = 9;
-    GameWorld world(config, testing::rooms_map());
+    interest::GameWorld world(world_settings(config), testing::rooms_map());
     auto interest_policy = make_policy(config, world);
     WorkerPool pool(threads,
                     as_server ? WorkerPool::Caller::stays_out : WorkerPool::Caller::takes_part);
@@ -81,9 +82,9 @@ std::vector<std::string> run_server_ticks(const std::string& policy, int threads
         poses.compute(world, quantization(config));
         std::vector<ClientTick> jobs;
         for (auto& c : clients) {
-            const Entity* self = world.find(c->entity_id);
+            const interest::Entity* self = world.find(c->entity_id);
             ClientTick job;
-            job.viewer = Viewer{c->client_id, c->entity_id, world.eye_of(*self)};
+            job.viewer = interest::Viewer{c->client_id, c->entity_id, world.eye_of(*self)};
             job.replication = &c->replication;
             job.interest = &c->interest;
             job.envelope = &c->envelope;

@@ -1,4 +1,5 @@
 #include "dsoc/protocol/compact_snapshot.hpp"
+#include "dsoc/server/interest_setup.hpp"
 #include "dsoc/server/replication_state.hpp"
 #include "support/test_maps.hpp"
 
@@ -21,15 +22,15 @@ std::vector<std::uint32_t> ids(const google::protobuf::RepeatedField<std::uint32
     return {r.begin(), r.end()};
 }
 
-std::vector<Interest> near(std::initializer_list<std::uint32_t> list) {
-    std::vector<Interest> out;
+std::vector<interest::Interest> near(std::initializer_list<std::uint32_t> list) {
+    std::vector<interest::Interest> out;
     for (const auto id : list) {
         out.push_back({id, 0});
     }
     return out;
 }
 
-std::vector<std::uint32_t> id_list(const std::vector<Interest>& set) {
+std::vector<std::uint32_t> id_list(const std::vector<interest::Interest>& set) {
     std::vector<std::uint32_t> out;
     for (const auto& i : set) {
         out.push_back(i.id);
@@ -49,7 +50,8 @@ std::vector<std::uint32_t> updated_ids(const protocol::pb::Snapshot& s) {
 }
 
 TEST(ReplicationState, EnterThenUpdateThenLeave) {
-    GameWorld world(config_with_bots(3), testing::rooms_map()); // ids 1, 2, 3
+    interest::GameWorld world(world_settings(config_with_bots(3)),
+                              testing::rooms_map()); // ids 1, 2, 3
     ReplicationState state;
     protocol::pb::Snapshot snap;
 
@@ -77,7 +79,7 @@ TEST(ReplicationState, EnterThenUpdateThenLeave) {
 }
 
 TEST(ReplicationState, RemovedEntityLeaves) {
-    GameWorld world(config_with_bots(2), testing::rooms_map());
+    interest::GameWorld world(world_settings(config_with_bots(2)), testing::rooms_map());
     ReplicationState state;
     protocol::pb::Snapshot snap;
     state.build_snapshot(world, near({1, 2}), 1, false, snap);
@@ -88,10 +90,10 @@ TEST(ReplicationState, RemovedEntityLeaves) {
 }
 
 TEST(ReplicationState, CoarseTiersAreUpdatedEverySecondAndFourthTick) {
-    GameWorld world(config_with_bots(12), testing::rooms_map());
+    interest::GameWorld world(world_settings(config_with_bots(12)), testing::rooms_map());
     ReplicationState state;
     protocol::pb::Snapshot snap;
-    std::vector<Interest> set;
+    std::vector<interest::Interest> set;
     for (std::uint32_t id = 1; id <= 12; ++id) {
         set.push_back({id, static_cast<std::uint8_t>(id % 3)});
     }
@@ -115,7 +117,7 @@ TEST(ReplicationState, CoarseTiersAreUpdatedEverySecondAndFourthTick) {
 }
 
 TEST(ReplicationState, RandomSequencesKeepTheDecodedReplicaExact) {
-    GameWorld world(config_with_bots(40), testing::rooms_map());
+    interest::GameWorld world(world_settings(config_with_bots(40)), testing::rooms_map());
     const protocol::QuantizationSettings quantization;
     ReplicationState state(quantization);
     protocol::SnapshotDecoder client(quantization);
@@ -124,7 +126,7 @@ TEST(ReplicationState, RandomSequencesKeepTheDecodedReplicaExact) {
     std::uint64_t audited = 0;
     for (int tick = 1; tick <= 300; ++tick) {
         world.step(1.0f / 30.0f);
-        std::vector<Interest> interest;
+        std::vector<interest::Interest> interest;
         for (std::uint32_t id = 1; id <= 40; ++id) {
             if (rng() % 3 != 0) {
                 interest.push_back({id, static_cast<std::uint8_t>(rng() % 3)});

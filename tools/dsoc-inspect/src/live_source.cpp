@@ -1,7 +1,6 @@
 #include "dsoc/inspect/live_source.hpp"
 
-#include "dsoc/server/culling_policy.hpp"
-#include "dsoc/server/server_config.hpp"
+#include "dsoc/interest/culling_policy.hpp"
 
 #include <stdexcept>
 
@@ -9,22 +8,29 @@ namespace dsoc::inspect {
 
 namespace {
 
-server::ServerConfig server_config(const LiveOptions& o) {
-    server::ServerConfig c;
-    c.policy = o.policy;
-    c.bots = o.bots;
-    c.tick_rate = o.tick_rate;
-    c.latency_allowance_ms = o.latency_allowance_ms;
-    c.culler = o.culler;
-    c.seed = o.seed;
+interest::WorldSettings world_settings(const LiveOptions& o) {
+    interest::WorldSettings s;
+    s.bots = o.bots;
+    s.seed = o.seed;
+    return s;
+}
+
+/// The server's policy settings for these options (its defaults for the rest).
+interest::PolicySettings policy_settings(const LiveOptions& o) {
+    interest::PolicySettings s;
+    s.policy = o.policy;
+    s.dsoc.tick_rate = o.tick_rate;
+    interest::apply_policy_presets(o.policy, s.dsoc);
+    s.culler = o.culler;
+    s.lookahead_ticks = interest::lookahead_ticks(o.latency_allowance_ms, o.tick_rate);
     // The exact stages, as the classifier below: the pictures show TBVs and what the
     // PVS and shaft stages decide (behind the baked table there are no TBVs).
-    c.baked_stage = false;
-    return c;
+    s.baked_stage = false;
+    return s;
 }
 
 visibility::RegionCullerConfig culler_config(const std::string& culler) {
-    visibility::RegionCullerConfig c; // as server::make_policy reads ServerConfig::culler
+    visibility::RegionCullerConfig c; // as interest::make_policy reads PolicySettings::culler
     c.pyramid = culler != "shaft";
     c.shaft = culler != "pyramid";
     return c;
@@ -35,11 +41,11 @@ visibility::RegionCullerConfig culler_config(const std::string& culler) {
 template <class Member>
 struct SelectAnswer;
 template <class Policy, class Entry>
-struct SelectAnswer<void (Policy::*)(const server::GameWorld&, const server::Viewer&,
+struct SelectAnswer<void (Policy::*)(const interest::GameWorld&, const interest::Viewer&,
                                      std::vector<Entry>&)> {
     using type = std::vector<Entry>;
 };
-using SelectOut = SelectAnswer<decltype(&server::InterestPolicy::select)>::type;
+using SelectOut = SelectAnswer<decltype(&interest::InterestPolicy::select)>::type;
 
 } // namespace
 
@@ -49,8 +55,8 @@ std::vector<std::string> validate(const LiveOptions& o) {
         problems.push_back("policy '" + o.policy +
                            "': the inspector shows the culling policies, dsoc or occlusion");
     }
-    // The fields server::make_policy and GameWorld read, with ServerConfig's limits
-    // (server::validate() would also judge the socket settings we do not use).
+    // The settings interest::make_policy and GameWorld read, with the server's limits
+    // (ServerConfig's validate()).
     if (o.bots < 1 || o.bots > 100000) {
         problems.push_back("bots " + std::to_string(o.bots) + ": must be 1..100000");
     }
@@ -83,17 +89,16 @@ LiveSimulation::LiveSimulation(std::shared_ptr<const maps::Map> map, const LiveO
     if (map_ == nullptr || map_->spawn_points.empty()) {
         throw std::invalid_argument("map: the live simulation needs a map with spawn points");
     }
-    const server::ServerConfig config = server_config(options);
-    world_ = std::make_unique<server::GameWorld>(config, map_);
-    policy_ = server::make_policy(config, *world_);
-    culling_ = dynamic_cast<const server::CullingPolicy*>(policy_.get());
+    world_ = std::make_unique<interest::GameWorld>(world_settings(options), map_);
+    policy_ = interest::make_policy(policy_settings(options), *world_);
+    culling_ = dynamic_cast<const interest::CullingPolicy*>(policy_.get());
     if (culling_ == nullptr) {
-        throw std::logic_error("server::make_policy did not return a CullingPolicy for " +
+        throw std::logic_error("interest::make_policy did not return a CullingPolicy for " +
                                options.policy);
     }
     policy_->add_viewer(kClientId, options.viewer_entity);
     scene_ = visibility::OccluderScene::build(map_->occluders);
-    // As server::make_policy: the map's PVS stage in front of the occluder culler.
+    // As interest::make_policy: the map's PVS stage in front of the occluder culler.
     classifier_ =
         std::make_unique<ReplicatedClassifier>(scene_, map_->pvs, culler_config(options.culler));
 }
@@ -106,8 +111,8 @@ void LiveSimulation::advance() {
     policy_->begin_tick(*world_, tick_);
     // The policy decides for a viewer in begin_tick() or in select(), depending on how
     // the server spreads per-client work; ask, as the server does, so both hold.
-    if (const server::Entity* self = world_->find(options_.viewer_entity)) {
-        server::Viewer viewer;
+    if (const interest::Entity* self = world_->find(options_.viewer_entity)) {
+        interest::Viewer viewer;
         viewer.client_id = kClientId;
         viewer.entity_id = options_.viewer_entity;
         viewer.eye = world_->eye_of(*self);
@@ -122,7 +127,7 @@ ClientView LiveSimulation::view() {
     v.tick = tick_;
     v.client = kClientId;
     v.viewer_entity = options_.viewer_entity;
-    const server::Entity* self = world_->find(options_.viewer_entity);
+    const interest::Entity* self = world_->find(options_.viewer_entity);
     if (self != nullptr) {
         v.eye = world_->eye_of(*self);
         v.viewer_box = world_->box_of(*self);
@@ -138,7 +143,7 @@ ClientView LiveSimulation::view() {
             replicated[r.id] = true;
         }
     }
-    for (const server::Entity& e : world_->entities()) {
+    for (const interest::Entity& e : world_->entities()) {
         if (e.id == options_.viewer_entity) {
             continue;
         }

@@ -5,9 +5,9 @@
 // depends only on the world, the tick and that client's own history, so the bytes
 // are identical whatever the thread count (tests/server/parallel_tick_test.cpp).
 
+#include "dsoc/interest/game_world.hpp"
+#include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/protocol/messages.hpp"
-#include "dsoc/server/game_world.hpp"
-#include "dsoc/server/interest_policy.hpp"
 #include "dsoc/server/replication_state.hpp"
 #include "dsoc/server/worker_pool.hpp"
 
@@ -24,10 +24,10 @@ namespace dsoc::server {
 /// One client's work this tick. The pointed-to objects belong to the client (one
 /// set per client, never shared), so distinct jobs touch distinct state.
 struct ClientTick {
-    Viewer viewer;
+    interest::Viewer viewer;
     ReplicationState* replication = nullptr;
-    std::vector<Interest>* interest = nullptr;  ///< receives the interest set
-    protocol::pb::Envelope* envelope = nullptr; ///< receives the snapshot when `build`
+    std::vector<interest::Interest>* interest = nullptr; ///< receives the interest set
+    protocol::pb::Envelope* envelope = nullptr;          ///< receives the snapshot when `build`
     /// When not null and `build`: receives the snapshot encoded as one wire frame
     /// (cleared first; its capacity is reused), so serialization runs on the pool too.
     std::vector<std::uint8_t>* frame = nullptr;
@@ -56,8 +56,8 @@ struct CullingBudget {
 /// `build`, the snapshot of `tick` (and its frame when `frame` is set). policy.begin_tick(world,
 /// tick) must have run; `world` and the policy's shared state are only read meanwhile.
 /// `budget` (may be null: no deadline) must outlive the call.
-void run_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
-                      std::span<const ClientTick> jobs, WorkerPool& pool,
+void run_client_ticks(const interest::GameWorld& world, interest::InterestPolicy& policy,
+                      std::uint64_t tick, std::span<const ClientTick> jobs, WorkerPool& pool,
                       CullingBudget* budget = nullptr);
 
 /// The same jobs, on the pool's own threads (WorkerPool::start): returns at once, and
@@ -66,8 +66,8 @@ void run_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint6
 /// span's memory and everything the jobs point to: the caller must neither write nor
 /// destroy any of it (reading `world` is fine), and must keep all of it alive (`budget`
 /// too, when not null). The bytes are the same as run_client_ticks() gives.
-void start_client_ticks(const GameWorld& world, InterestPolicy& policy, std::uint64_t tick,
-                        std::span<const ClientTick> jobs, WorkerPool& pool,
+void start_client_ticks(const interest::GameWorld& world, interest::InterestPolicy& policy,
+                        std::uint64_t tick, std::span<const ClientTick> jobs, WorkerPool& pool,
                         std::function<void(std::exception_ptr)> done,
                         CullingBudget* budget = nullptr);
 

@@ -6,10 +6,10 @@
 // Threading: one per client; build_snapshot() of distinct clients may run
 // concurrently (it only reads the world).
 
+#include "dsoc/interest/game_world.hpp"
+#include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/protocol/compact_snapshot.hpp"
 #include "dsoc/protocol/messages.hpp"
-#include "dsoc/server/game_world.hpp"
-#include "dsoc/server/interest_policy.hpp"
 
 #include <cstdint>
 #include <span>
@@ -18,7 +18,7 @@
 namespace dsoc::server {
 
 /// The wire pose of a world entity.
-[[nodiscard]] protocol::Pose pose_of(const Entity& e);
+[[nodiscard]] protocol::Pose pose_of(const interest::Entity& e);
 
 /// Every entity's wire pose this tick, quantized on each network level-of-detail
 /// tier once for all clients (instead of once per client that is sent it).
@@ -26,7 +26,8 @@ namespace dsoc::server {
 class SharedPoses {
 public:
     /// For every entity of `world` (in its order) and every tier of `quantization`.
-    void compute(const GameWorld& world, const protocol::QuantizationSettings& quantization);
+    void compute(const interest::GameWorld& world,
+                 const protocol::QuantizationSettings& quantization);
     /// The pose of world.entities()[index] on `tier`, as of the last compute().
     [[nodiscard]] const protocol::QuantizedPose& at(std::size_t index, std::uint8_t tier) const {
         return poses_[index * protocol::kLodTiers + tier];
@@ -57,8 +58,9 @@ public:
     /// snapshot.audit with the exact pose of every entity made current. `poses`
     /// (optional): this tick's SharedPoses of `world`, computed with this state's
     /// quantization; the bytes are the same with or without it.
-    void build_snapshot(const GameWorld& world, std::span<const Interest> interest,
-                        std::uint64_t tick, bool audit, protocol::pb::Snapshot& snapshot,
+    void build_snapshot(const interest::GameWorld& world,
+                        std::span<const interest::Interest> interest, std::uint64_t tick,
+                        bool audit, protocol::pb::Snapshot& snapshot,
                         const SharedPoses* poses = nullptr);
 
     [[nodiscard]] std::size_t known_count() const { return known_.size(); }

@@ -27,11 +27,11 @@
 // reads only I/O-thread state (the TBV count is the one taken at the last hand-over).
 // One tick at a time: the next tick is scheduled at the hand-over.
 
+#include "dsoc/interest/game_world.hpp"
+#include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/protocol/connect_token.hpp"
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/server/client_tick.hpp"
-#include "dsoc/server/game_world.hpp"
-#include "dsoc/server/interest_policy.hpp"
 #include "dsoc/server/metrics.hpp"
 #include "dsoc/server/replication_state.hpp"
 #include "dsoc/server/server_config.hpp"
@@ -122,13 +122,13 @@ public:
 private:
     struct Client {
         std::shared_ptr<Session> session;
-        ReplicationState replication;    // written by this client's job during a phase
-        std::vector<Interest> interest;  // this tick's set, written by the job
-        protocol::pb::Envelope envelope; // this tick's snapshot, written by the job
-        std::uint32_t audit_every = 0;   // ClientHello.audit_every_ticks
-        std::vector<std::uint8_t> frame; // this tick's snapshot frame, written by the job
-        protocol::pb::ClientInput input; // the latest input, for the next tick start
-        bool input_pending = false;      // `input` not handed to the world yet
+        ReplicationState replication;             // written by this client's job during a phase
+        std::vector<interest::Interest> interest; // this tick's set, written by the job
+        protocol::pb::Envelope envelope;          // this tick's snapshot, written by the job
+        std::uint32_t audit_every = 0;            // ClientHello.audit_every_ticks
+        std::vector<std::uint8_t> frame;          // this tick's snapshot frame, written by the job
+        protocol::pb::ClientInput input;          // the latest input, for the next tick start
+        bool input_pending = false;               // `input` not handed to the world yet
     };
 
     void accept_next();
@@ -156,8 +156,8 @@ private:
     std::chrono::steady_clock::time_point last_skip_log_; // skips are logged every 10 s at most
     std::uint64_t skipped_since_log_ = 0;
     std::uint64_t tick_ = 0;
-    GameWorld world_;
-    std::unique_ptr<InterestPolicy> policy_;
+    interest::GameWorld world_;
+    std::unique_ptr<interest::InterestPolicy> policy_;
     std::map<std::uint32_t, Client> clients_;                    // active (after hello)
     std::map<std::uint32_t, std::shared_ptr<Session>> sessions_; // all open connections
     std::uint32_t next_client_id_ = 1;

@@ -1,7 +1,7 @@
 #pragma once
-// The live input of dsoc-inspect: the server's own world (dsoc::server::GameWorld:
+// The live input of dsoc-inspect: the server's own world (dsoc::interest::GameWorld:
 // wandering bots, Quake 3 movement) and its own culling policy
-// (dsoc::server::make_policy: "dsoc" or "occlusion"), run in-process tick by tick,
+// (dsoc::interest::make_policy: "dsoc" or "occlusion"), run in-process tick by tick,
 // with one client viewing from one of the bots. Deterministic for a seed.
 //
 // Only that one client is added to the interest manager: a client's decisions
@@ -10,16 +10,16 @@
 
 #include "dsoc/inspect/client_view.hpp"
 #include "dsoc/inspect/replicated_classifier.hpp"
+#include "dsoc/interest/game_world.hpp"
+#include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/maps/map.hpp"
-#include "dsoc/server/game_world.hpp"
-#include "dsoc/server/interest_policy.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
 
 #include <memory>
 #include <string>
 #include <vector>
 
-namespace dsoc::server {
+namespace dsoc::interest {
 class CullingPolicy;
 }
 
@@ -71,9 +71,9 @@ public:
 private:
     std::shared_ptr<const maps::Map> map_;
     LiveOptions options_;
-    std::unique_ptr<server::GameWorld> world_;
-    std::unique_ptr<server::InterestPolicy> policy_;
-    const server::CullingPolicy* culling_ = nullptr; ///< policy_ itself
+    std::unique_ptr<interest::GameWorld> world_;
+    std::unique_ptr<interest::InterestPolicy> policy_;
+    const interest::CullingPolicy* culling_ = nullptr; ///< policy_ itself
     std::shared_ptr<const visibility::OccluderScene> scene_;
     std::unique_ptr<ReplicatedClassifier> classifier_;
     std::uint64_t tick_ = 0;

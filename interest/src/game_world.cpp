@@ -1,4 +1,4 @@
-#include "dsoc/server/game_world.hpp"
+#include "dsoc/interest/game_world.hpp"
 
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
@@ -7,7 +7,7 @@
 #include <cassert>
 #include <cmath>
 
-namespace dsoc::server {
+namespace dsoc::interest {
 
 namespace {
 
@@ -21,18 +21,18 @@ float wrap_degrees(float deg) {
 
 } // namespace
 
-GameWorld::GameWorld(const ServerConfig& config, std::shared_ptr<const maps::Map> map)
+GameWorld::GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::Map> map)
     : map_(std::move(map)), collision_(map_->collision_brushes) {
-    move_.max_speed = config.max_speed;
-    entities_.reserve(static_cast<std::size_t>(config.bots) + 64);
+    move_.max_speed = settings.max_speed;
+    entities_.reserve(static_cast<std::size_t>(settings.bots) + 64);
     bots_ = sim::spawn_wander_bots(collision_, move_, map_->spawn_points,
-                                   static_cast<std::size_t>(config.bots), config.seed);
+                                   static_cast<std::size_t>(settings.bots), settings.seed);
     for (std::size_t i = 0; i < bots_.size(); ++i) {
         Entity& bot = add(EntityKind::bot, next_id_++);
         bot.bot = static_cast<std::int32_t>(i);
         bot.move = bots_[i].state;
     }
-    next_spawn_ = static_cast<std::uint32_t>(config.seed % map_->spawn_points.size());
+    next_spawn_ = static_cast<std::uint32_t>(settings.seed % map_->spawn_points.size());
 }
 
 Entity& GameWorld::add(EntityKind kind, std::uint32_t id) {
@@ -134,4 +134,4 @@ void GameWorld::step(float dt) {
     }
 }
 
-} // namespace dsoc::server
+} // namespace dsoc::interest

@@ -1,12 +1,12 @@
 #pragma once
-// The server's authoritative entities, bots and players, walking on a map with
-// Quake 3 style movement (dsoc::sim). Clients only send intent; the server moves
-// every entity, so every entity obeys sim::motion_bound() — the speed contract that
-// interest policies and TBVs rely on. A bot that falls into a hazard respawns (a
-// teleport, flagged for that tick).
+// An authoritative world of entities, bots and players, walking on a map with
+// Quake 3 style movement (dsoc::sim): the server's world, and the one dsoc-inspect
+// runs in-process. Clients only send intent; the world moves every entity, so every
+// entity obeys sim::motion_bound() — the speed contract that interest policies and
+// TBVs rely on. A bot that falls into a hazard respawns (a teleport, flagged for that
+// tick).
 
 #include "dsoc/maps/map.hpp"
-#include "dsoc/server/server_config.hpp"
 #include "dsoc/sim/collision_world.hpp"
 #include "dsoc/sim/player_move.hpp"
 #include "dsoc/sim/wander_bot.hpp"
@@ -20,7 +20,17 @@
 #include <unordered_map>
 #include <vector>
 
-namespace dsoc::server {
+namespace dsoc::interest {
+
+/// What a GameWorld is made of besides its map.
+struct WorldSettings {
+    /// Wandering bots. [Limit: >= 0]
+    int bots = 200;
+    /// Horizontal speed bound of every entity. [Units: world units/s] [Limit: > 0]
+    float max_speed = 320.0f;
+    /// Seed for bots and spawn positions; the same seed gives the same bot motion.
+    std::uint64_t seed = 1;
+};
 
 enum class EntityKind : std::uint8_t { bot = 0, player = 1 };
 
@@ -38,7 +48,7 @@ struct Entity {
 class GameWorld {
 public:
     /// `map` must outlive the world and have at least one spawn point.
-    GameWorld(const ServerConfig& config, std::shared_ptr<const maps::Map> map);
+    GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::Map> map);
 
     /// Adds a player entity at a spawn point; returns its id (never 0, never reused).
     /// The same as spawn_reserved(reserve_player()).
@@ -87,4 +97,4 @@ private:
     std::uint32_t next_spawn_ = 0;
 };
 
-} // namespace dsoc::server
+} // namespace dsoc::interest

@@ -1,29 +1,33 @@
 #pragma once
 // Interest policies decide, per tick and per client, which entities the client
-// should know about. The server turns the answer into enter/update/leave messages.
+// should know about. The server turns the answer into enter/update/leave messages;
+// dsoc-inspect draws it.
 //
 // Threading: begin_tick(), add_viewer() and remove_viewer() are serialized (the
 // server's tick thread). After begin_tick(), select() may run concurrently for
 // distinct viewers (the server's worker pool); its answer for a viewer depends only
 // on the world, the tick and that viewer, never on the order or the thread.
 
-#include "dsoc/server/game_world.hpp"
-#include "dsoc/server/server_config.hpp"
+#include "dsoc/interest/game_world.hpp"
+#include "dsoc/maps/pvs.hpp"
 #include "dsoc/visibility/cell_visibility.hpp"
+#include "dsoc/visibility/dsoc_config.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
 
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <string>
 #include <string_view>
 #include <vector>
 
-namespace dsoc::server {
+namespace dsoc::interest {
 
 /// One entity of a client's interest set, with its network level-of-detail tier.
 struct Interest {
     std::uint32_t id = 0;
     /// 0 near: updated every tick at the finest quantum; 1 mid: every 2nd tick, coarser;
-    /// 2 far: every 4th tick, coarsest (ServerConfig's position quanta). Policies
+    /// 2 far: every 4th tick, coarsest (the server's position quanta). Policies
     /// without a distance hint answer 0.
     std::uint8_t tier = 0;
     friend bool operator==(const Interest&, const Interest&) = default;
@@ -105,18 +109,59 @@ private:
     std::vector<bool> always_sent_;
 };
 
-/// The policy named by config.policy, for `world`; config must have passed validate().
-std::unique_ptr<InterestPolicy> make_policy(const ServerConfig& config, const GameWorld& world);
+/// What make_policy() reads: which policy, and the settings of the one it makes. The
+/// defaults are the server's; the server builds it from its own settings in one place
+/// (dsoc::server::policy_settings()).
+struct PolicySettings {
+    /// "dsoc" (occlusion culling with TBVs, latency-safe), "occlusion" (the same
+    /// culler, every entity tested every tick, no TBVs), "pvs", "distance" or
+    /// "broadcast".
+    std::string policy = "dsoc";
+    /// distance: the radius from the viewer's eye. [Units: world units] [Limit: > 0]
+    float distance_radius = 1500.0f;
+    /// dsoc and occlusion: the InterestManager's settings, the policy's presets
+    /// included. Must pass visibility::validate().
+    visibility::DSOCConfig dsoc;
+    /// dsoc and occlusion: the exact occluder stage, "shaft", "pyramid" or "both".
+    std::string culler = "shaft";
+    /// Levels of portal tests in the shaft stage. [Limit: 0..4]
+    int portal_depth = 0;
+    /// The map's PVS over the reachable clusters before the exact stage.
+    bool pvs_stage = true;
+    /// The map's baked cell table before them (or alone): make_policy()'s `baked_table`.
+    bool baked_stage = true;
+    /// The cell edge the baked table was asked for. [Units: world units]
+    float bake_cell_size = 32.0f;
+    /// With baked_stage: "true", "false" or "auto" (use_exact_stages()).
+    std::string exact_stages = "auto";
+    /// The client latency allowance. [Units: ticks] [Limit: >= 0]
+    int lookahead_ticks = 5;
+};
 
-/// Whether the exact stages follow `table` (ServerConfig::exact_stages; "auto": when
-/// the bake had to make its cells coarser than config.bake_cell_size).
-[[nodiscard]] bool use_exact_stages(const ServerConfig& config,
+/// The occlusion policy's presets over `config` when `policy` is "occlusion" (every
+/// entity's current box every tick: no TBVs, no culler reuse, no temporal coherence,
+/// no blocker hints); other policies leave it as it is.
+void apply_policy_presets(std::string_view policy, visibility::DSOCConfig& config);
+
+/// A latency allowance in whole ticks at `tick_rate`, rounded up: how far ahead a
+/// client's own movement is covered (PolicySettings::lookahead_ticks).
+[[nodiscard]] int lookahead_ticks(int latency_allowance_ms, int tick_rate);
+
+/// The map's baked cell visibility table over the occluders of `scene`, for
+/// PolicySettings::baked_stage. Throws when it cannot be had.
+using BakedTableSource = std::function<std::shared_ptr<const visibility::CellVisibilityTable>(
+    const visibility::OccluderScene& scene)>;
+
+/// The policy named by settings.policy, for `world`; the settings must be usable
+/// (dsoc::server::validate() checks the server's). `baked_table` is called once when a
+/// culling policy (dsoc, occlusion) has baked_stage; std::invalid_argument when it is
+/// needed and empty.
+std::unique_ptr<InterestPolicy> make_policy(const PolicySettings& settings, const GameWorld& world,
+                                            const BakedTableSource& baked_table = {});
+
+/// Whether the exact stages follow `table` (PolicySettings::exact_stages; "auto": when
+/// the bake had to make its cells coarser than settings.bake_cell_size).
+[[nodiscard]] bool use_exact_stages(const PolicySettings& settings,
                                     const visibility::CellVisibilityTable& table);
 
-/// The map's baked cell visibility table for config.baked_stage: from the cache, or
-/// baked (progress on stderr) and saved. Throws std::runtime_error when it cannot be had.
-[[nodiscard]] std::shared_ptr<const visibility::CellVisibilityTable>
-baked_table(const ServerConfig& config, const GameWorld& world,
-            const visibility::OccluderScene& scene);
-
-} // namespace dsoc::server
+} // namespace dsoc::interest

@@ -1,9 +1,9 @@
-#include "dsoc/server/culling_policy.hpp"
+#include "dsoc/interest/culling_policy.hpp"
 
 #include <algorithm>
 #include <utility>
 
-namespace dsoc::server {
+namespace dsoc::interest {
 
 CullingPolicy::CullingPolicy(std::string_view name, const visibility::DSOCConfig& config,
                              const GameWorld& world,
@@ -91,4 +91,4 @@ std::size_t CullingPolicy::tbvs_alive() const {
     return total;
 }
 
-} // namespace dsoc::server
+} // namespace dsoc::interest

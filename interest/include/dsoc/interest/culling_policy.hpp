@@ -7,15 +7,15 @@
 // on the server's worker pool). The manager's network level-of-detail hint
 // (update_interval 1/2/4) becomes Interest::tier 0/1/2.
 
+#include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/interest/walking_interest.hpp"
-#include "dsoc/server/interest_policy.hpp"
 
 #include <memory>
 #include <string_view>
 #include <unordered_map>
 #include <vector>
 
-namespace dsoc::server {
+namespace dsoc::interest {
 
 class CullingPolicy final : public InterestPolicy {
 public:
@@ -45,7 +45,7 @@ private:
     [[nodiscard]] visibility::InterestManager& manager() { return interest_.manager(); }
 
     std::string name_;
-    interest::WalkingInterest interest_;
+    WalkingInterest interest_;
     std::vector<std::uint32_t> known_entities_; // increasing
     std::vector<std::uint32_t> scratch_;
     /// Client id -> the manager's client index, rebuilt by begin_tick(); read-only
@@ -53,4 +53,4 @@ private:
     std::unordered_map<std::uint32_t, std::size_t> client_index_;
 };
 
-} // namespace dsoc::server
+} // namespace dsoc::interest

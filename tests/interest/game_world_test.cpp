@@ -1,14 +1,14 @@
 // GameWorld's reserved player ids: the server tells a client its entity id at hello
 // and spawns it at the next tick start, possibly after later-reserved ones.
 
-#include "dsoc/server/game_world.hpp"
+#include "dsoc/interest/game_world.hpp"
 #include "support/test_maps.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
-namespace dsoc::server {
+namespace dsoc::interest {
 namespace {
 
 bool ids_increasing(const GameWorld& world) {
@@ -20,9 +20,9 @@ bool ids_increasing(const GameWorld& world) {
 }
 
 TEST(GameWorld, ReservedPlayersSpawnInIdOrderWhateverOrderTheySpawnIn) {
-    ServerConfig config;
-    config.bots = 5;
-    GameWorld world(config, testing::rooms_map());
+    WorldSettings settings;
+    settings.bots = 5;
+    GameWorld world(settings, testing::rooms_map());
     const std::size_t bots = world.entities().size();
     const std::uint32_t first = world.reserve_player();
     const std::uint32_t second = world.reserve_player();
@@ -49,4 +49,4 @@ TEST(GameWorld, ReservedPlayersSpawnInIdOrderWhateverOrderTheySpawnIn) {
 }
 
 } // namespace
-} // namespace dsoc::server
+} // namespace dsoc::interest

@@ -1,0 +1,122 @@
+#include "dsoc/interest/interest_policy.hpp"
+
+#include "dsoc/interest/culler_stages.hpp"
+#include "dsoc/interest/culling_policy.hpp"
+
+#include <stdexcept>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+namespace dsoc::interest {
+
+void BroadcastPolicy::select(const GameWorld& world, const Viewer& /*viewer*/,
+                             std::vector<Interest>& out) {
+    out.clear();
+    for (const Entity& e : world.entities()) {
+        out.push_back({e.id, 0});
+    }
+}
+
+void DistancePolicy::select(const GameWorld& world, const Viewer& viewer,
+                            std::vector<Interest>& out) {
+    out.clear();
+    const float r2 = radius_ * radius_;
+    for (const Entity& e : world.entities()) {
+        // Distance from the eye to the nearest point of the entity's box.
+        const visibility::Aabb box = world.box_of(e);
+        const glm::vec3 nearest = glm::clamp(viewer.eye, box.min, box.max);
+        const glm::vec3 d = nearest - viewer.eye;
+        if (glm::dot(d, d) <= r2) {
+            out.push_back({e.id, 0});
+        }
+    }
+}
+
+void PvsPolicy::begin_tick(const GameWorld& world, std::uint64_t /*tick*/) {
+    const auto& entities = world.entities();
+    ids_.resize(entities.size());
+    always_sent_.resize(entities.size());
+    if (clusters_.size() < entities.size()) {
+        clusters_.resize(entities.size());
+    }
+    const bool vis = pvs_ != nullptr && pvs_->has_visibility();
+    for (std::size_t i = 0; i < entities.size(); ++i) {
+        ids_[i] = entities[i].id;
+        always_sent_[i] = !vis || !pvs_->clusters_of(world.box_of(entities[i]), clusters_[i]);
+    }
+}
+
+void PvsPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
+                       std::vector<Interest>& out) {
+    out.clear();
+    // Per-thread scratch: select() runs concurrently for distinct viewers.
+    thread_local std::vector<std::int32_t> eye_clusters;
+    thread_local std::vector<std::uint8_t> rows;
+    const bool known = pvs_ != nullptr && pvs_->has_visibility() &&
+                       pvs_->clusters_of(visibility::Aabb{viewer.eye, viewer.eye}, eye_clusters);
+    if (known) {
+        pvs_->union_of_rows(eye_clusters, rows);
+    }
+    for (std::size_t i = 0; i < ids_.size(); ++i) {
+        if (!known || always_sent_[i] || pvs_->may_see_clusters(rows, clusters_[i])) {
+            out.push_back({ids_[i], 0});
+        }
+    }
+}
+
+void apply_policy_presets(std::string_view policy, visibility::DSOCConfig& config) {
+    if (policy == "occlusion") { // every entity's current box, every tick
+        config.tbvs_enabled = false;
+        config.reuse_buffers = false;
+        config.full_test_interval = 1;
+        config.blocker_hints = false; // no temporal coherence at all
+    }
+}
+
+int lookahead_ticks(int latency_allowance_ms, int tick_rate) {
+    return static_cast<int>((static_cast<long>(latency_allowance_ms) * tick_rate + 999) / 1000);
+}
+
+bool use_exact_stages(const PolicySettings& settings,
+                      const visibility::CellVisibilityTable& table) {
+    if (settings.exact_stages != "auto") {
+        return settings.exact_stages == "true";
+    }
+    // The bake grows cells by 1.25x steps until the table fits its budget: a grown
+    // table was made coarse by the map's size, not chosen.
+    return table.grid().cell_size > settings.bake_cell_size * 1.01f;
+}
+
+std::unique_ptr<InterestPolicy> make_policy(const PolicySettings& settings, const GameWorld& world,
+                                            const BakedTableSource& baked_table) {
+    if (settings.policy == "broadcast") {
+        return std::make_unique<BroadcastPolicy>();
+    }
+    if (settings.policy == "distance") {
+        return std::make_unique<DistancePolicy>(settings.distance_radius);
+    }
+    if (settings.policy == "pvs") {
+        return std::make_unique<PvsPolicy>(world.map().pvs);
+    }
+    CullerStages stages;
+    stages.exact_config.pyramid = settings.culler != "shaft";
+    stages.exact_config.shaft = settings.culler != "pyramid";
+    stages.exact_config.portal_depth = settings.portal_depth;
+    if (settings.pvs_stage) { // the map's PVS over the reachable clusters
+        stages.pvs = world.map().pvs;
+    }
+    auto scene = visibility::OccluderScene::build(world.map().occluders);
+    if (settings.baked_stage) { // the baked cell table before them (or alone)
+        if (!baked_table) {
+            throw std::invalid_argument("make_policy: baked_stage without a baked table");
+        }
+        stages.table = baked_table(*scene);
+        stages.exact = use_exact_stages(settings, *stages.table);
+    }
+    return std::make_unique<CullingPolicy>(settings.policy, settings.dsoc, world,
+                                           make_culler(std::move(scene), stages),
+                                           settings.lookahead_ticks);
+}
+
+} // namespace dsoc::interest
