@@ -41,8 +41,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::memcpy(&key, bytes.data() + kKeyOffset, sizeof key);
     const auto again =
         dsoc::maps::decode_bake(dsoc::maps::encode_bake(table.value(), key), "again", key);
-    if (!again.ok() || again.value().open_cells() != table.value().open_cells() ||
-        !std::ranges::equal(again.value().words(), table.value().words())) {
+    if (!again.ok() || !(again.value() == table.value())) {
         std::abort(); // encode_bake wrote something decode_bake reads differently
     }
     return 0;

@@ -36,7 +36,7 @@ T get(std::span<const std::byte> in, std::size_t at) {
 
 std::uint64_t checksum_of_file(std::span<const std::byte> bytes) {
     const std::uint64_t head = bake_checksum(bytes.first(kChecksumOffset));
-    return bake_checksum(bytes.subspan(kHeaderBytes), head);
+    return bake_checksum(bytes.subspan(kChecksumOffset + 8), head); // all but itself
 }
 
 std::size_t open_list_bytes(std::uint64_t open) {
@@ -125,11 +125,19 @@ std::uint64_t bake_key(const Map& map, const visibility::CellGrid& grid,
 
 std::vector<std::byte> encode_bake(const visibility::CellVisibilityTable& table,
                                    std::uint64_t key) {
+    const visibility::CellVisibilityTable* rows = &table;
+    visibility::CellVisibilityTable compressed;
+    if (!table.compressed()) {
+        compressed = table;
+        compressed.compress();
+        rows = &compressed;
+    }
     const auto& grid = table.grid();
     const std::size_t open = table.open_count();
     const std::size_t list = open_list_bytes(open);
-    const auto words = table.words();
-    std::vector<std::byte> out(kHeaderBytes + list + words.size() * 8);
+    const auto classes = rows->classes();
+    const auto literals = rows->literals();
+    std::vector<std::byte> out(kHeaderBytes + list + (classes.size() + literals.size()) * 8);
     std::memcpy(out.data(), kMagic, 8);
     put<std::uint32_t>(out, 8, kBakeFormatVersion);
     put<std::uint32_t>(out, 12, static_cast<std::uint32_t>(kHeaderBytes));
@@ -143,10 +151,17 @@ std::vector<std::byte> encode_bake(const visibility::CellVisibilityTable& table,
     put<std::int32_t>(out, 48, grid.dims.z);
     put<std::uint32_t>(out, 52, static_cast<std::uint32_t>(open));
     put<std::uint64_t>(out, 56, table.words_per_row());
-    put<std::uint64_t>(out, 72, 0);
-    if (open > 0) { // memcpy from an empty vector's null data() is undefined
+    put<std::uint64_t>(out, 72, literals.size());
+    // memcpy from an empty span's null data() is undefined: copy only what is there.
+    if (open > 0) {
         std::memcpy(out.data() + kHeaderBytes, table.open_cells().data(), open * 4);
-        std::memcpy(out.data() + kHeaderBytes + list, words.data(), words.size() * 8);
+    }
+    if (!classes.empty()) {
+        std::memcpy(out.data() + kHeaderBytes + list, classes.data(), classes.size() * 8);
+    }
+    if (!literals.empty()) {
+        std::memcpy(out.data() + kHeaderBytes + list + classes.size() * 8, literals.data(),
+                    literals.size() * 8);
     }
     put<std::uint64_t>(out, kChecksumOffset, checksum_of_file(out));
     return out;
@@ -208,8 +223,13 @@ Result<visibility::CellVisibilityTable> decode_bake(std::span<const std::byte> b
         return fail("header", "words per row " + std::to_string(words_per_row) + " do not fit " +
                                   std::to_string(open) + " open cells");
     }
+    const std::uint64_t class_words = open * ((words_per_row + 31) / 32);
+    const std::uint64_t literal_words = get<std::uint64_t>(bytes, 72);
+    if (literal_words > kMaxBakeFileBytes / 8) {
+        return fail("header", std::to_string(literal_words) + " literal words: over the limit");
+    }
     const std::uint64_t expected_size =
-        kHeaderBytes + open_list_bytes(open) + open * words_per_row * 8;
+        kHeaderBytes + open_list_bytes(open) + (class_words + literal_words) * 8;
     if (expected_size > kMaxBakeFileBytes) {
         return fail("header", "table of " + std::to_string(expected_size) +
                                   " bytes is over the limit of " +
@@ -234,29 +254,29 @@ Result<visibility::CellVisibilityTable> decode_bake(std::span<const std::byte> b
         std::memcpy(cells.data(), bytes.data() + kHeaderBytes, open * 4);
     }
     for (std::size_t i = 0; i < cells.size(); ++i) {
-        if (cells[i] >= grid.cell_count() || (i > 0 && cells[i] <= cells[i - 1])) {
+        if (cells[i] >= grid.cell_count()) {
+            return fail("open cells", "entry " + std::to_string(i) + " is out of range");
+        }
+    }
+    visibility::CellVisibilityTable table(grid, cells, visibility::CellVisibilityTable::Rows::none);
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+        if (table.open_cells()[i] != cells[i] ||
+            (i > 0 && table.block_rank(cells[i]) <= table.block_rank(cells[i - 1]))) {
             return fail("open cells",
-                        "entry " + std::to_string(i) + " is out of range or not increasing");
+                        "entry " + std::to_string(i) + " is repeated or not in block order");
         }
     }
-    visibility::CellVisibilityTable table(grid, std::move(cells));
-    auto words = table.words();
-    if (!words.empty()) {
-        std::memcpy(words.data(), bytes.data() + kHeaderBytes + open_list_bytes(open),
-                    words.size() * 8);
+    const std::size_t rows_at = kHeaderBytes + open_list_bytes(open);
+    std::vector<std::uint64_t> classes(class_words);
+    std::vector<std::uint64_t> literals(literal_words);
+    if (!classes.empty()) {
+        std::memcpy(classes.data(), bytes.data() + rows_at, class_words * 8);
     }
-    for (std::size_t r = 0; r < open; ++r) {
-        if ((words[r * words_per_row + r / 64] >> (r % 64) & 1u) == 0) {
-            return fail("rows", "open cell " + std::to_string(r) + " does not see itself");
-        }
+    if (!literals.empty()) {
+        std::memcpy(literals.data(), bytes.data() + rows_at + class_words * 8, literal_words * 8);
     }
-    if (open % 64 != 0) {
-        const std::uint64_t beyond = ~std::uint64_t{0} << (open % 64);
-        for (std::size_t r = 0; r < open; ++r) {
-            if ((words[(r + 1) * words_per_row - 1] & beyond) != 0) {
-                return fail("rows", "row " + std::to_string(r) + " has bits past the last cell");
-            }
-        }
+    if (auto problem = table.adopt_compressed(std::move(classes), std::move(literals))) {
+        return fail("rows", *problem);
     }
     return table;
 }

@@ -81,9 +81,7 @@ TEST_F(BakeFileTest, TheCacheBakesOnceThenLoadsTheSameBits) {
     EXPECT_TRUE(second->from_cache);
     EXPECT_TRUE(second->cache_problem.empty());
     ASSERT_EQ(first->table->open_cells(), second->table->open_cells());
-    const auto a = first->table->words();
-    const auto b = second->table->words();
-    ASSERT_TRUE(std::equal(a.begin(), a.end(), b.begin(), b.end()));
+    ASSERT_TRUE(*first->table == *second->table); // the same compressed rows
 }
 
 TEST_F(BakeFileTest, EveryKindOfDamageIsRefusedNamingTheFileAndWhat) {
@@ -125,6 +123,30 @@ TEST_F(BakeFileTest, EveryKindOfDamageIsRefusedNamingTheFileAndWhat) {
         std::memcpy(sparse.data() + 40 + 4 * axis, &side, 4);
     }
     cases.push_back({"grid much larger than its open cells", sparse, "per open cell"});
+    // Two open cells swapped, the checksum made good again: the order is checked too.
+    auto swapped = good;
+    std::swap_ranges(swapped.begin() + 80, swapped.begin() + 84, swapped.begin() + 84);
+    const auto resum = [](std::vector<std::byte>& bytes) {
+        const std::span<const std::byte> all(bytes);
+        const std::uint64_t sum = bake_checksum(all.subspan(72), bake_checksum(all.first(64)));
+        std::memcpy(bytes.data() + 64, &sum, 8);
+    };
+    resum(swapped);
+    cases.push_back({"open cells out of block order", swapped, "not in block order"});
+    // The last literal word zeroed (a literal must be neither all hidden nor all
+    // visible), the checksum made good again: the rows' rules are checked too.
+    std::uint64_t literal_count = 0;
+    std::memcpy(&literal_count, good.data() + 72, 8);
+    ASSERT_GT(literal_count, 0u);
+    auto zero_literal = good;
+    std::fill(zero_literal.end() - 8, zero_literal.end(), std::byte{0});
+    resum(zero_literal);
+    cases.push_back({"a literal word of zeros", zero_literal, "a literal that is all hidden"});
+    auto huge_literals = good;
+    const std::uint64_t absurd = std::uint64_t{1} << 60;
+    std::memcpy(huge_literals.data() + 72, &absurd, 8);
+    resum(huge_literals);
+    cases.push_back({"absurd literal count", huge_literals, "literal words: over the limit"});
     for (const Damage& d : cases) {
         const auto r = decode_bake(d.bytes, "t.dsocbake", baked->key);
         ASSERT_FALSE(r.ok()) << d.kind << " was accepted";

@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
     dsoc::maps::BakeRequest request;
     std::string dir;
     bool json = false;
-    std::uint64_t max_mib = 64;
+    std::uint64_t max_mib = dsoc::maps::BakeRequest{}.max_table_bytes >> 20;
     app.add_option("maps", specs, "map names (oa_dm4), .bsp/.pk3/text map paths or gen:...")
         ->required();
     app.add_option("--cell-size", request.config.cell_size, "cell edge in world units")
@@ -55,7 +55,8 @@ int main(int argc, char** argv) {
     app.add_flag("--both-directions,!--one-direction", request.config.both_directions,
                  "retry a failed exact test of two cells with region and box swapped")
         ->capture_default_str();
-    app.add_option("--max-table-mib", max_mib, "cells grow until the table fits")
+    app.add_option("--max-table-mib", max_mib,
+                   "cells grow until the dense rows the bake fills fit this many MiB")
         ->capture_default_str();
     app.add_option("--cache-dir", dir,
                    "where tables are kept (default: $DSOC_BAKE_DIR, "

@@ -38,10 +38,7 @@ void BakedRegionVisibility::build(const Aabb& region) {
                     continue;
                 }
                 any = true;
-                const auto row = table_->row(c);
-                for (std::size_t k = 0; k < words; ++k) {
-                    visible_[k] |= row[k];
-                }
+                table_->or_row_into(c, visible_);
             }
         }
     }

@@ -513,6 +513,7 @@ CellVisibilityTable bake_cell_visibility(const OccluderScene& scene, const CellG
         Baker baker(scene, grid, config, pruner, table);
         baker.run(local, progress);
     }
+    table.compress();
     if (stats != nullptr) {
         *stats = local;
     }

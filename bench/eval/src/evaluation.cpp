@@ -36,6 +36,7 @@ baked_table(const maps::Map& map, const visibility::OccluderScene& scene,
     maps::BakeRequest request;
     request.config.cell_size = options.bake_cell_size;
     request.dir = options.bake_dir;
+    request.max_table_bytes = options.bake_max_table_mib << 20;
     auto baked = maps::load_or_bake(map, scene, request, [&](double fraction, double seconds) {
         if (progress != nullptr) {
             *progress << "\rbaking " << map.name << ": " << static_cast<int>(100.0 * fraction)

@@ -82,6 +82,10 @@ int main(int argc, char** argv) {
                    "cell edge of the baked table the dsoc-baked and dsoc-table policies use")
         ->check(CLI::Range(4.0f, 1024.0f))
         ->capture_default_str();
+    app.add_option("--bake-max-table-mib", options.bake_max_table_mib,
+                   "cells grow (by 1.25x) until the baked table fits this many MiB")
+        ->check(CLI::Range(1, 65536))
+        ->capture_default_str();
     app.add_option("--bake-dir", options.bake_dir,
                    "cache of baked tables (default: $DSOC_BAKE_DIR, $XDG_CACHE_HOME/dsoc/bakes "
                    "or ~/.cache/dsoc/bakes)");

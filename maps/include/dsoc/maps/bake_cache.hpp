@@ -24,9 +24,11 @@ struct BakeRequest {
     visibility::CellBakeConfig config;
     /// Cache directory; empty: default_bake_dir().
     std::filesystem::path dir;
-    /// The table's rows must fit this; cells grow by 1.25x steps from
-    /// config.cell_size until they do. [Units: bytes] [Limit: >= 1 MiB]
-    std::uint64_t max_table_bytes = std::uint64_t{64} << 20;
+    /// The dense rows the bake fills must fit this; cells grow by 1.25x steps from
+    /// config.cell_size until they do. (The table kept in memory after the bake, and
+    /// after loading, has compressed rows: a fraction of this.) [Units: bytes]
+    /// [Limit: >= 1 MiB]
+    std::uint64_t max_table_bytes = std::uint64_t{128} << 20;
     /// Bake again even when a good file exists.
     bool force = false;
 };
@@ -44,7 +46,7 @@ struct BakedTable {
 };
 
 /// The grid `map` is baked over: cells of `cell_size` over the map's bounds, grown by
-/// 1.25x steps until the dense table of its open cells fits `max_table_bytes`.
+/// 1.25x steps until the dense rows of its open cells fit `max_table_bytes`.
 [[nodiscard]] visibility::CellGrid bake_grid(const Map& map, const visibility::OccluderScene& scene,
                                              float cell_size, std::uint64_t max_table_bytes);
 

@@ -21,7 +21,7 @@
 namespace dsoc::maps {
 
 /// Bumped on any change of the layout or of what the bits mean.
-inline constexpr std::uint32_t kBakeFormatVersion = 2;
+inline constexpr std::uint32_t kBakeFormatVersion = 3;
 /// Part of every key: bumped on any change to what the bake may prove (the bake, the
 /// exact region tests it runs, the open-cell rules, the PVS pruner), so that tables
 /// baked by older code are baked again, never trusted.

@@ -41,7 +41,7 @@ public:
     [[nodiscard]] Visibility test_prepared_coarse(const PreparedBox& p) const override;
     /// Keys are runs of open cells (CellVisibilityTable::open_runs_of): the union of
     /// both lists, sorted, overlapping and adjacent runs joined, so that a group that
-    /// keeps merging holds at most one run per row of cells it covers.
+    /// keeps merging holds at most one run per row of cells per block it covers.
     void merge_prepared(PreparedBox& into, const PreparedBox& more) const override;
 
     /// True when the last build() found the region covered by the table.

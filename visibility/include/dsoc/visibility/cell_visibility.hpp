@@ -7,13 +7,16 @@
 // the compiler's PVS, where the bake used it); a set bit proves nothing. Cells whose
 // box lies inside one occluder's interior are "solid": no eye and no point of an
 // entity's box that can be seen lies in them, so they have no row and no column.
-// The table is symmetric (visibility of segments is).
+// The table is symmetric (visibility of segments is). Rows are dense while a bake or
+// the file reader fills them, then compressed for use.
 
 #include "dsoc/visibility/cell_grid.hpp"
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace dsoc::visibility {
@@ -22,41 +25,78 @@ namespace dsoc::visibility {
 using OpenCell = std::int32_t;
 inline constexpr OpenCell kSolidCell = -1;
 
+/// Open cells are numbered in block order: the grid is cut into blocks of
+/// kTableBlockCells^3 cells (blocks in grid order, x fastest), and the open cells of a
+/// block get consecutive numbers (in grid order within the block). A row's 64-bit words
+/// then speak about compact pieces of space, so that most are all-hidden or
+/// all-visible, which the compressed rows store in two bits.
+inline constexpr int kTableBlockCells = 4;
+
 class CellVisibilityTable {
 public:
+    /// dense: all-hidden dense rows, which set_visible_atomic() and words() may write
+    /// until compress(); none: no rows yet (adopt_compressed() brings them).
+    enum class Rows { dense, none };
+
     CellVisibilityTable() = default;
-    /// An all-hidden table over `grid` whose open cells are `open` (grid indexes,
-    /// strictly increasing).
-    CellVisibilityTable(const CellGrid& grid, std::vector<std::uint32_t> open);
+    /// A table over `grid` whose open cells are the grid indexes `open` (distinct, any
+    /// order: they are numbered in block order).
+    CellVisibilityTable(const CellGrid& grid, std::vector<std::uint32_t> open,
+                        Rows rows = Rows::dense);
 
     [[nodiscard]] const CellGrid& grid() const { return grid_; }
     [[nodiscard]] std::size_t open_count() const { return open_.size(); }
-    /// Grid index of each open cell, increasing.
+    /// Grid index of each open cell, in block order.
     [[nodiscard]] const std::vector<std::uint32_t>& open_cells() const { return open_; }
     /// The open cell at grid index `cell`, or kSolidCell.
     [[nodiscard]] OpenCell open_index(std::uint32_t cell) const { return open_of_[cell]; }
+    /// Position of grid cell `cell` in block order (open cells are numbered by it).
+    [[nodiscard]] std::uint64_t block_rank(std::uint32_t cell) const;
     [[nodiscard]] std::size_t words_per_row() const { return words_per_row_; }
 
-    /// Row `from`: bit t set when open cell t may be seen from open cell `from`.
-    [[nodiscard]] std::span<const std::uint64_t> row(OpenCell from) const {
-        return {bits_.data() + static_cast<std::size_t>(from) * words_per_row_, words_per_row_};
-    }
-    [[nodiscard]] bool may_see(OpenCell from, OpenCell to) const {
-        return (row(from)[static_cast<std::size_t>(to) >> 6] >> (to & 63) & 1u) != 0;
-    }
-    /// Sets (a, b) and (b, a) to "may see"; several threads may write at once.
-    void set_visible_atomic(OpenCell a, OpenCell b);
+    /// Whether anything in open cell `to` may be seen from open cell `from`.
+    [[nodiscard]] bool may_see(OpenCell from, OpenCell to) const;
+    /// ORs row `from` (bit t: open cell t may be seen from `from`) into `out`, which
+    /// holds words_per_row() words with no bit set past the last open cell.
+    void or_row_into(OpenCell from, std::span<std::uint64_t> out) const;
 
-    /// Every row, open_count() * words_per_row() words (for storage).
+    /// Sets (a, b) and (b, a) to "may see"; several threads may write at once. Dense
+    /// rows only (before compress()).
+    void set_visible_atomic(OpenCell a, OpenCell b);
+    /// The dense rows, open_count() * words_per_row() words, row by row (empty once
+    /// compressed).
     [[nodiscard]] std::span<const std::uint64_t> words() const { return bits_; }
     [[nodiscard]] std::span<std::uint64_t> words() { return bits_; }
 
+    /// Replaces the dense rows by compressed ones (read-only from then on): each word
+    /// of a row is stored as two bits (all hidden, all visible, or a literal) plus the
+    /// literal words. Same answers.
+    void compress();
+    [[nodiscard]] bool compressed() const { return !literal_start_.empty(); }
+
+    /// The compressed rows (for storage): per row class_words_per_row() words of 2-bit
+    /// codes, word w of the row at bits 2(w % 32) of class word w / 32 (0: all hidden,
+    /// 1: all visible, 2: literal); and the literal words, row by row, in word order.
+    [[nodiscard]] std::size_t class_words_per_row() const { return (words_per_row_ + 31) / 32; }
+    [[nodiscard]] std::span<const std::uint64_t> classes() const { return classes_; }
+    [[nodiscard]] std::span<const std::uint64_t> literals() const {
+        return literals_.empty()
+                   ? std::span<const std::uint64_t>()
+                   : std::span<const std::uint64_t>(literals_).first(literals_.size() - 1);
+    }
+    /// Takes compressed rows read from storage, in place of the dense ones, after
+    /// checking every rule compress() follows (codes 0..2 and none past the row's
+    /// words; as many literals as literal codes; no literal all hidden, all visible or
+    /// with bits past the last open cell) and that every open cell sees itself. On a
+    /// problem, returns it in words and leaves the table as it was.
+    [[nodiscard]] std::optional<std::string> adopt_compressed(std::vector<std::uint64_t> classes,
+                                                              std::vector<std::uint64_t> literals);
+
     /// The open cells a closed box touches, as runs of open-cell indexes: pairs
-    /// (first, end) appended to `out` (cleared first), one run per row of the box's
-    /// cells at most (open cells are numbered in grid order, so the open cells of one
-    /// row are consecutive), adjacent runs joined. False when the grid does not cover
-    /// the whole box, or when every cell it touches is solid: then the table must not
-    /// answer for it.
+    /// (first, end) appended to `out` (cleared first), sorted, touching runs joined
+    /// (the open cells of one row of a block are consecutive). False when the grid
+    /// does not cover the whole box, or when every cell it touches is solid: then the
+    /// table must not answer for it.
     bool open_runs_of(const Aabb& box, std::vector<std::int32_t>& out) const;
 
     /// Pairs (ordered, self pairs included) whose bit is clear, i.e. proven hidden.
@@ -64,14 +104,29 @@ public:
     /// Bytes of the rows and indexes held in memory.
     [[nodiscard]] std::size_t memory_bytes() const;
 
+    /// Same grid, same open cells, same answers (both dense or both compressed).
+    friend bool operator==(const CellVisibilityTable& a, const CellVisibilityTable& b);
+
 private:
+    /// The valid bits of word `w` of a row.
+    [[nodiscard]] std::uint64_t full_word(std::size_t w) const;
+
     CellGrid grid_;
+    glm::ivec3 block_dims_{0};
     std::vector<std::uint32_t> open_;
     std::vector<OpenCell> open_of_;
-    /// Open cells with a grid index below i, for i in 0 .. cell_count().
+    /// Per grid cell: the open cells before it in block order.
     std::vector<std::int32_t> open_before_;
     std::size_t words_per_row_ = 0;
+    /// Dense rows (before compress()).
     std::vector<std::uint64_t> bits_;
+    /// Compressed rows: per row class_words_per_row_ words of 2-bit codes (0: all
+    /// hidden, 1: all visible, 2: literal), and the row's literals from
+    /// literal_start_[row], then one spare word.
+    std::size_t class_words_per_row_ = 0;
+    std::vector<std::uint64_t> classes_;
+    std::vector<std::uint64_t> literal_start_;
+    std::vector<std::uint64_t> literals_;
 };
 
 } // namespace dsoc::visibility

@@ -51,6 +51,8 @@ struct EvalOptions {
     /// [Units: world units]
     float bake_cell_size = 32.0f;
     std::string bake_dir;
+    /// Cells grow until the bake's dense rows fit this (maps::BakeRequest). [Units: MiB]
+    std::uint64_t bake_max_table_mib = 128;
     /// Concrete violations kept per policy for the report.
     std::size_t max_examples = 10;
 };

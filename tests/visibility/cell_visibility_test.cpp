@@ -1,0 +1,131 @@
+// The compressed rows against the dense rows they were made from (the slow, obviously
+// correct twin), and the block-order runs of a box against the cells it touches.
+
+#include "dsoc/visibility/cell_visibility.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <set>
+
+namespace dsoc::visibility {
+namespace {
+
+/// A random table over a grid of odd sizes (blocks cut at the edges), about a third of
+/// the cells solid, visibility falling off with distance so that whole words are
+/// hidden, whole words visible and the rest mixed, as in a baked map.
+CellVisibilityTable random_table(std::mt19937& random, glm::ivec3 dims) {
+    CellGrid grid;
+    grid.cell_size = 16.0f;
+    grid.origin = {-100.0f, 7.0f, 0.0f};
+    grid.dims = dims;
+    std::vector<std::uint32_t> open;
+    std::bernoulli_distribution solid(0.35);
+    for (std::uint32_t i = 0; i < grid.cell_count(); ++i) {
+        if (!solid(random)) {
+            open.push_back(i);
+        }
+    }
+    std::ranges::shuffle(open, random); // the table numbers them itself
+    CellVisibilityTable table(grid, open);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    const auto n = static_cast<OpenCell>(table.open_count());
+    for (OpenCell a = 0; a < n; ++a) {
+        const glm::vec3 pa = grid.coords(table.open_cells()[static_cast<std::size_t>(a)]);
+        for (OpenCell b = a; b < n; ++b) {
+            const glm::vec3 pb = grid.coords(table.open_cells()[static_cast<std::size_t>(b)]);
+            const float d = glm::length(pa - pb);
+            if (a == b || d < 6.0f || (d < 10.0f && unit(random) < 0.5f)) {
+                table.set_visible_atomic(a, b);
+            }
+        }
+    }
+    return table;
+}
+
+TEST(CellVisibilityTable, CompressedRowsGiveTheDenseRowsAnswers) {
+    std::mt19937 random(1234);
+    for (const glm::ivec3 dims :
+         {glm::ivec3{13, 9, 6}, glm::ivec3{4, 4, 4}, glm::ivec3{1, 30, 3}, glm::ivec3{21, 17, 5}}) {
+        CellVisibilityTable dense = random_table(random, dims);
+        CellVisibilityTable packed = dense;
+        packed.compress();
+        ASSERT_TRUE(packed.compressed());
+        const auto n = static_cast<OpenCell>(dense.open_count());
+        std::uint64_t visible_words = 0;
+        std::uint64_t hidden_words = 0;
+        for (OpenCell a = 0; a < n; ++a) {
+            std::vector<std::uint64_t> d(dense.words_per_row(), 0);
+            std::vector<std::uint64_t> p(dense.words_per_row(), 1); // bit 0: a real cell
+            dense.or_row_into(a, d);
+            packed.or_row_into(a, p); // ORs into what is there
+            for (std::size_t w = 0; w < d.size(); ++w) {
+                ASSERT_EQ(p[w], d[w] | 1u) << "row " << a << " word " << w;
+                hidden_words += d[w] == 0 ? 1 : 0;
+                visible_words += d[w] == ~std::uint64_t{0} ? 1 : 0;
+            }
+            for (OpenCell b = 0; b < n; ++b) {
+                ASSERT_EQ(packed.may_see(a, b), dense.may_see(a, b)) << a << " " << b;
+            }
+        }
+        EXPECT_EQ(packed.hidden_pairs(), dense.hidden_pairs());
+        if (n > 512) {
+            EXPECT_GT(dense.hidden_pairs(), 0u); // something is hidden
+            EXPECT_GT(hidden_words, 0u);         // every kind of word was exercised
+            EXPECT_GT(visible_words, 0u);
+            EXPECT_LT(packed.memory_bytes(), dense.memory_bytes());
+        }
+    }
+}
+
+TEST(CellVisibilityTable, RunsOfABoxAreExactlyItsOpenCellsSortedAndJoined) {
+    std::mt19937 random(99);
+    const CellVisibilityTable table = random_table(random, {19, 11, 7});
+    const CellGrid& grid = table.grid();
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    std::vector<std::int32_t> runs;
+    int answered = 0;
+    for (int trial = 0; trial < 2000; ++trial) {
+        const glm::vec3 size = grid.bounds().size();
+        glm::vec3 a = grid.bounds().min + size * glm::vec3(u(random), u(random), u(random));
+        glm::vec3 b = a + glm::vec3(u(random), u(random), u(random)) * 60.0f;
+        const Aabb box{glm::min(a, b), glm::max(a, b)};
+        glm::ivec3 lo;
+        glm::ivec3 hi;
+        const bool covered = grid.range_of(box, lo, hi);
+        const bool answer = table.open_runs_of(box, runs);
+        if (!covered) {
+            EXPECT_FALSE(answer);
+            continue;
+        }
+        std::set<std::int32_t> expected;
+        for (int z = lo.z; z <= hi.z; ++z) {
+            for (int y = lo.y; y <= hi.y; ++y) {
+                for (int x = lo.x; x <= hi.x; ++x) {
+                    const OpenCell c = table.open_index(grid.index({x, y, z}));
+                    if (c != kSolidCell) {
+                        expected.insert(c);
+                    }
+                }
+            }
+        }
+        ASSERT_EQ(answer, !expected.empty());
+        std::set<std::int32_t> got;
+        for (std::size_t k = 0; k + 1 < runs.size(); k += 2) {
+            ASSERT_LT(runs[k], runs[k + 1]);
+            if (k > 0) {
+                ASSERT_GT(runs[k], runs[k - 1]) << "runs must be sorted and joined";
+            }
+            for (std::int32_t c = runs[k]; c < runs[k + 1]; ++c) {
+                got.insert(c);
+            }
+        }
+        ASSERT_EQ(got, expected);
+        answered += answer ? 1 : 0;
+    }
+    EXPECT_GT(answered, 500);
+}
+
+} // namespace
+} // namespace dsoc::visibility
