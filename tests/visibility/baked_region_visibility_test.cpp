@@ -181,6 +181,42 @@ TEST(BakedRegionVisibility, PreparedRunsAnswerAsCellsAndMergedKeysHideOnlyTogeth
     EXPECT_GT(merged_checks, 100);
 }
 
+TEST(BakedRegionVisibility, AWalkingRegionAnswersAsAFreshBuildOfEachRegion) {
+    // The union is rebuilt from the slabs the last region left (slabs per x): a region
+    // that wanders by small steps, often along x only, must answer every box exactly
+    // as a culler built for that region alone.
+    const Baked& b = corridor_table();
+    BakedRegionVisibility walking(b.table, nullptr);
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> step(-40.0f, 40.0f);
+    std::bernoulli_distribution along_x(0.6);
+    Aabb region = random_box(rng, b.play_area, 60.0f, 120.0f);
+    int hidden = 0;
+    int tests = 0;
+    for (int r = 0; r < 400; ++r) {
+        glm::vec3 move{step(rng), along_x(rng) ? 0.0f : step(rng), 0.0f};
+        if (r % 50 == 49) {
+            move.z = step(rng);
+        }
+        const Aabb moved{region.min + move, region.max + move};
+        if (b.play_area.contains(moved)) {
+            region = moved;
+        }
+        walking.build(region);
+        BakedRegionVisibility fresh(b.table, nullptr);
+        fresh.build(region);
+        ASSERT_EQ(walking.active(), fresh.active()) << r;
+        for (int k = 0; k < 30; ++k) {
+            const Aabb box = random_box(rng, b.play_area, 16.0f, 64.0f);
+            const Visibility expected = fresh.test_box(box);
+            ASSERT_EQ(walking.test_box(box), expected) << "region " << r << " box " << k;
+            ++tests;
+            hidden += expected == Visibility::occluded ? 1 : 0;
+        }
+    }
+    EXPECT_GT(hidden, tests / 10); // something is culled
+}
+
 TEST(BakedRegionVisibility, AFactoryWithoutATableIsTheNextStage) {
     int calls = 0;
     const auto factory = with_baked_stage(

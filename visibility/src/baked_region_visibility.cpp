@@ -1,6 +1,7 @@
 #include "dsoc/visibility/baked_region_visibility.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <utility>
 
 namespace dsoc::visibility {
@@ -24,25 +25,64 @@ void BakedRegionVisibility::build(const Aabb& region) {
     if (lo == built_lo_ && hi == built_hi_) {
         return; // the same cells: the same union (and the same active_)
     }
-    built_lo_ = lo;
-    built_hi_ = hi;
+    // The union is kept as one slab per x of the range (the rows of that x's cells);
+    // when only the x range moved, the slabs of the xs kept are reused.
+    const bool same_yz = lo.y == built_lo_.y && hi.y == built_hi_.y && lo.z == built_lo_.z &&
+                         hi.z == built_hi_.z && built_lo_.x <= built_hi_.x;
     const CellGrid& grid = table_->grid();
     const std::size_t words = table_->words_per_row();
-    visible_.assign(words, 0);
-    bool any = false;
-    for (int z = lo.z; z <= hi.z; ++z) {
-        for (int y = lo.y; y <= hi.y; ++y) {
-            for (int x = lo.x; x <= hi.x; ++x) {
+    const auto slabs = static_cast<std::size_t>(hi.x - lo.x + 1);
+    // The slabs of the xs both ranges hold move (in place) to their new places.
+    int keep_lo = 1;
+    int keep_hi = 0;
+    if (same_yz) {
+        keep_lo = std::max(lo.x, built_lo_.x);
+        keep_hi = std::min(hi.x, built_hi_.x);
+    }
+    const std::size_t old_slabs = slab_open_.size();
+    slabs_.resize(std::max(old_slabs, slabs) * words);
+    slab_open_.resize(std::max(old_slabs, slabs), 0);
+    if (keep_lo <= keep_hi) {
+        const auto from = static_cast<std::size_t>(keep_lo - built_lo_.x);
+        const auto to = static_cast<std::size_t>(keep_lo - lo.x);
+        const auto count = static_cast<std::size_t>(keep_hi - keep_lo + 1);
+        std::memmove(slabs_.data() + to * words, slabs_.data() + from * words,
+                     count * words * sizeof(std::uint64_t));
+        std::memmove(slab_open_.data() + to, slab_open_.data() + from, count);
+    }
+    slabs_.resize(slabs * words);
+    slab_open_.resize(slabs);
+    for (int x = lo.x; x <= hi.x; ++x) {
+        if (x >= keep_lo && x <= keep_hi) {
+            continue;
+        }
+        const auto k = static_cast<std::size_t>(x - lo.x);
+        const std::span<std::uint64_t> slab(slabs_.data() + k * words, words);
+        std::fill(slab.begin(), slab.end(), 0);
+        slab_open_[k] = 0;
+        for (int z = lo.z; z <= hi.z; ++z) {
+            for (int y = lo.y; y <= hi.y; ++y) {
                 const OpenCell c = table_->open_index(grid.index({x, y, z}));
-                if (c == kSolidCell) {
-                    continue;
+                if (c != kSolidCell) {
+                    slab_open_[k] = 1;
+                    table_->or_row_into(c, slab);
                 }
-                any = true;
-                table_->or_row_into(c, visible_);
             }
         }
     }
-    active_ = any;
+    built_lo_ = lo;
+    built_hi_ = hi;
+    visible_.assign(words, 0);
+    active_ = false;
+    for (std::size_t k = 0; k < slabs; ++k) {
+        if (slab_open_[k] != 0) {
+            active_ = true;
+            const std::uint64_t* slab = slabs_.data() + k * words;
+            for (std::size_t w = 0; w < words; ++w) {
+                visible_[w] |= slab[w];
+            }
+        }
+    }
 }
 
 bool BakedRegionVisibility::hidden(const std::vector<std::int32_t>& runs) const {

@@ -61,6 +61,10 @@ private:
     glm::ivec3 built_lo_{1};
     glm::ivec3 built_hi_{0};
     std::vector<std::uint64_t> visible_; ///< union of the region's rows
+    /// Per x of the built range, the union of the rows of that x's cells, and whether
+    /// it has an open cell.
+    std::vector<std::uint64_t> slabs_;
+    std::vector<char> slab_open_;
     mutable std::vector<std::int32_t> scratch_;
 };
 
