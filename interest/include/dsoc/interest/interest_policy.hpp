@@ -110,7 +110,8 @@ private:
 };
 
 /// What make_policy() reads: which policy, and the settings of the one it makes. The
-/// defaults are the server's; the server builds it from its own settings in one place
+/// defaults written here are the server's too (its ServerConfig takes them from here);
+/// the server builds it from its own settings in one place
 /// (dsoc::server::policy_settings()).
 struct PolicySettings {
     /// "dsoc" (occlusion culling with TBVs, latency-safe), "occlusion" (the same
