@@ -10,6 +10,16 @@
 
 namespace dsoc::interest {
 
+bool eye_pvs_rows(const maps::Pvs* pvs, glm::vec3 eye, std::vector<std::int32_t>& clusters,
+                  std::vector<std::uint8_t>& rows) {
+    if (pvs == nullptr || !pvs->has_visibility() ||
+        !pvs->clusters_of(visibility::Aabb{eye, eye}, clusters)) {
+        return false;
+    }
+    pvs->union_of_rows(clusters, rows);
+    return true;
+}
+
 void BroadcastPolicy::select(const GameWorld& world, const Viewer& /*viewer*/,
                              std::vector<Interest>& out) {
     out.clear();
@@ -21,13 +31,8 @@ void BroadcastPolicy::select(const GameWorld& world, const Viewer& /*viewer*/,
 void DistancePolicy::select(const GameWorld& world, const Viewer& viewer,
                             std::vector<Interest>& out) {
     out.clear();
-    const float r2 = radius_ * radius_;
     for (const Entity& e : world.entities()) {
-        // Distance from the eye to the nearest point of the entity's box.
-        const visibility::Aabb box = world.box_of(e);
-        const glm::vec3 nearest = glm::clamp(viewer.eye, box.min, box.max);
-        const glm::vec3 d = nearest - viewer.eye;
-        if (glm::dot(d, d) <= r2) {
+        if (within_radius(world.box_of(e), viewer.eye, radius_)) {
             out.push_back({e.id, 0});
         }
     }
@@ -53,11 +58,7 @@ void PvsPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
     // Per-thread scratch: select() runs concurrently for distinct viewers.
     thread_local std::vector<std::int32_t> eye_clusters;
     thread_local std::vector<std::uint8_t> rows;
-    const bool known = pvs_ != nullptr && pvs_->has_visibility() &&
-                       pvs_->clusters_of(visibility::Aabb{viewer.eye, viewer.eye}, eye_clusters);
-    if (known) {
-        pvs_->union_of_rows(eye_clusters, rows);
-    }
+    const bool known = eye_pvs_rows(pvs_.get(), viewer.eye, eye_clusters, rows);
     for (std::size_t i = 0; i < ids_.size(); ++i) {
         if (!known || always_sent_[i] || pvs_->may_see_clusters(rows, clusters_[i])) {
             out.push_back({ids_[i], 0});
