@@ -75,6 +75,11 @@ void apply_policy_presets(std::string_view policy, visibility::DSOCConfig& confi
     }
 }
 
+void set_culler_stages(std::string_view culler, visibility::RegionCullerConfig& config) {
+    config.pyramid = culler != "shaft";
+    config.shaft = culler != "pyramid";
+}
+
 int lookahead_ticks(int latency_allowance_ms, int tick_rate) {
     return static_cast<int>((static_cast<long>(latency_allowance_ms) * tick_rate + 999) / 1000);
 }
@@ -101,8 +106,7 @@ std::unique_ptr<InterestPolicy> make_policy(const PolicySettings& settings, cons
         return std::make_unique<PvsPolicy>(world.map().pvs);
     }
     CullerStages stages;
-    stages.exact_config.pyramid = settings.culler != "shaft";
-    stages.exact_config.shaft = settings.culler != "pyramid";
+    set_culler_stages(settings.culler, stages.exact_config);
     stages.exact_config.portal_depth = settings.portal_depth;
     if (settings.pvs_stage) { // the map's PVS over the reachable clusters
         stages.pvs = world.map().pvs;

@@ -10,6 +10,8 @@
 #include "dsoc/visibility/reference_visibility.hpp"
 #include "dsoc/visibility/test_worlds.hpp"
 
+#include "test_scene.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -78,20 +80,8 @@ void run_world(const char* name, const TestWorld& tw, std::uint32_t seed, int ey
         buffer.build(eye, tw.world, bsp);
         beams.build(eye, tw.world, bsp);
         for (int b = 0; b < boxes; ++b) {
-            const float size_pick = unit(rng);
-            const float h = size_pick < 0.2f ? 0.5f
-                                             : (size_pick < 0.9f ? 4.0f + 40.0f * unit(rng)
-                                                                 : 64.0f + 128.0f * unit(rng));
-            glm::vec3 c = random_point();
-            if (b % 2 == 1) {
-                // Hugging an occluder: around one of its vertices.
-                const auto& near =
-                    tw.world.occluder(static_cast<OccluderId>(rng() % tw.world.size()));
-                c = near.vertices()[rng() % near.vertices().size()] +
-                    glm::vec3(unit(rng) - 0.5f, unit(rng) - 0.5f, unit(rng) - 0.5f) * 40.0f;
-            }
-            glm::vec3 half(h * (0.5f + unit(rng)), h * (0.5f + unit(rng)), h * (0.5f + unit(rng)));
-            Aabb box = Aabb::from_center_half_extents(c, half);
+            Aabb box = testing::random_test_box(rng, unit, random_point, tw.world, b,
+                                                {0.5f, 4.0f, 40.0f, 64.0f, 128.0f});
             if (b % 5 == 0) {
                 // Snap one face onto an axis plane through the eye (a cube-face seam).
                 const int axis = static_cast<int>(rng() % 3);
@@ -113,17 +103,13 @@ void run_world(const char* name, const TestWorld& tw, std::uint32_t seed, int ey
                 ++t.reference_visible;
                 if (zb == Visibility::occluded) {
                     ++t.buffer_misses;
-                    ADD_FAILURE() << name << ": z-pyramid culled a visible box; eye (" << eye.x
-                                  << ", " << eye.y << ", " << eye.z << ") box (" << box.min.x
-                                  << ", " << box.min.y << ", " << box.min.z << ")-(" << box.max.x
-                                  << ", " << box.max.y << ", " << box.max.z << ")";
+                    ADD_FAILURE() << name << ": z-pyramid culled a visible box; eye "
+                                  << testing::text(eye) << " box " << testing::text(box);
                 }
                 if (bm == Visibility::occluded) {
                     ++t.beam_misses;
-                    ADD_FAILURE() << name << ": beams culled a visible box; eye (" << eye.x << ", "
-                                  << eye.y << ", " << eye.z << ") box (" << box.min.x << ", "
-                                  << box.min.y << ", " << box.min.z << ")-(" << box.max.x << ", "
-                                  << box.max.y << ", " << box.max.z << ")";
+                    ADD_FAILURE() << name << ": beams culled a visible box; eye "
+                                  << testing::text(eye) << " box " << testing::text(box);
                 }
             } else {
                 ++t.reference_hidden;

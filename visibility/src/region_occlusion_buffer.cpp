@@ -57,6 +57,14 @@ constexpr float kTinyW = 1.0e-12f;
 /// Occluders and boxes within this distance of the region are not used / visible.
 constexpr float kRegionMargin = 1.0f;
 
+/// The extent [lo, hi] of the box [rel_min, rel_max] (relative to the centre) along
+/// the direction face `fa` looks in.
+void oriented_extent(const CubeFace& fa, glm::vec3 rel_min, glm::vec3 rel_max, float& lo,
+                     float& hi) {
+    lo = fa.sign > 0.0f ? rel_min[fa.axis] : -rel_max[fa.axis];
+    hi = fa.sign > 0.0f ? rel_max[fa.axis] : -rel_min[fa.axis];
+}
+
 /// Squared distance between two non-empty boxes (0 when they overlap).
 float box_distance_squared(const Aabb& a, const Aabb& b) {
     const glm::vec3 gap = glm::max(glm::max(a.min - b.max, b.min - a.max), glm::vec3(0.0f));
@@ -205,10 +213,10 @@ bool RegionOcclusionBuffer::add_occluder(std::span<const Plane> planes, const Aa
     const std::int64_t before = stats_.texels_written;
     for (int face = 0; face < 6; ++face) {
         const CubeFace& fa = kCubeFaces[face];
-        const bool positive = fa.sign > 0.0f;
         // Oriented extent of the occluder along the face direction.
-        const float oa0 = positive ? rel_min[fa.axis] : -rel_max[fa.axis];
-        const float oa1 = positive ? rel_max[fa.axis] : -rel_min[fa.axis];
+        float oa0 = 0.0f;
+        float oa1 = 0.0f;
+        oriented_extent(fa, rel_min, rel_max, oa0, oa1);
         const float ha = half_[fa.axis];
         if (!(oa1 > ha)) {
             continue; // behind the most advanced corner: no ray from it reaches O here
@@ -451,9 +459,9 @@ Visibility RegionOcclusionBuffer::test_box(const Aabb& box) const {
     int faces_touched = 0;
     for (int face = 0; face < 6; ++face) {
         const CubeFace& fa = kCubeFaces[face];
-        const bool positive = fa.sign > 0.0f;
-        const float ba0 = positive ? rel_min[fa.axis] : -rel_max[fa.axis];
-        const float ba1 = positive ? rel_max[fa.axis] : -rel_min[fa.axis];
+        float ba0 = 0.0f;
+        float ba1 = 0.0f;
+        oriented_extent(fa, rel_min, rel_max, ba0, ba1);
         const float ha = half_[fa.axis];
         // Forward component q_a - p_a of the pairs leaving by this face.
         const float fwd_lo = std::max(ba0 - ha, min_forward);

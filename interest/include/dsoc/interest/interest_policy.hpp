@@ -152,6 +152,10 @@ struct PolicySettings {
     int lookahead_ticks = 5;
 };
 
+/// PolicySettings::culler ("shaft", "pyramid" or "both") as the exact stages of
+/// `config`.
+void set_culler_stages(std::string_view culler, visibility::RegionCullerConfig& config);
+
 /// The occlusion policy's presets over `config` when `policy` is "occlusion" (every
 /// entity's current box every tick: no TBVs, no culler reuse, no temporal coherence,
 /// no blocker hints); other policies leave it as it is.
