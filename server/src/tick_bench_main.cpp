@@ -66,6 +66,16 @@ struct Phases {
     double snapshot = 0.0;   // SharedPoses::compute, ReplicationState::build_snapshot
     double encode = 0.0;     // the frame
     double decode = 0.0;     // client side: parse + SnapshotDecoder::apply
+
+    Phases& operator+=(const Phases& p) {
+        movement += p.movement;
+        begin_tick += p.begin_tick;
+        select += p.select;
+        snapshot += p.snapshot;
+        encode += p.encode;
+        decode += p.decode;
+        return *this;
+    }
 };
 
 } // namespace
@@ -174,12 +184,7 @@ int main(int argc, char** argv) {
             }
         }
         if (measured) {
-            total.movement += p.movement;
-            total.begin_tick += p.begin_tick;
-            total.select += p.select;
-            total.snapshot += p.snapshot;
-            total.encode += p.encode;
-            total.decode += p.decode;
+            total += p;
         }
     }
     const double n = ticks;

@@ -31,6 +31,19 @@ struct Tally {
     int beam_culled = 0;
     int either_culled = 0; ///< EitherOccludes(buffer, beams)
     int either_misses = 0;
+
+    Tally& operator+=(const Tally& t) {
+        configs += t.configs;
+        reference_visible += t.reference_visible;
+        reference_hidden += t.reference_hidden;
+        buffer_misses += t.buffer_misses;
+        beam_misses += t.beam_misses;
+        buffer_culled += t.buffer_culled;
+        beam_culled += t.beam_culled;
+        either_culled += t.either_culled;
+        either_misses += t.either_misses;
+        return *this;
+    }
 };
 
 bool inside_any(const OccluderWorld& world, glm::vec3 p) {
@@ -122,14 +135,7 @@ void run_world(const char* name, const TestWorld& tw, std::uint32_t seed, int ey
                 100.0 * t.buffer_culled / std::max(1, t.reference_hidden), t.beam_culled,
                 100.0 * t.beam_culled / std::max(1, t.reference_hidden), t.buffer_misses,
                 t.beam_misses);
-    total.configs += t.configs;
-    total.reference_visible += t.reference_visible;
-    total.reference_hidden += t.reference_hidden;
-    total.buffer_misses += t.buffer_misses;
-    total.beam_misses += t.beam_misses;
-    total.buffer_culled += t.buffer_culled;
-    total.beam_culled += t.beam_culled;
-    total.either_culled += t.either_culled;
+    total += t;
 }
 
 TEST(VisibilityProperty, BackendsNeverCullWhatTheReferenceSees) {
@@ -240,11 +246,7 @@ void run_region_world(const char* name, const TestWorld& tw, std::uint32_t seed,
                 "culls %5d (%.1f%%); misses %d\n",
                 name, t.configs, t.reference_hidden, t.buffer_culled,
                 100.0 * t.buffer_culled / std::max(1, t.reference_hidden), t.buffer_misses);
-    total.configs += t.configs;
-    total.reference_hidden += t.reference_hidden;
-    total.reference_visible += t.reference_visible;
-    total.buffer_culled += t.buffer_culled;
-    total.buffer_misses += t.buffer_misses;
+    total += t;
 }
 
 TEST(VisibilityProperty, RegionBufferCoversEveryEyeOfTheRegion) {

@@ -289,6 +289,18 @@ struct Tally {
     int parallax = 0;       ///< seen from some eye of the region but not from its centre
     int point_culled = 0;   ///< h = 0 only: the point buffer's culls
     int region0_culled = 0; ///< h = 0 only: the region buffer's culls
+
+    Tally& operator+=(const Tally& t) {
+        configs += t.configs;
+        reference_visible += t.reference_visible;
+        reference_hidden += t.reference_hidden;
+        culled += t.culled;
+        misses += t.misses;
+        parallax += t.parallax;
+        point_culled += t.point_culled;
+        region0_culled += t.region0_culled;
+        return *this;
+    }
 };
 
 struct PropertyCase {
@@ -403,14 +415,7 @@ void run_property(const PropertyCase& pc, const RegionOcclusionBufferConfig& con
                 "culled %5d (%.1f%% of hidden), misses %d; hidden from the centre only %d\n",
                 pc.name, t.configs, eyes.size(), t.reference_hidden, t.culled,
                 100.0 * t.culled / std::max(1, t.reference_hidden), t.misses, t.parallax);
-    total.configs += t.configs;
-    total.reference_visible += t.reference_visible;
-    total.reference_hidden += t.reference_hidden;
-    total.culled += t.culled;
-    total.misses += t.misses;
-    total.parallax += t.parallax;
-    total.point_culled += t.point_culled;
-    total.region0_culled += t.region0_culled;
+    total += t;
 }
 
 TEST(RegionOcclusionBufferProperty, NeverCullsWhatAnyEyeOfTheRegionSees) {
