@@ -199,7 +199,7 @@ int main(int argc, char** argv) {
             tallies[client].enters += d.enter.size();
             tallies[client].leaves += d.leave.size();
             for (const vis::Replicated& r : d.replicated) {
-                // Far entities may be sent less often, and coarser (position_precision).
+                // Far entities may be sent less often (and, at your choice, coarser).
                 if (tick % r.update_interval == 0) {
                     ++tallies[client].updates;
                 }

@@ -10,6 +10,16 @@
 
 namespace dsoc::interest {
 
+bool eye_pvs_rows(const maps::Pvs* pvs, glm::vec3 eye, std::vector<std::int32_t>& clusters,
+                  std::vector<std::uint8_t>& rows) {
+    if (pvs == nullptr || !pvs->has_visibility() ||
+        !pvs->clusters_of(visibility::Aabb{eye, eye}, clusters)) {
+        return false;
+    }
+    pvs->union_of_rows(clusters, rows);
+    return true;
+}
+
 void BroadcastPolicy::select(const GameWorld& world, const Viewer& /*viewer*/,
                              std::vector<Interest>& out) {
     out.clear();
@@ -21,13 +31,8 @@ void BroadcastPolicy::select(const GameWorld& world, const Viewer& /*viewer*/,
 void DistancePolicy::select(const GameWorld& world, const Viewer& viewer,
                             std::vector<Interest>& out) {
     out.clear();
-    const float r2 = radius_ * radius_;
     for (const Entity& e : world.entities()) {
-        // Distance from the eye to the nearest point of the entity's box.
-        const visibility::Aabb box = world.box_of(e);
-        const glm::vec3 nearest = glm::clamp(viewer.eye, box.min, box.max);
-        const glm::vec3 d = nearest - viewer.eye;
-        if (glm::dot(d, d) <= r2) {
+        if (within_radius(world.box_of(e), viewer.eye, radius_)) {
             out.push_back({e.id, 0});
         }
     }
@@ -53,11 +58,7 @@ void PvsPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
     // Per-thread scratch: select() runs concurrently for distinct viewers.
     thread_local std::vector<std::int32_t> eye_clusters;
     thread_local std::vector<std::uint8_t> rows;
-    const bool known = pvs_ != nullptr && pvs_->has_visibility() &&
-                       pvs_->clusters_of(visibility::Aabb{viewer.eye, viewer.eye}, eye_clusters);
-    if (known) {
-        pvs_->union_of_rows(eye_clusters, rows);
-    }
+    const bool known = eye_pvs_rows(pvs_.get(), viewer.eye, eye_clusters, rows);
     for (std::size_t i = 0; i < ids_.size(); ++i) {
         if (!known || always_sent_[i] || pvs_->may_see_clusters(rows, clusters_[i])) {
             out.push_back({ids_[i], 0});
@@ -72,6 +73,11 @@ void apply_policy_presets(std::string_view policy, visibility::DSOCConfig& confi
         config.full_test_interval = 1;
         config.blocker_hints = false; // no temporal coherence at all
     }
+}
+
+void set_culler_stages(std::string_view culler, visibility::RegionCullerConfig& config) {
+    config.pyramid = culler != "shaft";
+    config.shaft = culler != "pyramid";
 }
 
 int lookahead_ticks(int latency_allowance_ms, int tick_rate) {
@@ -100,8 +106,7 @@ std::unique_ptr<InterestPolicy> make_policy(const PolicySettings& settings, cons
         return std::make_unique<PvsPolicy>(world.map().pvs);
     }
     CullerStages stages;
-    stages.exact_config.pyramid = settings.culler != "shaft";
-    stages.exact_config.shaft = settings.culler != "pyramid";
+    set_culler_stages(settings.culler, stages.exact_config);
     stages.exact_config.portal_depth = settings.portal_depth;
     if (settings.pvs_stage) { // the map's PVS over the reachable clusters
         stages.pvs = world.map().pvs;

@@ -7,6 +7,7 @@
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <string_view>
 
 namespace dsoc::maps::q3 {
 
@@ -48,6 +49,50 @@ private:
     /// `first` and `count` must describe a range inside [0, size).
     static bool range_ok(std::int64_t first, std::int64_t count, std::size_t size) {
         return first >= 0 && count >= 0 && first + count <= static_cast<std::int64_t>(size);
+    }
+    /// The lump's records into `out` (resized to their count after count_records()),
+    /// record i read by `read(bytes of record i, i, out[i])`, which returns the first
+    /// problem or nothing.
+    template <class T, class Read>
+    std::optional<LoadError> read_records(Lump lump, std::size_t record_size, std::vector<T>& out,
+                                          Read&& read) const {
+        std::size_t count = 0;
+        if (auto failure = count_records(lump, record_size, count)) {
+            return failure;
+        }
+        const auto data = lump_bytes(lump);
+        out.resize(count);
+        for (std::size_t i = 0; i < count; ++i) {
+            if (auto failure = read(data.subspan(i * record_size, record_size), i, out[i])) {
+                return failure;
+            }
+        }
+        return std::nullopt;
+    }
+    /// "<record> <i>: <what> index <value> out of range (<size> <things>)" unless
+    /// 0 <= value < size.
+    std::optional<LoadError> check_index(Lump lump, const char* record, std::size_t i,
+                                         const char* what, std::int32_t value, std::size_t size,
+                                         const char* things) const {
+        if (range_ok(value, 1, size)) {
+            return std::nullopt;
+        }
+        return error(lump, record + (" " + std::to_string(i)) + ": " + what + " index " +
+                               std::to_string(value) + " out of range (" + std::to_string(size) +
+                               " " + things + ")");
+    }
+    /// "<record> <i>: <what> [<first>, +<count>) out of range (<size>[ <things>])"
+    /// unless the range lies inside [0, size).
+    std::optional<LoadError> check_range(Lump lump, const char* record, std::size_t i,
+                                         const char* what, std::int32_t first, std::int32_t count,
+                                         std::size_t size, std::string_view things = {}) const {
+        if (range_ok(first, count, size)) {
+            return std::nullopt;
+        }
+        return error(lump, record + (" " + std::to_string(i)) + ": " + what + " [" +
+                               std::to_string(first) + ", +" + std::to_string(count) +
+                               ") out of range (" + std::to_string(size) +
+                               (things.empty() ? "" : " " + std::string(things)) + ")");
     }
 
     std::optional<LoadError> parse_header();
@@ -132,88 +177,57 @@ std::optional<LoadError> Parser::count_records(Lump lump, std::size_t record_siz
 }
 
 std::optional<LoadError> Parser::parse_shaders() {
-    std::size_t count = 0;
-    if (auto failure = count_records(Lump::shaders, kShaderSize, count)) {
-        return failure;
-    }
-    const auto data = lump_bytes(Lump::shaders);
-    bsp_.shaders.resize(count);
-    for (std::size_t i = 0; i < count; ++i) {
-        const std::size_t base = i * kShaderSize;
-        const char* name = reinterpret_cast<const char*>(data.data() + base);
-        std::size_t length = 0;
-        while (length < 64 && name[length] != '\0') {
-            ++length;
-        }
-        bsp_.shaders[i].name.assign(name, length);
-        bsp_.shaders[i].surface_flags = read_u32(data, base + 64);
-        bsp_.shaders[i].content_flags = read_u32(data, base + 68);
-    }
-    return std::nullopt;
+    return read_records(Lump::shaders, kShaderSize, bsp_.shaders,
+                        [](std::span<const std::byte> r, std::size_t, Shader& shader) {
+                            const char* name = reinterpret_cast<const char*>(r.data());
+                            std::size_t length = 0;
+                            while (length < 64 && name[length] != '\0') {
+                                ++length;
+                            }
+                            shader.name.assign(name, length);
+                            shader.surface_flags = read_u32(r, 64);
+                            shader.content_flags = read_u32(r, 68);
+                            return std::optional<LoadError>();
+                        });
 }
 
 std::optional<LoadError> Parser::parse_planes() {
-    std::size_t count = 0;
-    if (auto failure = count_records(Lump::planes, kPlaneSize, count)) {
-        return failure;
-    }
-    const auto data = lump_bytes(Lump::planes);
-    bsp_.planes.resize(count);
-    for (std::size_t i = 0; i < count; ++i) {
-        const std::size_t base = i * kPlaneSize;
-        bsp_.planes[i].normal = {read_f32(data, base), read_f32(data, base + 4),
-                                 read_f32(data, base + 8)};
-        bsp_.planes[i].dist = read_f32(data, base + 12);
-    }
-    return std::nullopt;
+    return read_records(Lump::planes, kPlaneSize, bsp_.planes,
+                        [](std::span<const std::byte> r, std::size_t, Plane& plane) {
+                            plane.normal = {read_f32(r, 0), read_f32(r, 4), read_f32(r, 8)};
+                            plane.dist = read_f32(r, 12);
+                            return std::optional<LoadError>();
+                        });
 }
 
 std::optional<LoadError> Parser::parse_brushes() {
-    std::size_t side_count = 0;
-    if (auto failure = count_records(Lump::brush_sides, kBrushSideSize, side_count)) {
+    if (auto failure =
+            read_records(Lump::brush_sides, kBrushSideSize, bsp_.brush_sides,
+                         [&](std::span<const std::byte> r, std::size_t i, BrushSide& side) {
+                             side.plane = read_i32(r, 0);
+                             side.shader = read_i32(r, 4);
+                             if (auto bad = check_index(Lump::brush_sides, "side", i, "plane",
+                                                        side.plane, bsp_.planes.size(), "planes")) {
+                                 return bad;
+                             }
+                             return check_index(Lump::brush_sides, "side", i, "shader", side.shader,
+                                                bsp_.shaders.size(), "shaders");
+                         })) {
         return failure;
     }
-    const auto side_data = lump_bytes(Lump::brush_sides);
-    bsp_.brush_sides.resize(side_count);
-    for (std::size_t i = 0; i < side_count; ++i) {
-        BrushSide& side = bsp_.brush_sides[i];
-        side.plane = read_i32(side_data, i * kBrushSideSize);
-        side.shader = read_i32(side_data, i * kBrushSideSize + 4);
-        if (!range_ok(side.plane, 1, bsp_.planes.size())) {
-            return error(Lump::brush_sides, "side " + std::to_string(i) + ": plane index " +
-                                                std::to_string(side.plane) + " out of range (" +
-                                                std::to_string(bsp_.planes.size()) + " planes)");
-        }
-        if (!range_ok(side.shader, 1, bsp_.shaders.size())) {
-            return error(Lump::brush_sides, "side " + std::to_string(i) + ": shader index " +
-                                                std::to_string(side.shader) + " out of range (" +
-                                                std::to_string(bsp_.shaders.size()) + " shaders)");
-        }
-    }
-    std::size_t brush_count = 0;
-    if (auto failure = count_records(Lump::brushes, kBrushSize, brush_count)) {
-        return failure;
-    }
-    const auto brush_data = lump_bytes(Lump::brushes);
-    bsp_.brushes.resize(brush_count);
-    for (std::size_t i = 0; i < brush_count; ++i) {
-        Brush& brush = bsp_.brushes[i];
-        brush.first_side = read_i32(brush_data, i * kBrushSize);
-        brush.num_sides = read_i32(brush_data, i * kBrushSize + 4);
-        brush.shader = read_i32(brush_data, i * kBrushSize + 8);
-        if (!range_ok(brush.first_side, brush.num_sides, side_count)) {
-            return error(Lump::brushes, "brush " + std::to_string(i) + ": sides [" +
-                                            std::to_string(brush.first_side) + ", +" +
-                                            std::to_string(brush.num_sides) + ") out of range (" +
-                                            std::to_string(side_count) + " brush sides)");
-        }
-        if (!range_ok(brush.shader, 1, bsp_.shaders.size())) {
-            return error(Lump::brushes, "brush " + std::to_string(i) + ": shader index " +
-                                            std::to_string(brush.shader) + " out of range (" +
-                                            std::to_string(bsp_.shaders.size()) + " shaders)");
-        }
-    }
-    return std::nullopt;
+    return read_records(Lump::brushes, kBrushSize, bsp_.brushes,
+                        [&](std::span<const std::byte> r, std::size_t i, Brush& brush) {
+                            brush.first_side = read_i32(r, 0);
+                            brush.num_sides = read_i32(r, 4);
+                            brush.shader = read_i32(r, 8);
+                            if (auto bad = check_range(Lump::brushes, "brush", i, "sides",
+                                                       brush.first_side, brush.num_sides,
+                                                       bsp_.brush_sides.size(), "brush sides")) {
+                                return bad;
+                            }
+                            return check_index(Lump::brushes, "brush", i, "shader", brush.shader,
+                                               bsp_.shaders.size(), "shaders");
+                        });
 }
 
 std::optional<LoadError> Parser::parse_surfaces() {
@@ -244,32 +258,22 @@ std::optional<LoadError> Parser::parse_models() {
     if (count == 0) {
         return error(Lump::models, "no models (model 0, the world, is required)");
     }
-    const auto data = lump_bytes(Lump::models);
-    bsp_.models.resize(count);
-    for (std::size_t i = 0; i < count; ++i) {
-        const std::size_t base = i * kModelSize;
-        Model& model = bsp_.models[i];
-        model.mins = {read_f32(data, base), read_f32(data, base + 4), read_f32(data, base + 8)};
-        model.maxs = {read_f32(data, base + 12), read_f32(data, base + 16),
-                      read_f32(data, base + 20)};
-        model.first_surface = read_i32(data, base + 24);
-        model.num_surfaces = read_i32(data, base + 28);
-        model.first_brush = read_i32(data, base + 32);
-        model.num_brushes = read_i32(data, base + 36);
-        if (!range_ok(model.first_brush, model.num_brushes, bsp_.brushes.size())) {
-            return error(Lump::models, "model " + std::to_string(i) + ": brushes [" +
-                                           std::to_string(model.first_brush) + ", +" +
-                                           std::to_string(model.num_brushes) + ") out of range (" +
-                                           std::to_string(bsp_.brushes.size()) + " brushes)");
-        }
-        if (!range_ok(model.first_surface, model.num_surfaces, bsp_.surface_count)) {
-            return error(Lump::models, "model " + std::to_string(i) + ": surfaces [" +
-                                           std::to_string(model.first_surface) + ", +" +
-                                           std::to_string(model.num_surfaces) + ") out of range (" +
-                                           std::to_string(bsp_.surface_count) + " surfaces)");
-        }
-    }
-    return std::nullopt;
+    return read_records(
+        Lump::models, kModelSize, bsp_.models,
+        [&](std::span<const std::byte> r, std::size_t i, Model& model) {
+            model.mins = {read_f32(r, 0), read_f32(r, 4), read_f32(r, 8)};
+            model.maxs = {read_f32(r, 12), read_f32(r, 16), read_f32(r, 20)};
+            model.first_surface = read_i32(r, 24);
+            model.num_surfaces = read_i32(r, 28);
+            model.first_brush = read_i32(r, 32);
+            model.num_brushes = read_i32(r, 36);
+            if (auto bad = check_range(Lump::models, "model", i, "brushes", model.first_brush,
+                                       model.num_brushes, bsp_.brushes.size(), "brushes")) {
+                return bad;
+            }
+            return check_range(Lump::models, "model", i, "surfaces", model.first_surface,
+                               model.num_surfaces, bsp_.surface_count, "surfaces");
+        });
 }
 
 std::optional<LoadError> Parser::parse_visibility() {
@@ -310,97 +314,81 @@ std::optional<LoadError> Parser::parse_visibility() {
 }
 
 std::optional<LoadError> Parser::parse_tree() {
-    std::size_t leaf_brush_count = 0;
-    if (auto failure = count_records(Lump::leaf_brushes, kIndexSize, leaf_brush_count)) {
+    if (auto failure =
+            read_records(Lump::leaf_brushes, kIndexSize, bsp_.leaf_brushes,
+                         [&](std::span<const std::byte> r, std::size_t i, std::int32_t& brush) {
+                             brush = read_i32(r, 0);
+                             return check_index(Lump::leaf_brushes, "entry", i, "brush", brush,
+                                                bsp_.brushes.size(), "brushes");
+                         })) {
         return failure;
     }
-    const auto lb_data = lump_bytes(Lump::leaf_brushes);
-    bsp_.leaf_brushes.resize(leaf_brush_count);
-    for (std::size_t i = 0; i < leaf_brush_count; ++i) {
-        bsp_.leaf_brushes[i] = read_i32(lb_data, i * kIndexSize);
-        if (!range_ok(bsp_.leaf_brushes[i], 1, bsp_.brushes.size())) {
-            return error(Lump::leaf_brushes, "entry " + std::to_string(i) + ": brush index " +
-                                                 std::to_string(bsp_.leaf_brushes[i]) +
-                                                 " out of range (" +
-                                                 std::to_string(bsp_.brushes.size()) + " brushes)");
-        }
-    }
-    std::size_t leaf_count = 0;
-    if (auto failure = count_records(Lump::leafs, kLeafSize, leaf_count)) {
-        return failure;
-    }
-    const auto leaf_data = lump_bytes(Lump::leafs);
-    bsp_.leafs.resize(leaf_count);
     const std::int32_t clusters = bsp_.visibility.num_clusters;
-    for (std::size_t i = 0; i < leaf_count; ++i) {
-        const std::size_t base = i * kLeafSize;
-        Leaf& leaf = bsp_.leafs[i];
-        leaf.cluster = read_i32(leaf_data, base);
-        leaf.area = read_i32(leaf_data, base + 4);
-        for (std::size_t a = 0; a < 3; ++a) {
-            leaf.mins[a] = read_i32(leaf_data, base + 8 + 4 * a);
-            leaf.maxs[a] = read_i32(leaf_data, base + 20 + 4 * a);
-        }
-        leaf.first_leaf_surface = read_i32(leaf_data, base + 32);
-        leaf.num_leaf_surfaces = read_i32(leaf_data, base + 36);
-        leaf.first_leaf_brush = read_i32(leaf_data, base + 40);
-        leaf.num_leaf_brushes = read_i32(leaf_data, base + 44);
-        const std::string which = "leaf " + std::to_string(i);
-        if (leaf.cluster < -1 || (clusters > 0 && leaf.cluster >= clusters)) {
-            return error(Lump::leafs, which + ": cluster " + std::to_string(leaf.cluster) +
-                                          " out of range (" + std::to_string(clusters) +
-                                          " clusters in the visibility lump)");
-        }
-        if (!range_ok(leaf.first_leaf_brush, leaf.num_leaf_brushes, leaf_brush_count)) {
-            return error(Lump::leafs,
-                         which + ": leaf brushes [" + std::to_string(leaf.first_leaf_brush) +
-                             ", +" + std::to_string(leaf.num_leaf_brushes) + ") out of range (" +
-                             std::to_string(leaf_brush_count) + ")");
-        }
-        if (!range_ok(leaf.first_leaf_surface, leaf.num_leaf_surfaces, bsp_.leaf_surface_count)) {
-            return error(Lump::leafs,
-                         which + ": leaf surfaces [" + std::to_string(leaf.first_leaf_surface) +
-                             ", +" + std::to_string(leaf.num_leaf_surfaces) + ") out of range (" +
-                             std::to_string(bsp_.leaf_surface_count) + ")");
-        }
+    if (auto failure = read_records(
+            Lump::leafs, kLeafSize, bsp_.leafs,
+            [&](std::span<const std::byte> r, std::size_t i, Leaf& leaf) {
+                leaf.cluster = read_i32(r, 0);
+                leaf.area = read_i32(r, 4);
+                for (std::size_t a = 0; a < 3; ++a) {
+                    leaf.mins[a] = read_i32(r, 8 + 4 * a);
+                    leaf.maxs[a] = read_i32(r, 20 + 4 * a);
+                }
+                leaf.first_leaf_surface = read_i32(r, 32);
+                leaf.num_leaf_surfaces = read_i32(r, 36);
+                leaf.first_leaf_brush = read_i32(r, 40);
+                leaf.num_leaf_brushes = read_i32(r, 44);
+                if (leaf.cluster < -1 || (clusters > 0 && leaf.cluster >= clusters)) {
+                    return std::optional(
+                        error(Lump::leafs, "leaf " + std::to_string(i) + ": cluster " +
+                                               std::to_string(leaf.cluster) + " out of range (" +
+                                               std::to_string(clusters) +
+                                               " clusters in the visibility lump)"));
+                }
+                if (auto bad =
+                        check_range(Lump::leafs, "leaf", i, "leaf brushes", leaf.first_leaf_brush,
+                                    leaf.num_leaf_brushes, bsp_.leaf_brushes.size())) {
+                    return bad;
+                }
+                return check_range(Lump::leafs, "leaf", i, "leaf surfaces", leaf.first_leaf_surface,
+                                   leaf.num_leaf_surfaces, bsp_.leaf_surface_count);
+            })) {
+        return failure;
     }
     std::size_t node_count = 0;
     if (auto failure = count_records(Lump::nodes, kNodeSize, node_count)) {
         return failure;
     }
-    const auto node_data = lump_bytes(Lump::nodes);
-    bsp_.nodes.resize(node_count);
-    for (std::size_t i = 0; i < node_count; ++i) {
-        const std::size_t base = i * kNodeSize;
-        Node& node = bsp_.nodes[i];
-        node.plane = read_i32(node_data, base);
-        node.children = {read_i32(node_data, base + 4), read_i32(node_data, base + 8)};
-        for (std::size_t a = 0; a < 3; ++a) {
-            node.mins[a] = read_i32(node_data, base + 12 + 4 * a);
-            node.maxs[a] = read_i32(node_data, base + 24 + 4 * a);
-        }
-        const std::string which = "node " + std::to_string(i);
-        if (!range_ok(node.plane, 1, bsp_.planes.size())) {
-            return error(Lump::nodes, which + ": plane index " + std::to_string(node.plane) +
-                                          " out of range (" + std::to_string(bsp_.planes.size()) +
-                                          " planes)");
-        }
-        for (const std::int32_t child : node.children) {
-            // Nodes only point forward in a well-formed tree, so a walk always ends;
-            // requiring child > i rules out cycles in hostile input.
-            const std::int64_t leaf = -(static_cast<std::int64_t>(child) + 1);
-            const bool ok = child >= 0 ? (static_cast<std::size_t>(child) < node_count &&
-                                          static_cast<std::size_t>(child) > i)
-                                       : leaf < static_cast<std::int64_t>(leaf_count);
-            if (!ok) {
-                return error(Lump::nodes, which + ": child " + std::to_string(child) +
-                                              " out of range or not after its parent (" +
-                                              std::to_string(node_count) + " nodes, " +
-                                              std::to_string(leaf_count) + " leafs)");
+    const std::size_t leaf_count = bsp_.leafs.size();
+    return read_records(
+        Lump::nodes, kNodeSize, bsp_.nodes,
+        [&](std::span<const std::byte> r, std::size_t i, Node& node) -> std::optional<LoadError> {
+            node.plane = read_i32(r, 0);
+            node.children = {read_i32(r, 4), read_i32(r, 8)};
+            for (std::size_t a = 0; a < 3; ++a) {
+                node.mins[a] = read_i32(r, 12 + 4 * a);
+                node.maxs[a] = read_i32(r, 24 + 4 * a);
             }
-        }
-    }
-    return std::nullopt;
+            if (auto bad = check_index(Lump::nodes, "node", i, "plane", node.plane,
+                                       bsp_.planes.size(), "planes")) {
+                return bad;
+            }
+            for (const std::int32_t child : node.children) {
+                // Nodes only point forward in a well-formed tree, so a walk always ends;
+                // requiring child > i rules out cycles in hostile input.
+                const std::int64_t leaf = -(static_cast<std::int64_t>(child) + 1);
+                const bool ok = child >= 0 ? (static_cast<std::size_t>(child) < node_count &&
+                                              static_cast<std::size_t>(child) > i)
+                                           : leaf < static_cast<std::int64_t>(leaf_count);
+                if (!ok) {
+                    return error(Lump::nodes, "node " + std::to_string(i) + ": child " +
+                                                  std::to_string(child) +
+                                                  " out of range or not after its parent (" +
+                                                  std::to_string(node_count) + " nodes, " +
+                                                  std::to_string(leaf_count) + " leafs)");
+                }
+            }
+            return std::nullopt;
+        });
 }
 
 } // namespace

@@ -7,6 +7,17 @@
 
 namespace dsoc::server {
 
+void add_own_entity(std::vector<interest::Interest>& interest, std::uint32_t entity_id) {
+    const auto own =
+        std::lower_bound(interest.begin(), interest.end(), entity_id,
+                         [](const interest::Interest& a, std::uint32_t id) { return a.id < id; });
+    if (own == interest.end() || own->id != entity_id) {
+        interest.insert(own, interest::Interest{entity_id, 0});
+    } else {
+        own->tier = 0;
+    }
+}
+
 namespace {
 
 void run_one(const interest::GameWorld& world, interest::InterestPolicy& policy, std::uint64_t tick,
@@ -19,14 +30,7 @@ void run_one(const interest::GameWorld& world, interest::InterestPolicy& policy,
     } else {
         policy.select(world, job.viewer, interest);
     }
-    const auto own =
-        std::lower_bound(interest.begin(), interest.end(), job.viewer.entity_id,
-                         [](const interest::Interest& a, std::uint32_t id) { return a.id < id; });
-    if (own == interest.end() || own->id != job.viewer.entity_id) {
-        interest.insert(own, interest::Interest{job.viewer.entity_id, 0});
-    } else {
-        own->tier = 0; // a client always gets its own entity every tick, finest
-    }
+    add_own_entity(interest, job.viewer.entity_id);
     if (!job.network_lod) {
         for (interest::Interest& i : interest) {
             i.tier = 0;

@@ -147,8 +147,11 @@ void read_dsoc_table(const toml::node& node, std::string_view source,
         const toml::node& value = entry.second;
         const std::string name(key.str());
         const std::string at = where(source, value.source());
-        std::string why = "unknown setting: not a visibility::DSOCConfig field (see "
-                          "dsoc-server --print-config)";
+        // tick_rate: set_dsoc_setting() says whose it is.
+        std::string why = name == "tick_rate"
+                              ? set_dsoc_setting(settings, name, {}, at)
+                              : "unknown setting: not a visibility::DSOCConfig field (see "
+                                "dsoc-server --print-config)";
         std::string text;
         visit_dsoc_fields(visibility::DSOCConfig{}, [&](const char* field, auto field_value) {
             if (name == field) {

@@ -40,6 +40,9 @@ bool is_flat_field(std::string_view name) {
 
 std::string set_dsoc_setting(std::vector<DsocSetting>& settings, std::string_view key,
                              std::string_view value, std::string_view origin) {
+    if (key == "tick_rate") {
+        return "not a [dsoc] field: DSOCConfig's tick_rate is the server's tick_rate";
+    }
     visibility::DSOCConfig scratch;
     if (auto why = visibility::set_field(scratch, key, value); !why.empty()) {
         return why;
@@ -66,7 +69,6 @@ std::string set_dsoc_setting_from_flag(std::vector<DsocSetting>& settings,
 
 visibility::DSOCConfig dsoc_config(const ServerConfig& config) {
     visibility::DSOCConfig dsoc;
-    dsoc.tick_rate = config.tick_rate;
     [[maybe_unused]] const bool known =
         visibility::parse_tbv_strategy(config.tbv_strategy, dsoc.strategy); // validated
     dsoc.region_reuse_margin = config.region_reuse_margin;
@@ -74,6 +76,7 @@ visibility::DSOCConfig dsoc_config(const ServerConfig& config) {
     for (const DsocSetting& s : config.dsoc) {
         [[maybe_unused]] const auto why = visibility::set_field(dsoc, s.key, s.value);
     }
+    dsoc.tick_rate = config.tick_rate; // the one rate; set_dsoc_setting() refuses another
     return dsoc;
 }
 
@@ -87,19 +90,13 @@ std::vector<std::string> validate_dsoc_settings(const ServerConfig& config) {
         }
         return nullptr;
     };
-    visibility::DSOCConfig scratch;
     for (const DsocSetting& s : config.dsoc) {
-        if (auto why = visibility::set_field(scratch, s.key, s.value); !why.empty()) {
+        std::vector<DsocSetting> scratch;
+        if (auto why = set_dsoc_setting(scratch, s.key, s.value, s.origin); !why.empty()) {
             problems.push_back(s.origin + ": dsoc." + s.key + ": " + why);
         }
     }
     const visibility::DSOCConfig dsoc = dsoc_config(config);
-    if (const DsocSetting* s = entry("tick_rate");
-        s != nullptr && dsoc.tick_rate != config.tick_rate) {
-        problems.push_back(s->origin + ": dsoc.tick_rate: must equal tick_rate (" +
-                           std::to_string(config.tick_rate) +
-                           " Hz), the rate the server ticks at; got " + s->value);
-    }
     for (const std::string& problem : visibility::validate(dsoc)) {
         const std::string field = problem.substr(0, problem.find(':'));
         if (const DsocSetting* s = entry(field)) {
@@ -115,9 +112,9 @@ std::string format_dsoc_table(const ServerConfig& config) {
     std::string out =
         "\n[dsoc]\n"
         "# The dsoc and occlusion policies' culler and TBV settings (visibility::DSOCConfig,\n"
-        "# docs/operations.md). A line set here overrides tick_rate, tbv_strategy,\n"
+        "# docs/operations.md). A line set here overrides tbv_strategy,\n"
         "# region_reuse_margin and the occlusion policy's presets; commented lines show\n"
-        "# the value in effect.\n";
+        "# the value in effect. Its tick_rate is always the server's.\n";
     const visibility::DSOCConfig dsoc = dsoc_config(config);
     visit_dsoc_fields(dsoc, [&](const char* name, auto value) {
         const bool set = std::any_of(config.dsoc.begin(), config.dsoc.end(),

@@ -8,6 +8,8 @@
 #include "dsoc/server/server.hpp"
 #include "dsoc/server/stats_report.hpp"
 
+#include "program_options.hpp"
+
 #include <CLI/CLI.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -38,33 +40,11 @@ void add_options(CLI::App& app, dsoc::server::ServerConfig& config, ProgramOptio
                  "Print the effective settings as TOML and exit (2 when they are invalid)");
     app.add_option("--bind", config.bind_address, "Address to listen on")->capture_default_str();
     app.add_option("--port", config.port, "TCP port; 0 picks a free one")->capture_default_str();
-    app.add_option("--tick-rate", config.tick_rate, "Ticks (snapshots) per second [Hz]")
-        ->capture_default_str();
-    app.add_option("--bots", config.bots, "Wandering bots")->capture_default_str();
-    app.add_option("--map", config.map,
-                   "Map: name (e.g. oa_dm4), path to .bsp/text map, or gen:city / gen:rooms")
-        ->capture_default_str();
-    app.add_option("--policy", config.policy,
-                   "Interest policy: dsoc | occlusion | pvs | distance | broadcast")
-        ->capture_default_str();
+    dsoc::server::add_world_options(app, config);
+    dsoc::server::add_policy_options(app, config);
     app.add_option("--tbv-strategy", config.tbv_strategy, "dsoc TBVs: adaptive | explicit | fuzzy")
         ->capture_default_str();
     app.add_option("--culler", config.culler, "Occlusion culler stages: shaft | pyramid | both")
-        ->capture_default_str();
-    app.add_option("--portal-depth", config.portal_depth,
-                   "Levels of portal tests in the culler (0 = off; 2 = tightest, ~4x CPU)")
-        ->capture_default_str();
-    app.add_option("--baked-stage", config.baked_stage,
-                   "The map's baked cell visibility table first (true/false; baked and cached "
-                   "on first start: dsoc-bake MAP does it ahead)")
-        ->capture_default_str();
-    app.add_option("--bake-cell-size", config.bake_cell_size, "Cell edge of the baked table")
-        ->capture_default_str();
-    app.add_option("--bake-dir", config.bake_dir, "Cache of baked tables");
-    app.add_option("--exact-stages", config.exact_stages,
-                   "With the baked stage: true runs the PVS and shaft tests after the table "
-                   "(tighter, dearer); false is the table alone; auto: alone unless the map "
-                   "needed cells coarser than --bake-cell-size")
         ->capture_default_str();
     app.add_option("--culling-budget", config.culling_budget,
                    "Share of the tick period for culling; clients after it get the cheapest "
@@ -116,7 +96,6 @@ void add_options(CLI::App& app, dsoc::server::ServerConfig& config, ProgramOptio
         ->capture_default_str();
     app.add_option("--max-speed", config.max_speed, "Speed bound of every entity [units/s]")
         ->capture_default_str();
-    app.add_option("--seed", config.seed, "Seed for bots and spawns")->capture_default_str();
     app.add_option("--duration", config.duration_s,
                    "Stop after this many seconds (0: run until signalled)")
         ->capture_default_str();

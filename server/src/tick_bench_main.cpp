@@ -18,9 +18,12 @@
 #include "dsoc/maps/map_source.hpp"
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/compact_snapshot.hpp"
+#include "dsoc/server/client_tick.hpp"
 #include "dsoc/server/interest_setup.hpp"
 #include "dsoc/server/replication_state.hpp"
 #include "dsoc/server/server_config.hpp"
+
+#include "program_options.hpp"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -63,6 +66,16 @@ struct Phases {
     double snapshot = 0.0;   // SharedPoses::compute, ReplicationState::build_snapshot
     double encode = 0.0;     // the frame
     double decode = 0.0;     // client side: parse + SnapshotDecoder::apply
+
+    Phases& operator+=(const Phases& p) {
+        movement += p.movement;
+        begin_tick += p.begin_tick;
+        select += p.select;
+        snapshot += p.snapshot;
+        encode += p.encode;
+        decode += p.decode;
+        return *this;
+    }
 };
 
 } // namespace
@@ -73,32 +86,17 @@ int main(int argc, char** argv) {
     int ticks = 90;
     int warm_up = 30;
     CLI::App app{"dsoc-tick-bench: CPU per server tick for N players, by phase, no sockets"};
-    app.add_option("--map", config.map, "Map")->capture_default_str();
-    app.add_option("--policy", config.policy, "dsoc | occlusion | pvs | distance | broadcast")
-        ->capture_default_str();
-    app.add_option("--bots", config.bots, "Wandering bots")->capture_default_str();
+    server::add_world_options(app, config);
+    server::add_policy_options(app, config);
     app.add_option("--players", players, "Connected players (viewers)")
         ->capture_default_str()
         ->check(CLI::Range(1, 100000));
-    app.add_option("--tick-rate", config.tick_rate, "[Hz]")->capture_default_str();
     app.add_option("--ticks", ticks, "Measured ticks")
         ->capture_default_str()
         ->check(CLI::Range(1, 1000000));
     app.add_option("--warm-up", warm_up, "Ticks run before measuring (players join over them)")
         ->capture_default_str()
         ->check(CLI::Range(1, 1000000));
-    app.add_option("--seed", config.seed, "Seed of bots and players")->capture_default_str();
-    app.add_option("--portal-depth", config.portal_depth,
-                   "Levels of portal tests in the culler (ServerConfig::portal_depth)")
-        ->capture_default_str();
-    app.add_option("--baked-stage", config.baked_stage,
-                   "The map's baked cell table first (ServerConfig::baked_stage)")
-        ->capture_default_str();
-    app.add_option("--exact-stages", config.exact_stages,
-                   "With the baked stage, the PVS and shaft stages after it: auto | true | false "
-                   "(ServerConfig::exact_stages)")
-        ->capture_default_str();
-    app.add_option("--bake-dir", config.bake_dir, "Cache of baked tables");
     CLI11_PARSE(app, argc, argv);
     config.insecure = true; // no connections here: the token settings do not matter
     if (const auto problems = server::validate(config); !problems.empty()) {
@@ -165,14 +163,7 @@ int main(int argc, char** argv) {
             const interest::Viewer viewer{c->client_id, c->entity_id, world.eye_of(*self)};
             // As run_client_ticks: the policy's set plus the viewer's own entity.
             policy->select(world, viewer, c->interest);
-            const auto own = std::lower_bound(
-                c->interest.begin(), c->interest.end(), c->entity_id,
-                [](const interest::Interest& a, std::uint32_t id) { return a.id < id; });
-            if (own == c->interest.end() || own->id != c->entity_id) {
-                c->interest.insert(own, interest::Interest{c->entity_id, 0});
-            } else {
-                own->tier = 0;
-            }
+            server::add_own_entity(c->interest, c->entity_id);
             lap(p.select);
             c->replication.build_snapshot(world, c->interest, tick, false,
                                           *c->envelope.mutable_snapshot(), &poses);
@@ -193,12 +184,7 @@ int main(int argc, char** argv) {
             }
         }
         if (measured) {
-            total.movement += p.movement;
-            total.begin_tick += p.begin_tick;
-            total.select += p.select;
-            total.snapshot += p.snapshot;
-            total.encode += p.encode;
-            total.decode += p.decode;
+            total += p;
         }
     }
     const double n = ticks;

@@ -20,6 +20,23 @@ glm::vec3 random_point(std::mt19937& rng, const visibility::Aabb& b) {
     return {x(rng), y(rng), z(rng)};
 }
 
+/// The rooms map, its occluders as a world, the exact reference over them and the
+/// Embree oracle: the two implementations the tests compare.
+struct Rooms {
+    std::shared_ptr<const maps::Map> map = testing::rooms_map();
+    visibility::OccluderWorld world = world_of(*map);
+    visibility::ReferenceVisibility reference{world};
+    RayOracle oracle{map->occluders};
+
+    static visibility::OccluderWorld world_of(const maps::Map& m) {
+        visibility::OccluderWorld w;
+        for (const auto& o : m.occluders) {
+            w.add(o);
+        }
+        return w;
+    }
+};
+
 /// True when `p` is strictly inside some occluder. A segment between two points
 /// inside the same solid crosses no face: a surface ray caster cannot see it, the
 /// reference calls it blocked. The evaluation never asks that (eyes and entity boxes
@@ -38,13 +55,11 @@ bool inside_any(const visibility::OccluderWorld& world, glm::vec3 p) {
 }
 
 TEST(RayOracle, AgreesWithReferenceOnRandomSegments) {
-    const auto map = testing::rooms_map();
-    visibility::OccluderWorld world;
-    for (const auto& o : map->occluders) {
-        world.add(o);
-    }
-    const visibility::ReferenceVisibility reference(world);
-    const RayOracle oracle(map->occluders);
+    const Rooms rooms;
+    const auto& map = rooms.map;
+    const auto& world = rooms.world;
+    const auto& reference = rooms.reference;
+    const auto& oracle = rooms.oracle;
     ASSERT_GT(oracle.triangle_count(), 0u);
 
     std::mt19937 rng(12345);
@@ -115,13 +130,11 @@ TEST(RayOracle, BoxAnswersAgreeWithReference) {
     // The reference samples all six faces, the oracle the faces turned toward the eye:
     // different samples, so allow a few disagreements, but every oracle "visible" is a
     // real unblocked segment and the two must agree almost always.
-    const auto map = testing::rooms_map();
-    visibility::OccluderWorld world;
-    for (const auto& o : map->occluders) {
-        world.add(o);
-    }
-    const visibility::ReferenceVisibility reference(world);
-    const RayOracle oracle(map->occluders);
+    const Rooms rooms;
+    const auto& map = rooms.map;
+    const auto& world = rooms.world;
+    const auto& reference = rooms.reference;
+    const auto& oracle = rooms.oracle;
     std::mt19937 rng(7);
     visibility::Aabb space = map->bounds;
     space.min.z = 30.0f;

@@ -18,12 +18,7 @@ TEST(EndToEnd, EightClientsGetHelloSnapshotsAndTheirOwnEntity) {
     sc.policy = "distance";
     testing::RunningServer server(sc);
 
-    simclient::LoadConfig lc;
-    lc.port = server.port();
-    lc.clients = 8;
-    lc.duration_s = 2.0;
-    lc.ramp_up_s = 0.2;
-    lc.progress = false;
+    const simclient::LoadConfig lc = testing::load_config(server, 8, 2.0, 0.2);
     boost::asio::io_context io;
     simclient::LoadRun run(io, lc);
     run.start();
@@ -59,12 +54,8 @@ TEST(EndToEnd, ShutdownTellsEveryClientWhy) {
     sc.bots = 10;
     testing::RunningServer server(sc);
 
-    simclient::LoadConfig lc;
-    lc.port = server.port();
-    lc.clients = 4;
-    lc.duration_s = 30.0; // far longer than we wait: the server ends it
-    lc.ramp_up_s = 0.0;
-    lc.progress = false;
+    // 30 s, far longer than we wait: the server ends it
+    const simclient::LoadConfig lc = testing::load_config(server, 4, 30.0, 0.0);
     boost::asio::io_context io;
     simclient::LoadRun run(io, lc);
     run.start();
@@ -92,12 +83,7 @@ TEST(EndToEnd, ClientsPastTheCullingBudgetGetTheCheapestAnswerAndAreCounted) {
     sc.culling_budget = 1e-9;
     testing::RunningServer server(sc);
 
-    simclient::LoadConfig lc;
-    lc.port = server.port();
-    lc.clients = 4;
-    lc.duration_s = 1.5;
-    lc.ramp_up_s = 0.1;
-    lc.progress = false;
+    const simclient::LoadConfig lc = testing::load_config(server, 4, 1.5, 0.1);
     boost::asio::io_context io;
     simclient::LoadRun run(io, lc);
     run.start();

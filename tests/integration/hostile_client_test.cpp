@@ -89,12 +89,7 @@ protected:
 TEST_F(HostileClients, AreDisconnectedWithReasonsWhileOthersKeepTheirSnapshots) {
     testing::RunningServer server(config());
 
-    simclient::LoadConfig lc;
-    lc.port = server.port();
-    lc.clients = 4;
-    lc.duration_s = 2.5;
-    lc.ramp_up_s = 0.0;
-    lc.progress = false;
+    const simclient::LoadConfig lc = testing::load_config(server, 4, 2.5, 0.0);
     asio::io_context io;
     simclient::LoadRun run(io, lc);
     run.start();

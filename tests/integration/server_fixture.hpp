@@ -2,6 +2,7 @@
 // Runs a real dsoc server on loopback (port 0) on its own thread.
 
 #include "dsoc/server/server.hpp"
+#include "dsoc/simclient/load_config.hpp"
 #include "support/test_maps.hpp"
 
 #include <boost/asio/io_context.hpp>
@@ -52,5 +53,18 @@ private:
     std::uint16_t port_ = 0;
     std::thread thread_;
 };
+
+/// Quiet simulated clients for a test against `server`: `clients` of them, joining over
+/// `ramp_up_s`, each leaving after `duration_s`.
+inline simclient::LoadConfig load_config(const RunningServer& server, int clients,
+                                         double duration_s, double ramp_up_s) {
+    simclient::LoadConfig lc;
+    lc.port = server.port();
+    lc.clients = clients;
+    lc.duration_s = duration_s;
+    lc.ramp_up_s = ramp_up_s;
+    lc.progress = false;
+    return lc;
+}
 
 } // namespace dsoc::testing

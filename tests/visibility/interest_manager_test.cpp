@@ -128,6 +128,15 @@ protected:
         d.lookahead_ticks = lookahead;
         ASSERT_TRUE(m.add_client(100, d));
     }
+    /// make(config()), the viewer at x = -500, entity 2 at x = 400 (behind the wall),
+    /// and tick 1.
+    std::unique_ptr<InterestManager> entity_behind_the_wall() {
+        auto m = make(config());
+        add_viewer(*m, -500.0f);
+        EXPECT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
+        step(*m, 1);
+        return m;
+    }
     void step(InterestManager& m, std::uint64_t tick) {
         m.update(tick);
         const auto problems = m.validate_state();
@@ -167,10 +176,7 @@ TEST_P(DsocStateMachine, ClientJoinCreatesTbvsForEveryHiddenEntityAtOnce) {
 }
 
 TEST_P(DsocStateMachine, HiddenTbvCostsNothingWhileTheRegionHolds) {
-    auto m = make(config());
-    add_viewer(*m, -500.0f);
-    ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
-    step(*m, 1);
+    auto m = entity_behind_the_wall();
     const auto tests_after_join = m->stats(100)->box_tests;
     for (std::uint64_t t = 2; t <= 9; ++t) { // within the 10-tick TBV
         m->set_entity_box(2, box_at({400.0f + 5.0f * static_cast<float>(t), 0, 0}));
@@ -182,10 +188,7 @@ TEST_P(DsocStateMachine, HiddenTbvCostsNothingWhileTheRegionHolds) {
 }
 
 TEST_P(DsocStateMachine, ExpiredTbvIsRetestedAndRenewed) {
-    auto m = make(config());
-    add_viewer(*m, -500.0f);
-    ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
-    step(*m, 1);
+    auto m = entity_behind_the_wall();
     for (std::uint64_t t = 2; t <= 12; ++t) {
         step(*m, t);
     }
@@ -213,10 +216,7 @@ TEST_P(DsocStateMachine, VisibleTbvTriggersARealTestOfTheCurrentBox) {
 }
 
 TEST_P(DsocStateMachine, TeleportVoidsTheTbv) {
-    auto m = make(config());
-    add_viewer(*m, -500.0f);
-    ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
-    step(*m, 1);
+    auto m = entity_behind_the_wall();
     ASSERT_EQ(m->state(100, 2), PairState::hidden_with_tbv);
     // Far beyond 320 units/s * 1/30 s: a teleport, to the viewer's side of the wall.
     m->set_entity_box(2, box_at({-900, 0, 0}));
@@ -318,10 +318,7 @@ TEST_P(DsocStateMachine, TbvIsTheEntitysOwnAndSharedByEveryClient) {
     // Two clients behind the wall from entity 2, the second joining 3 ticks later: with
     // a prepared stage both hold the very same TBV (made once, at tick 1, for the
     // entity); without one each client makes its own at its own tick.
-    auto m = make(config());
-    add_viewer(*m, -500.0f);
-    ASSERT_TRUE(m->add_entity(2, EntityDesc{kHalf, {}}, box_at({400, 0, 0})));
-    step(*m, 1);
+    auto m = entity_behind_the_wall();
     ClientDesc late;
     late.viewer = 1;
     late.lookahead_ticks = 3;

@@ -1,14 +1,14 @@
 #include "dsoc/visibility/occlusion_beams.hpp"
 #include "dsoc/visibility/test_worlds.hpp"
 
+#include "test_scene.hpp"
+
 #include <gtest/gtest.h>
 
 namespace dsoc::visibility {
 namespace {
 
-Aabb cube(glm::vec3 c, float h) {
-    return Aabb::from_center_half_extents(c, glm::vec3(h));
-}
+using testing::cube;
 
 TEST(OcclusionBeams, WallBeamHidesOnlyWhatIsBehindIt) {
     OccluderWorld world;

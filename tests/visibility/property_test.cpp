@@ -10,6 +10,8 @@
 #include "dsoc/visibility/reference_visibility.hpp"
 #include "dsoc/visibility/test_worlds.hpp"
 
+#include "test_scene.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -29,6 +31,19 @@ struct Tally {
     int beam_culled = 0;
     int either_culled = 0; ///< EitherOccludes(buffer, beams)
     int either_misses = 0;
+
+    Tally& operator+=(const Tally& t) {
+        configs += t.configs;
+        reference_visible += t.reference_visible;
+        reference_hidden += t.reference_hidden;
+        buffer_misses += t.buffer_misses;
+        beam_misses += t.beam_misses;
+        buffer_culled += t.buffer_culled;
+        beam_culled += t.beam_culled;
+        either_culled += t.either_culled;
+        either_misses += t.either_misses;
+        return *this;
+    }
 };
 
 bool inside_any(const OccluderWorld& world, glm::vec3 p) {
@@ -78,20 +93,8 @@ void run_world(const char* name, const TestWorld& tw, std::uint32_t seed, int ey
         buffer.build(eye, tw.world, bsp);
         beams.build(eye, tw.world, bsp);
         for (int b = 0; b < boxes; ++b) {
-            const float size_pick = unit(rng);
-            const float h = size_pick < 0.2f ? 0.5f
-                                             : (size_pick < 0.9f ? 4.0f + 40.0f * unit(rng)
-                                                                 : 64.0f + 128.0f * unit(rng));
-            glm::vec3 c = random_point();
-            if (b % 2 == 1) {
-                // Hugging an occluder: around one of its vertices.
-                const auto& near =
-                    tw.world.occluder(static_cast<OccluderId>(rng() % tw.world.size()));
-                c = near.vertices()[rng() % near.vertices().size()] +
-                    glm::vec3(unit(rng) - 0.5f, unit(rng) - 0.5f, unit(rng) - 0.5f) * 40.0f;
-            }
-            glm::vec3 half(h * (0.5f + unit(rng)), h * (0.5f + unit(rng)), h * (0.5f + unit(rng)));
-            Aabb box = Aabb::from_center_half_extents(c, half);
+            Aabb box = testing::random_test_box(rng, unit, random_point, tw.world, b,
+                                                {0.5f, 4.0f, 40.0f, 64.0f, 128.0f});
             if (b % 5 == 0) {
                 // Snap one face onto an axis plane through the eye (a cube-face seam).
                 const int axis = static_cast<int>(rng() % 3);
@@ -113,17 +116,13 @@ void run_world(const char* name, const TestWorld& tw, std::uint32_t seed, int ey
                 ++t.reference_visible;
                 if (zb == Visibility::occluded) {
                     ++t.buffer_misses;
-                    ADD_FAILURE() << name << ": z-pyramid culled a visible box; eye (" << eye.x
-                                  << ", " << eye.y << ", " << eye.z << ") box (" << box.min.x
-                                  << ", " << box.min.y << ", " << box.min.z << ")-(" << box.max.x
-                                  << ", " << box.max.y << ", " << box.max.z << ")";
+                    ADD_FAILURE() << name << ": z-pyramid culled a visible box; eye "
+                                  << testing::text(eye) << " box " << testing::text(box);
                 }
                 if (bm == Visibility::occluded) {
                     ++t.beam_misses;
-                    ADD_FAILURE() << name << ": beams culled a visible box; eye (" << eye.x << ", "
-                                  << eye.y << ", " << eye.z << ") box (" << box.min.x << ", "
-                                  << box.min.y << ", " << box.min.z << ")-(" << box.max.x << ", "
-                                  << box.max.y << ", " << box.max.z << ")";
+                    ADD_FAILURE() << name << ": beams culled a visible box; eye "
+                                  << testing::text(eye) << " box " << testing::text(box);
                 }
             } else {
                 ++t.reference_hidden;
@@ -136,14 +135,7 @@ void run_world(const char* name, const TestWorld& tw, std::uint32_t seed, int ey
                 100.0 * t.buffer_culled / std::max(1, t.reference_hidden), t.beam_culled,
                 100.0 * t.beam_culled / std::max(1, t.reference_hidden), t.buffer_misses,
                 t.beam_misses);
-    total.configs += t.configs;
-    total.reference_visible += t.reference_visible;
-    total.reference_hidden += t.reference_hidden;
-    total.buffer_misses += t.buffer_misses;
-    total.beam_misses += t.beam_misses;
-    total.buffer_culled += t.buffer_culled;
-    total.beam_culled += t.beam_culled;
-    total.either_culled += t.either_culled;
+    total += t;
 }
 
 TEST(VisibilityProperty, BackendsNeverCullWhatTheReferenceSees) {
@@ -254,11 +246,7 @@ void run_region_world(const char* name, const TestWorld& tw, std::uint32_t seed,
                 "culls %5d (%.1f%%); misses %d\n",
                 name, t.configs, t.reference_hidden, t.buffer_culled,
                 100.0 * t.buffer_culled / std::max(1, t.reference_hidden), t.buffer_misses);
-    total.configs += t.configs;
-    total.reference_hidden += t.reference_hidden;
-    total.reference_visible += t.reference_visible;
-    total.buffer_culled += t.buffer_culled;
-    total.buffer_misses += t.buffer_misses;
+    total += t;
 }
 
 TEST(VisibilityProperty, RegionBufferCoversEveryEyeOfTheRegion) {

@@ -6,6 +6,8 @@
 #include "dsoc/visibility/region_occlusion_buffer.hpp"
 #include "dsoc/visibility/test_worlds.hpp"
 
+#include "test_scene.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -17,21 +19,9 @@
 namespace dsoc::visibility {
 namespace {
 
-struct Scene {
-    OccluderWorld world;
-    BspTree bsp;
-    void add_box(glm::vec3 lo, glm::vec3 hi) {
-        (void)world.add(ConvexPolyhedron::from_aabb({lo, hi}));
-    }
-    void build() { bsp.build(world); }
-};
-
-Aabb cube(glm::vec3 c, float h) {
-    return Aabb::from_center_half_extents(c, glm::vec3(h));
-}
-Aabb region_at(glm::vec3 c, glm::vec3 h) {
-    return Aabb::from_center_half_extents(c, h);
-}
+using testing::cube;
+using testing::region_at;
+using testing::Scene;
 
 TEST(RegionOcclusionBuffer, WallBetweenRegionAndBoxHidesIt) {
     Scene s;
@@ -141,24 +131,7 @@ TEST(RegionOcclusionBuffer, PyramidLevelsHoldTheMaxOfTheirFourChildren) {
     RegionOcclusionBuffer buffer(config);
     buffer.build(region_at({700, 800, 60}, {48, 48, 40}), tw.world, bsp);
     ASSERT_GT(buffer.stats().texels_written, 0);
-    int finite = 0;
-    for (int face = 0; face < 6; ++face) {
-        for (int level = 1; level < buffer.levels(); ++level) {
-            const int size = config.face_resolution >> level;
-            for (int y = 0; y < size; ++y) {
-                for (int x = 0; x < size; ++x) {
-                    const float expected =
-                        std::max(std::max(buffer.depth(face, level - 1, 2 * x, 2 * y),
-                                          buffer.depth(face, level - 1, 2 * x + 1, 2 * y)),
-                                 std::max(buffer.depth(face, level - 1, 2 * x, 2 * y + 1),
-                                          buffer.depth(face, level - 1, 2 * x + 1, 2 * y + 1)));
-                    EXPECT_EQ(buffer.depth(face, level, x, y), expected);
-                    finite += expected < 1e30f ? 1 : 0;
-                }
-            }
-        }
-    }
-    EXPECT_GT(finite, 0);
+    EXPECT_GT(testing::expect_max_pyramid(buffer, config.face_resolution), 0);
     EXPECT_EQ(buffer.levels(), 6);
 }
 
@@ -316,6 +289,18 @@ struct Tally {
     int parallax = 0;       ///< seen from some eye of the region but not from its centre
     int point_culled = 0;   ///< h = 0 only: the point buffer's culls
     int region0_culled = 0; ///< h = 0 only: the region buffer's culls
+
+    Tally& operator+=(const Tally& t) {
+        configs += t.configs;
+        reference_visible += t.reference_visible;
+        reference_hidden += t.reference_hidden;
+        culled += t.culled;
+        misses += t.misses;
+        parallax += t.parallax;
+        point_culled += t.point_culled;
+        region0_culled += t.region0_culled;
+        return *this;
+    }
 };
 
 struct PropertyCase {
@@ -372,20 +357,8 @@ void run_property(const PropertyCase& pc, const RegionOcclusionBufferConfig& con
             eyes.assign(1, centre);
         }
         for (int b = 0; b < pc.boxes; ++b) {
-            const float size_pick = unit(rng);
-            const float h = size_pick < 0.2f ? 1.0f
-                                             : (size_pick < 0.9f ? 4.0f + 36.0f * unit(rng)
-                                                                 : 64.0f + 96.0f * unit(rng));
-            glm::vec3 c = random_point();
-            if (b % 2 == 1) {
-                const auto& near =
-                    tw.world.occluder(static_cast<OccluderId>(rng() % tw.world.size()));
-                c = near.vertices()[rng() % near.vertices().size()] +
-                    glm::vec3(unit(rng) - 0.5f, unit(rng) - 0.5f, unit(rng) - 0.5f) * 40.0f;
-            }
-            const glm::vec3 bh(h * (0.5f + unit(rng)), h * (0.5f + unit(rng)),
-                               h * (0.5f + unit(rng)));
-            Aabb box = Aabb::from_center_half_extents(c, bh);
+            Aabb box = testing::random_test_box(rng, unit, random_point, tw.world, b,
+                                                {1.0f, 4.0f, 36.0f, 64.0f, 96.0f});
             if (b % 5 == 0) {
                 // Snap a face onto a plane of the region (slab boundaries).
                 const int axis = static_cast<int>(rng() % 3);
@@ -418,13 +391,9 @@ void run_property(const PropertyCase& pc, const RegionOcclusionBufferConfig& con
                 if (seen) {
                     if (answer == Visibility::occluded) {
                         ++t.misses;
-                        ADD_FAILURE()
-                            << pc.name << ": culled a box seen from the region; region ("
-                            << region.min.x << ", " << region.min.y << ", " << region.min.z << ")-("
-                            << region.max.x << ", " << region.max.y << ", " << region.max.z
-                            << ") eye (" << eye.x << ", " << eye.y << ", " << eye.z << ") box ("
-                            << box.min.x << ", " << box.min.y << ", " << box.min.z << ")-("
-                            << box.max.x << ", " << box.max.y << ", " << box.max.z << ")";
+                        ADD_FAILURE() << pc.name << ": culled a box seen from the region; region "
+                                      << testing::text(region) << " eye " << testing::text(eye)
+                                      << " box " << testing::text(box);
                     }
                     break;
                 }
@@ -446,14 +415,7 @@ void run_property(const PropertyCase& pc, const RegionOcclusionBufferConfig& con
                 "culled %5d (%.1f%% of hidden), misses %d; hidden from the centre only %d\n",
                 pc.name, t.configs, eyes.size(), t.reference_hidden, t.culled,
                 100.0 * t.culled / std::max(1, t.reference_hidden), t.misses, t.parallax);
-    total.configs += t.configs;
-    total.reference_visible += t.reference_visible;
-    total.reference_hidden += t.reference_hidden;
-    total.culled += t.culled;
-    total.misses += t.misses;
-    total.parallax += t.parallax;
-    total.point_culled += t.point_culled;
-    total.region0_culled += t.region0_culled;
+    total += t;
 }
 
 TEST(RegionOcclusionBufferProperty, NeverCullsWhatAnyEyeOfTheRegionSees) {

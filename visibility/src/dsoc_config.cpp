@@ -1,11 +1,9 @@
 #include "dsoc/visibility/dsoc_config.hpp"
 
 #include <algorithm>
-#include <array>
 #include <charconv>
 #include <cmath>
-#include <utility>
-#include <variant>
+#include <type_traits>
 
 namespace dsoc::visibility {
 
@@ -108,56 +106,26 @@ bool set_field_flag(bool& out, std::string_view text) {
 } // namespace
 
 std::string set_field(DSOCConfig& c, std::string_view key, std::string_view value) {
-    using Field = std::variant<int DSOCConfig::*, float DSOCConfig::*, bool DSOCConfig::*>;
-    static constexpr std::array<std::pair<std::string_view, Field>, 17> kFields{{
-        {"tick_rate", &DSOCConfig::tick_rate},
-        {"default_tbv_duration", &DSOCConfig::default_tbv_duration},
-        {"tbv_expansion_factor", &DSOCConfig::tbv_expansion_factor},
-        {"max_tbvs_per_object", &DSOCConfig::max_tbvs_per_object},
-        {"max_tbvs_per_client", &DSOCConfig::max_tbvs_per_client},
-        {"velocity_threshold", &DSOCConfig::velocity_threshold},
-        {"min_adaptive_duration", &DSOCConfig::min_adaptive_duration},
-        {"max_adaptive_duration", &DSOCConfig::max_adaptive_duration},
-        {"fuzzy_confidence", &DSOCConfig::fuzzy_confidence},
-        {"tbv_merge_distance", &DSOCConfig::tbv_merge_distance},
-        {"region_reuse_margin", &DSOCConfig::region_reuse_margin},
-        {"lod_near_distance", &DSOCConfig::lod_near_distance},
-        {"lod_far_distance", &DSOCConfig::lod_far_distance},
-        {"tbvs_enabled", &DSOCConfig::tbvs_enabled},
-        {"reuse_buffers", &DSOCConfig::reuse_buffers},
-        {"full_test_interval", &DSOCConfig::full_test_interval},
-        {"entity_cluster_size", &DSOCConfig::entity_cluster_size},
-    }};
-    const std::string bad = "bad value '" + std::string(value) + "' for " + std::string(key);
-    if (key == "strategy") {
-        return parse_tbv_strategy(std::string(value), c.strategy)
-                   ? ""
-                   : bad + " (explicit, adaptive or fuzzy)";
-    }
-    if (key == "blocker_hints") {
-        return set_field_flag(c.blocker_hints, value) ? "" : bad + " (true or false)";
-    }
-    if (key == "exact_region_tests") {
-        return set_field_flag(c.exact_region_tests, value) ? "" : bad + " (true or false)";
-    }
-    if (key == "validate_state") {
-        return set_field_flag(c.validate_state, value) ? "" : bad + " (true or false)";
-    }
-    for (const auto& [name, field] : kFields) {
+    std::string why = "unknown DSOCConfig field '" + std::string(key) + "'";
+    visit_fields(c, [&](std::string_view name, auto& member) {
         if (name != key) {
-            continue;
+            return;
         }
-        if (const auto* i = std::get_if<int DSOCConfig::*>(&field)) {
-            return parse_number(value, c.**i) ? "" : bad;
+        using T = std::remove_reference_t<decltype(member)>;
+        bool ok = false;
+        const char* expected = "";
+        if constexpr (std::is_same_v<T, TbvStrategy>) {
+            ok = parse_tbv_strategy(std::string(value), member);
+            expected = " (explicit, adaptive or fuzzy)";
+        } else if constexpr (std::is_same_v<T, bool>) {
+            ok = set_field_flag(member, value);
+            expected = " (true or false)";
+        } else {
+            ok = parse_number(value, member);
         }
-        if (const auto* f = std::get_if<float DSOCConfig::*>(&field)) {
-            return parse_number(value, c.**f) ? "" : bad;
-        }
-        return set_field_flag(c.*std::get<bool DSOCConfig::*>(field), value)
-                   ? ""
-                   : bad + " (true or false)";
-    }
-    return "unknown DSOCConfig field '" + std::string(key) + "'";
+        why = ok ? "" : "bad value '" + std::string(value) + "' for " + std::string(key) + expected;
+    });
+    return why;
 }
 
 } // namespace dsoc::visibility

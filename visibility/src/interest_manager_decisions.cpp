@@ -1,7 +1,6 @@
 // InterestManager: a client's decisions after its update. The replication set (its
-// visible entities), each one's level of detail (update interval and position
-// precision by distance from the eye region), and the enter/leave lists against the
-// previous set.
+// visible entities), each one's level of detail (update interval by distance from the
+// eye region), and the enter/leave lists against the previous set.
 
 #include "interest_manager_state.hpp"
 
@@ -20,19 +19,17 @@ float conservative_distance(const Aabb& region, const Aabb& box) {
     return std::sqrt(glm::dot(gap, gap));
 }
 
-/// The level of detail for an entity `distance` from the eye region: every tick and
-/// fine positions near (lod_near_distance), every other tick between, every fourth
-/// tick and coarse positions beyond lod_far_distance.
+/// The level of detail for an entity `distance` from the eye region: every tick near
+/// (lod_near_distance), every other tick between, every fourth tick beyond
+/// lod_far_distance. How coarse each tier's positions are is the user's to choose (the
+/// server's position_quantum_near/mid/far).
 void set_level_of_detail(Replicated& r, float distance, const DSOCConfig& config) {
     if (distance < config.lod_near_distance) {
         r.update_interval = 1;
-        r.position_precision = 0.125f;
     } else if (distance < config.lod_far_distance) {
         r.update_interval = 2;
-        r.position_precision = 0.5f;
     } else {
         r.update_interval = 4;
-        r.position_precision = 1.0f;
     }
 }
 

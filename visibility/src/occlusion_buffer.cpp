@@ -14,8 +14,6 @@
 
 #include "dsoc/visibility/occlusion_buffer.hpp"
 
-#include "z_pyramid_query.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -32,18 +30,6 @@ constexpr float kRectMargin = 1.0e-5f;
 /// strictly outside them (shrinking the occluder is always conservative).
 constexpr float kEyePlaneMargin = 1.0e-3f;
 constexpr float kInvSqrt3 = 0.57735026f;
-
-/// Face f looks along sign * axis; R and U are the other two axes (positive).
-struct FaceAxes {
-    int axis, right, up;
-    float sign;
-};
-constexpr FaceAxes kFaces[6] = {{0, 1, 2, 1.0f},  {0, 1, 2, -1.0f}, {1, 0, 2, 1.0f},
-                                {1, 0, 2, -1.0f}, {2, 0, 1, 1.0f},  {2, 0, 1, -1.0f}};
-
-bool is_power_of_two(int v) {
-    return v > 0 && (v & (v - 1)) == 0;
-}
 
 /// d - n.p in double: map coordinates reach thousands of units while the eye may be
 /// a unit from the plane, and a float difference would lose the margins below.
@@ -67,16 +53,8 @@ bool is_finite(const Aabb& b) {
 
 std::vector<std::string> validate(const OcclusionBufferConfig& c) {
     std::vector<std::string> problems;
-    if (!is_power_of_two(c.face_resolution) || c.face_resolution < 8 || c.face_resolution > 1024) {
-        problems.push_back("face_resolution must be a power of two in 8..1024, is " +
-                           std::to_string(c.face_resolution));
-    }
-    if (c.max_occluders < 0) {
-        problems.push_back("max_occluders must be >= 0, is " + std::to_string(c.max_occluders));
-    }
-    if (!(c.max_occluder_distance > 0.0f)) {
-        problems.push_back("max_occluder_distance must be > 0");
-    }
+    CubeZPyramid::check_settings(c.face_resolution, c.max_occluders, c.max_occluder_distance,
+                                 problems);
     if (!(c.near_distance > 0.0f) || !std::isfinite(c.near_distance)) {
         problems.push_back("near_distance must be finite and > 0");
     }
@@ -89,22 +67,14 @@ OcclusionBuffer::OcclusionBuffer(const OcclusionBufferConfig& config) : config_(
         // server validates at start-up and refuses to run with them.
         config_ = OcclusionBufferConfig{};
     }
-    resolution_ = config_.face_resolution;
-    levels_ = 0;
-    std::size_t offset = 0;
-    for (int size = resolution_; size >= 1; size /= 2) {
-        level_offset_.push_back(offset);
-        offset += static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
-        ++levels_;
-    }
-    face_stride_ = offset;
-    depth_.assign(6 * face_stride_, kInf);
-    corner_u_.resize(static_cast<std::size_t>(resolution_) + 1);
-    for (int k = 0; k <= resolution_; ++k) {
+    pyramid_ = CubeZPyramid(config_.face_resolution);
+    const int resolution = pyramid_.resolution();
+    corner_u_.resize(static_cast<std::size_t>(resolution) + 1);
+    for (int k = 0; k <= resolution; ++k) {
         corner_u_[static_cast<std::size_t>(k)] =
-            -1.0f + 2.0f * static_cast<float>(k) / static_cast<float>(resolution_);
+            -1.0f + 2.0f * static_cast<float>(k) / static_cast<float>(resolution);
     }
-    const std::size_t row = static_cast<std::size_t>(resolution_) + 1;
+    const std::size_t row = static_cast<std::size_t>(resolution) + 1;
     row_prev_.resize(row);
     row_cur_.resize(row);
     w_front_.resize(row);
@@ -131,14 +101,11 @@ void OcclusionBuffer::begin_region(const Aabb& region) {
     }
     stats_ = {};
     any_written_ = false;
-    for (int f = 0; f < 6; ++f) {
-        float* level0 = level_data(f, 0);
-        std::fill(level0, level0 + static_cast<std::size_t>(resolution_) * resolution_, kInf);
-    }
+    pyramid_.clear_level0();
 }
 
 bool OcclusionBuffer::face_rect(int face, const Aabb& rel, float min_z, Rect& rect) const {
-    const FaceAxes& fa = kFaces[face];
+    const CubeFace& fa = kCubeFaces[face];
     float z_lo = fa.sign > 0.0f ? rel.min[fa.axis] : -rel.max[fa.axis];
     const float z_hi = fa.sign > 0.0f ? rel.max[fa.axis] : -rel.min[fa.axis];
     const float xl = rel.min[fa.right], xh = rel.max[fa.right];
@@ -161,8 +128,8 @@ bool OcclusionBuffer::face_rect(int face, const Aabb& rel, float min_z, Rect& re
     if (u1 < -1.0f || u0 > 1.0f || v1 < -1.0f || v0 > 1.0f) {
         return false;
     }
-    const float half = 0.5f * static_cast<float>(resolution_);
-    const int last = resolution_ - 1;
+    const float half = 0.5f * static_cast<float>(pyramid_.resolution());
+    const int last = pyramid_.resolution() - 1;
     auto pixel = [&](float u) {
         const float p = std::clamp((u + 1.0f) * half, 0.0f, static_cast<float>(last));
         return static_cast<int>(p);
@@ -252,7 +219,8 @@ bool OcclusionBuffer::add_occluder(std::span<const Plane> planes, const Aabb& bo
     const std::int64_t before = stats_.texels_written;
     for (int face = 0; face < 6; ++face) {
         Rect rect;
-        if (face_rect(face, rel, min_z, rect) && !level0_hides(face, rect, rect.z_near)) {
+        if (face_rect(face, rel, min_z, rect) &&
+            !pyramid_.level0_hides(face, rect, rect.z_near, false)) {
             rasterize_face(face, rect, planes, num, count);
         }
     }
@@ -262,23 +230,9 @@ bool OcclusionBuffer::add_occluder(std::span<const Plane> planes, const Aabb& bo
     return wrote;
 }
 
-bool OcclusionBuffer::level0_hides(int face, const Rect& r, float z) const {
-    // An occluder entirely behind what is already written cannot lower any texel.
-    const float* level0 = level_data(face, 0);
-    for (int y = r.y0; y <= r.y1; ++y) {
-        const float* row = level0 + static_cast<std::size_t>(y) * resolution_;
-        for (int x = r.x0; x <= r.x1; ++x) {
-            if (!(z > row[x])) {
-                return false;
-            }
-        }
-    }
-    return true;
-}
-
 void OcclusionBuffer::rasterize_face(int face, const Rect& rect, std::span<const Plane> planes,
                                      const float* num, std::size_t plane_count) {
-    const FaceAxes& fa = kFaces[face];
+    const CubeFace& fa = kCubeFaces[face];
     // Per eye j: w_ij(u, v) = (n.F + n.R u + n.U v) / num_ij, as (a, b, c) triples,
     // front planes (num < 0) first, then back planes.
     float* coef = coef_.data();
@@ -307,7 +261,7 @@ void OcclusionBuffer::rasterize_face(int face, const Rect& rect, std::span<const
     float* wb = w_back_.data();
     float* prev = row_prev_.data();
     float* cur = row_cur_.data();
-    float* level0 = level_data(face, 0);
+    float* level0 = pyramid_.level_data(face, 0);
     std::int64_t written = 0;
     for (int cy = rect.y0; cy <= rect.y1 + 1; ++cy) {
         const float v = corner_u_[static_cast<std::size_t>(cy)];
@@ -356,7 +310,8 @@ void OcclusionBuffer::rasterize_face(int face, const Rect& rect, std::span<const
             }
         }
         if (cy > rect.y0) {
-            float* row = level0 + static_cast<std::size_t>(cy - 1) * resolution_ + rect.x0;
+            float* row =
+                level0 + static_cast<std::size_t>(cy - 1) * pyramid_.resolution() + rect.x0;
             for (int k = 0; k + 1 < cols; ++k) {
                 const float d =
                     std::max(std::max(prev[k], prev[k + 1]), std::max(cur[k], cur[k + 1]));
@@ -370,22 +325,7 @@ void OcclusionBuffer::rasterize_face(int face, const Rect& rect, std::span<const
 }
 
 void OcclusionBuffer::finish() {
-    for (int f = 0; f < 6; ++f) {
-        for (int level = 1; level < levels_; ++level) {
-            const int size = resolution_ >> level;
-            const float* src = level_data(f, level - 1);
-            float* dst = level_data(f, level);
-            const int src_size = size * 2;
-            for (int y = 0; y < size; ++y) {
-                const float* r0 = src + static_cast<std::size_t>(2 * y) * src_size;
-                const float* r1 = r0 + src_size;
-                for (int x = 0; x < size; ++x) {
-                    dst[static_cast<std::size_t>(y) * size + x] = std::max(
-                        std::max(r0[2 * x], r0[2 * x + 1]), std::max(r1[2 * x], r1[2 * x + 1]));
-                }
-            }
-        }
-    }
+    pyramid_.build_levels();
 }
 
 void OcclusionBuffer::build(glm::vec3 eye, const OccluderWorld& world, const BspTree& bsp) {
@@ -411,16 +351,6 @@ void OcclusionBuffer::build_region(const Aabb& region, const OccluderWorld& worl
     finish();
 }
 
-float OcclusionBuffer::depth(int face, int level, int x, int y) const {
-    const int size = resolution_ >> level;
-    return level_data(face, level)[static_cast<std::size_t>(y) * size + x];
-}
-
-bool OcclusionBuffer::rect_occluded(int face, const Rect& r, float z) const {
-    return detail::rect_occluded([&](int level) { return level_data(face, level); }, resolution_,
-                                 levels_, detail::TexelRect{r.x0, r.y0, r.x1, r.y1}, z);
-}
-
 Visibility OcclusionBuffer::test_box(const Aabb& box) const {
     if (!any_written_ || box.is_empty() || !is_finite(box)) {
         return Visibility::visible;
@@ -441,7 +371,7 @@ Visibility OcclusionBuffer::test_box(const Aabb& box) const {
             continue;
         }
         ++faces_touched;
-        if (!rect_occluded(face, rect, rect.z_near * kDepthDown)) {
+        if (!pyramid_.rect_occluded(face, rect, rect.z_near * kDepthDown)) {
             return Visibility::visible;
         }
     }

@@ -29,8 +29,6 @@
 
 #include "dsoc/visibility/region_occlusion_buffer.hpp"
 
-#include "z_pyramid_query.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -59,16 +57,12 @@ constexpr float kTinyW = 1.0e-12f;
 /// Occluders and boxes within this distance of the region are not used / visible.
 constexpr float kRegionMargin = 1.0f;
 
-/// Face f looks along sign * axis; right and up are the other two axes.
-struct FaceAxes {
-    int axis, right, up;
-    float sign;
-};
-constexpr FaceAxes kFaces[6] = {{0, 1, 2, 1.0f},  {0, 1, 2, -1.0f}, {1, 0, 2, 1.0f},
-                                {1, 0, 2, -1.0f}, {2, 0, 1, 1.0f},  {2, 0, 1, -1.0f}};
-
-bool is_power_of_two(int v) {
-    return v > 0 && (v & (v - 1)) == 0;
+/// The extent [lo, hi] of the box [rel_min, rel_max] (relative to the centre) along
+/// the direction face `fa` looks in.
+void oriented_extent(const CubeFace& fa, glm::vec3 rel_min, glm::vec3 rel_max, float& lo,
+                     float& hi) {
+    lo = fa.sign > 0.0f ? rel_min[fa.axis] : -rel_max[fa.axis];
+    hi = fa.sign > 0.0f ? rel_max[fa.axis] : -rel_min[fa.axis];
 }
 
 /// Squared distance between two non-empty boxes (0 when they overlap).
@@ -101,16 +95,8 @@ void ratio_range(float n_lo, float n_hi, float d_lo, float d_hi, float& lo, floa
 
 std::vector<std::string> validate(const RegionOcclusionBufferConfig& c) {
     std::vector<std::string> problems;
-    if (!is_power_of_two(c.face_resolution) || c.face_resolution < 8 || c.face_resolution > 1024) {
-        problems.push_back("face_resolution must be a power of two in 8..1024, is " +
-                           std::to_string(c.face_resolution));
-    }
-    if (c.max_occluders < 0) {
-        problems.push_back("max_occluders must be >= 0, is " + std::to_string(c.max_occluders));
-    }
-    if (!(c.max_occluder_distance > 0.0f)) {
-        problems.push_back("max_occluder_distance must be > 0");
-    }
+    CubeZPyramid::check_settings(c.face_resolution, c.max_occluders, c.max_occluder_distance,
+                                 problems);
     if (!(c.projection_distance > 0.0f) || !std::isfinite(c.projection_distance)) {
         problems.push_back("projection_distance must be finite and > 0");
     }
@@ -124,20 +110,13 @@ RegionOcclusionBuffer::RegionOcclusionBuffer(const RegionOcclusionBufferConfig& 
         // server validates at start-up and refuses to run with them.
         config_ = RegionOcclusionBufferConfig{};
     }
-    resolution_ = config_.face_resolution;
-    std::size_t offset = 0;
-    for (int size = resolution_; size >= 1; size /= 2) {
-        level_offset_.push_back(offset);
-        offset += static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
-        ++levels_;
-    }
-    face_stride_ = offset;
-    depth_.assign(6 * face_stride_, kInf);
-    const std::size_t corners = static_cast<std::size_t>(resolution_) + 1;
+    pyramid_ = CubeZPyramid(config_.face_resolution);
+    const int resolution = pyramid_.resolution();
+    const std::size_t corners = static_cast<std::size_t>(resolution) + 1;
     grid_s_.resize(corners);
-    for (int k = 0; k <= resolution_; ++k) {
+    for (int k = 0; k <= resolution; ++k) {
         grid_s_[static_cast<std::size_t>(k)] =
-            -1.0f + 2.0f * static_cast<float>(k) / static_cast<float>(resolution_);
+            -1.0f + 2.0f * static_cast<float>(k) / static_cast<float>(resolution);
     }
     wf_.resize(corners);
     wb_.resize(corners);
@@ -155,10 +134,7 @@ void RegionOcclusionBuffer::begin(const Aabb& eye_region) {
     stats_ = {};
     any_written_ = false;
     valid_region_ = !eye_region.is_empty() && finite(eye_region.min) && finite(eye_region.max);
-    for (int f = 0; f < 6; ++f) {
-        float* level0 = level_data(f, 0);
-        std::fill(level0, level0 + static_cast<std::size_t>(resolution_) * resolution_, kInf);
-    }
+    pyramid_.clear_level0();
     corner_count_ = 0;
     if (!valid_region_) {
         return;
@@ -188,8 +164,8 @@ bool RegionOcclusionBuffer::texel_range(float lo, float hi, int& first, int& las
     if (!(lo <= hi) || hi < -1.0f || lo > 1.0f) {
         return false;
     }
-    const float half = 0.5f * static_cast<float>(resolution_);
-    const float top = static_cast<float>(resolution_ - 1);
+    const float half = 0.5f * static_cast<float>(pyramid_.resolution());
+    const float top = static_cast<float>(pyramid_.resolution() - 1);
     first = static_cast<int>(std::clamp((lo + 1.0f) * half, 0.0f, top));
     last = static_cast<int>(std::clamp((hi + 1.0f) * half, 0.0f, top));
     return true;
@@ -236,11 +212,11 @@ bool RegionOcclusionBuffer::add_occluder(std::span<const Plane> planes, const Aa
         min_forward_distance(std::sqrt(box_distance_squared(bounds, region_)));
     const std::int64_t before = stats_.texels_written;
     for (int face = 0; face < 6; ++face) {
-        const FaceAxes& fa = kFaces[face];
-        const bool positive = fa.sign > 0.0f;
+        const CubeFace& fa = kCubeFaces[face];
         // Oriented extent of the occluder along the face direction.
-        const float oa0 = positive ? rel_min[fa.axis] : -rel_max[fa.axis];
-        const float oa1 = positive ? rel_max[fa.axis] : -rel_min[fa.axis];
+        float oa0 = 0.0f;
+        float oa1 = 0.0f;
+        oriented_extent(fa, rel_min, rel_max, oa0, oa1);
         const float ha = half_[fa.axis];
         if (!(oa1 > ha)) {
             continue; // behind the most advanced corner: no ray from it reaches O here
@@ -283,7 +259,7 @@ bool RegionOcclusionBuffer::add_occluder(std::span<const Plane> planes, const Aa
         const float depth_far = oa1 * (1.0f + kDepthUpRel) + kDepthUpAbs;
         const float depth_near = std::min(oa1, d) * (1.0f + kDepthUpRel) + kDepthUpAbs;
         // Every depth this occluder writes is at least its nearest extent.
-        if (level0_hides(face, rect, std::max(oa0, ha))) {
+        if (pyramid_.level0_hides(face, rect, std::max(oa0, ha), true)) {
             continue;
         }
         rasterize_face(face, rect, planes, offset, depth_near, depth_far);
@@ -294,25 +270,11 @@ bool RegionOcclusionBuffer::add_occluder(std::span<const Plane> planes, const Aa
     return wrote;
 }
 
-bool RegionOcclusionBuffer::level0_hides(int face, const Rect& r, float z) const {
-    // Nothing this occluder writes (depth >= z) can lower a texel already <= z.
-    const float* level0 = level_data(face, 0);
-    for (int y = r.y0; y <= r.y1; ++y) {
-        const float* row = level0 + static_cast<std::size_t>(y) * resolution_;
-        for (int x = r.x0; x <= r.x1; ++x) {
-            if (!(z >= row[x])) {
-                return false;
-            }
-        }
-    }
-    return true;
-}
-
 void RegionOcclusionBuffer::rasterize_face(int face, const Rect& rect,
                                            std::span<const Plane> planes,
                                            const double* plane_offset, float depth_near,
                                            float depth_far) {
-    const FaceAxes& fa = kFaces[face];
+    const CubeFace& fa = kCubeFaces[face];
     const double d = static_cast<double>(distance_);
     // w = b / a = c0 + ct * t + cs * s per (corner, plane), split into planes the
     // corner is outside of (front: entry) and inside of (back: exit).
@@ -359,7 +321,7 @@ void RegionOcclusionBuffer::rasterize_face(int face, const Rect& rect,
     std::uint8_t* near_cur = near_cur_.data();
     std::uint8_t* far_prev = far_prev_.data();
     std::uint8_t* far_cur = far_cur_.data();
-    float* level0 = level_data(face, 0);
+    float* level0 = pyramid_.level_data(face, 0);
     std::int64_t written = 0;
     std::int64_t evaluated = 0;
     // Entry points of rays from eyes that lie on an occluder plane are the eyes
@@ -419,7 +381,8 @@ void RegionOcclusionBuffer::rasterize_face(int face, const Rect& rect,
             }
         }
         if (cy > rect.y0) {
-            float* row = level0 + static_cast<std::size_t>(cy - 1) * resolution_ + rect.x0;
+            float* row =
+                level0 + static_cast<std::size_t>(cy - 1) * pyramid_.resolution() + rect.x0;
             for (int x = 0; x + 1 < cols; ++x) {
                 const bool near =
                     (near_prev[x] & near_prev[x + 1] & near_cur[x] & near_cur[x + 1]) != 0;
@@ -447,22 +410,7 @@ void RegionOcclusionBuffer::rasterize_face(int face, const Rect& rect,
 }
 
 void RegionOcclusionBuffer::finish() {
-    for (int f = 0; f < 6; ++f) {
-        for (int level = 1; level < levels_; ++level) {
-            const int size = resolution_ >> level;
-            const float* src = level_data(f, level - 1);
-            float* dst = level_data(f, level);
-            const int src_size = size * 2;
-            for (int y = 0; y < size; ++y) {
-                const float* r0 = src + static_cast<std::size_t>(2 * y) * src_size;
-                const float* r1 = r0 + src_size;
-                for (int x = 0; x < size; ++x) {
-                    dst[static_cast<std::size_t>(y) * size + x] = std::max(
-                        std::max(r0[2 * x], r0[2 * x + 1]), std::max(r1[2 * x], r1[2 * x + 1]));
-                }
-            }
-        }
-    }
+    pyramid_.build_levels();
 }
 
 void RegionOcclusionBuffer::build(const Aabb& eye_region, const OccluderWorld& world,
@@ -494,16 +442,6 @@ float RegionOcclusionBuffer::min_forward_distance(float distance) const {
     return distance / std::sqrt(1.0f + 2.0f / (k * k)) * (1.0f - 1.0e-5f);
 }
 
-float RegionOcclusionBuffer::depth(int face, int level, int x, int y) const {
-    const int size = resolution_ >> level;
-    return level_data(face, level)[static_cast<std::size_t>(y) * size + x];
-}
-
-bool RegionOcclusionBuffer::rect_occluded(int face, const Rect& r, float z) const {
-    return detail::rect_occluded([&](int level) { return level_data(face, level); }, resolution_,
-                                 levels_, detail::TexelRect{r.x0, r.y0, r.x1, r.y1}, z);
-}
-
 Visibility RegionOcclusionBuffer::test_box(const Aabb& box) const {
     if (!any_written_ || box.is_empty() || !finite(box.min) || !finite(box.max)) {
         return Visibility::visible;
@@ -520,10 +458,10 @@ Visibility RegionOcclusionBuffer::test_box(const Aabb& box) const {
     const glm::vec3 rel_max = box.max - center_;
     int faces_touched = 0;
     for (int face = 0; face < 6; ++face) {
-        const FaceAxes& fa = kFaces[face];
-        const bool positive = fa.sign > 0.0f;
-        const float ba0 = positive ? rel_min[fa.axis] : -rel_max[fa.axis];
-        const float ba1 = positive ? rel_max[fa.axis] : -rel_min[fa.axis];
+        const CubeFace& fa = kCubeFaces[face];
+        float ba0 = 0.0f;
+        float ba1 = 0.0f;
+        oriented_extent(fa, rel_min, rel_max, ba0, ba1);
         const float ha = half_[fa.axis];
         // Forward component q_a - p_a of the pairs leaving by this face.
         const float fwd_lo = std::max(ba0 - ha, min_forward);
@@ -572,7 +510,7 @@ Visibility RegionOcclusionBuffer::test_box(const Aabb& box) const {
         // Nearest oriented axis coordinate of any q of such a pair.
         const float z = std::max(ba0, min_forward - ha);
         const float z_test = z - std::abs(z) * kDepthDownRel - kDepthDownAbs;
-        if (!rect_occluded(face, rect, z_test)) {
+        if (!pyramid_.rect_occluded(face, rect, z_test)) {
             return Visibility::visible;
         }
     }

@@ -1,6 +1,7 @@
 #include "dsoc/eval/policies.hpp"
 
 #include "dsoc/interest/culler_stages.hpp"
+#include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/interest/walking_interest.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
 
@@ -30,6 +31,7 @@ public:
     }
 };
 
+/// interest::DistancePolicy's rule (interest::within_radius()) over the eval's frames.
 class DistancePolicy final : public Policy {
 public:
     DistancePolicy(const WorldSim& world, float radius) : world_(&world), radius_(radius) {}
@@ -38,9 +40,8 @@ public:
                 std::vector<std::uint32_t>& out) override {
         out.clear();
         const glm::vec3 eye = world_->eye(frame, client);
-        const float r2 = radius_ * radius_;
         for (std::uint32_t id = 0; id < frame.entities.size(); ++id) {
-            if (id != client && visibility::distance_squared(frame.entities[id].box, eye) <= r2) {
+            if (id != client && interest::within_radius(frame.entities[id].box, eye, radius_)) {
                 out.push_back(id);
             }
         }
@@ -51,8 +52,8 @@ private:
     float radius_;
 };
 
-/// What the Quake 3 server does: an entity is sent when its box touches a leaf whose
-/// cluster is in the PVS of the viewer's eye cluster (areaportals left out).
+/// What the Quake 3 server does: interest::PvsPolicy's rule (interest::eye_pvs_rows(),
+/// maps::Pvs::may_see()) over the eval's frames, the viewer's own entity left out.
 class PvsPolicy final : public Policy {
 public:
     PvsPolicy(const WorldSim& world, std::shared_ptr<const maps::Pvs> pvs)
@@ -65,12 +66,8 @@ public:
         std::vector<std::int32_t> clusters;
         std::vector<std::int32_t> scratch;
         std::vector<std::uint8_t> rows;
-        const glm::vec3 eye = world_->eye(frame, client);
-        const bool known = pvs_ != nullptr && pvs_->has_visibility() &&
-                           pvs_->clusters_of(visibility::Aabb{eye, eye}, clusters);
-        if (known) {
-            pvs_->union_of_rows(clusters, rows);
-        }
+        const bool known =
+            interest::eye_pvs_rows(pvs_.get(), world_->eye(frame, client), clusters, rows);
         for (std::uint32_t id = 0; id < frame.entities.size(); ++id) {
             if (id != client && (!known || pvs_->may_see(rows, frame.entities[id].box, scratch))) {
                 out.push_back(id);

@@ -1,5 +1,7 @@
 #include "dsoc/eval/scenario.hpp"
 
+#include "dsoc/interest/interest_policy.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <cstdlib>
@@ -85,6 +87,10 @@ bool load_scenarios(const std::string& path, std::vector<Scenario>& out, std::st
         return false;
     }
     return true;
+}
+
+int Scenario::lookahead_ticks() const {
+    return interest::lookahead_ticks(rtt_ms + interpolation_ms, tick_rate);
 }
 
 std::string default_scenarios_path() {

@@ -30,9 +30,8 @@ interest::PolicySettings policy_settings(const LiveOptions& o) {
 }
 
 visibility::RegionCullerConfig culler_config(const std::string& culler) {
-    visibility::RegionCullerConfig c; // as interest::make_policy reads PolicySettings::culler
-    c.pyramid = culler != "shaft";
-    c.shaft = culler != "pyramid";
+    visibility::RegionCullerConfig c;
+    interest::set_culler_stages(culler, c); // as interest::make_policy reads it
     return c;
 }
 

@@ -68,6 +68,19 @@ public:
     [[nodiscard]] virtual std::size_t tbvs_alive() const { return 0; }
 };
 
+/// The distance policy's rule: `box` comes within `radius` of `eye` (its nearest point).
+[[nodiscard]] inline bool within_radius(const visibility::Aabb& box, glm::vec3 eye, float radius) {
+    return visibility::distance_squared(box, eye) <= radius * radius;
+}
+
+/// The pvs policy's rule for the eye: `rows` becomes the union of the PVS rows of the
+/// clusters `eye` is in (`clusters` is scratch), and an entity is sent when its box
+/// touches one of them (maps::Pvs::may_see). False when that says nothing and
+/// everything is sent: no PVS, a map without vis data, or an eye in solid.
+[[nodiscard]] bool eye_pvs_rows(const maps::Pvs* pvs, glm::vec3 eye,
+                                std::vector<std::int32_t>& clusters,
+                                std::vector<std::uint8_t>& rows);
+
 /// Every entity, always.
 class BroadcastPolicy final : public InterestPolicy {
 public:
@@ -110,7 +123,8 @@ private:
 };
 
 /// What make_policy() reads: which policy, and the settings of the one it makes. The
-/// defaults are the server's; the server builds it from its own settings in one place
+/// defaults written here are the server's too (its ServerConfig takes them from here);
+/// the server builds it from its own settings in one place
 /// (dsoc::server::policy_settings()).
 struct PolicySettings {
     /// "dsoc" (occlusion culling with TBVs, latency-safe), "occlusion" (the same
@@ -137,6 +151,10 @@ struct PolicySettings {
     /// The client latency allowance. [Units: ticks] [Limit: >= 0]
     int lookahead_ticks = 5;
 };
+
+/// PolicySettings::culler ("shaft", "pyramid" or "both") as the exact stages of
+/// `config`.
+void set_culler_stages(std::string_view culler, visibility::RegionCullerConfig& config);
 
 /// The occlusion policy's presets over `config` when `policy` is "occlusion" (every
 /// entity's current box every tick: no TBVs, no culler reuse, no temporal coherence,

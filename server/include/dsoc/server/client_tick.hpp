@@ -52,6 +52,10 @@ struct CullingBudget {
     std::atomic<std::uint64_t> cheapest{0}; ///< jobs given the cheapest answer
 };
 
+/// Adds the viewer's own entity `entity_id` to `interest` (increasing ids) on tier 0: a
+/// client always gets its own entity every tick, finest, whatever the policy said.
+void add_own_entity(std::vector<interest::Interest>& interest, std::uint32_t entity_id);
+
 /// For every job: policy.select() (plus the viewer's own entity), then, when
 /// `build`, the snapshot of `tick` (and its frame when `frame` is set). policy.begin_tick(world,
 /// tick) must have run; `world` and the policy's shared state are only read meanwhile.

@@ -1,7 +1,12 @@
 #pragma once
-// Every server setting, with its default, unit and valid range.
+// Every server setting, with its default, unit and valid range. The defaults of what
+// the interest layer reads are written once, there: interest::PolicySettings,
+// interest::WorldSettings and visibility::DSOCConfig.
 
+#include "dsoc/interest/game_world.hpp"
+#include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/protocol/quantization.hpp"
+#include "dsoc/visibility/dsoc_config.hpp"
 
 #include <cstdint>
 #include <string>
@@ -24,9 +29,9 @@ struct ServerConfig {
     /// TCP port; 0 picks a free port (printed at start). [Limit: 0..65535]
     std::uint16_t port = 27960;
     /// Simulation and snapshot rate. [Units: Hz] [Limit: 1..240]
-    int tick_rate = 30;
+    int tick_rate = visibility::DSOCConfig{}.tick_rate;
     /// Wandering bots. [Limit: 0..100000]
-    int bots = 200;
+    int bots = interest::WorldSettings{}.bots;
     /// Map: a name looked up in OpenArena's .pk3 archives (and $DSOC_MAP_PATH), a path
     /// to a .bsp or text map, or "gen:city[:seed]" / "gen:rooms[:seed]".
     std::string map = "oa_dm4";
@@ -34,28 +39,28 @@ struct ServerConfig {
     /// "occlusion" (the same culler, every entity tested every tick, no TBVs),
     /// "pvs" (the map's PVS from the eye's cluster, as the Quake 3 server does),
     /// "distance" (radius) or "broadcast" (everything).
-    std::string policy = "dsoc";
+    std::string policy = interest::PolicySettings{}.policy;
     /// TBV strategy of the dsoc policy: "adaptive", "explicit" or "fuzzy" (not
     /// conservative: for evaluation only).
-    std::string tbv_strategy = "adaptive";
+    std::string tbv_strategy = visibility::to_string(visibility::DSOCConfig{}.strategy);
     /// Stages of the occlusion culler: "shaft" (exact single-occluder test, no
     /// per-region build), "pyramid" (extended-projection z-pyramid) or "both".
-    std::string culler = "shaft";
+    std::string culler = interest::PolicySettings{}.culler;
     /// Levels of portal tests in the culler's shaft stage (RegionCullerConfig::
     /// portal_depth): 2 sends about 15% fewer entities on oa_dm4 for about 4x the
     /// culling CPU, so the server defaults to 0 (capacity) where the library and the
     /// evaluation default to 2 (docs/operations.md). [Limit: 0..4]
-    int portal_depth = 0;
+    int portal_depth = interest::PolicySettings{}.portal_depth;
     /// dsoc and occlusion: reject first what the map's PVS (Quake 3 maps with vis data)
     /// proves hidden from every cluster of the client's eye region.
-    bool pvs_stage = true;
+    bool pvs_stage = interest::PolicySettings{}.pvs_stage;
     /// dsoc and occlusion: the map's baked cell visibility table first
     /// (docs/baked-visibility.md), loaded from the cache or baked at start (with
     /// progress on stderr; about a minute for oa_dm4 on two cores, once per map and
     /// cell size: `dsoc-bake MAP` does it ahead).
-    bool baked_stage = true;
+    bool baked_stage = interest::PolicySettings{}.baked_stage;
     /// Cell edge of the baked table. [Units: world units] [Limit: 4..1024]
-    float bake_cell_size = 32.0f;
+    float bake_cell_size = interest::PolicySettings{}.bake_cell_size;
     /// Where baked tables are kept; empty: $DSOC_BAKE_DIR, $XDG_CACHE_HOME/dsoc/bakes or
     /// ~/.cache/dsoc/bakes.
     std::string bake_dir;
@@ -65,7 +70,7 @@ struct ServerConfig {
     /// fine as bake_cell_size, the exact stages too when the map needed coarser cells to
     /// fit the table's memory budget (open and large maps, where a coarse table hides
     /// little). Without baked_stage the exact stages always run. See docs/operations.md.
-    std::string exact_stages = "auto";
+    std::string exact_stages = interest::PolicySettings{}.exact_stages;
     /// Fail-open: clients whose culling has not started this share of the tick period
     /// after the tick began get the policy's cheapest conservative answer (the baked
     /// table or the PVS alone, no exact stage) instead of making the tick late; counted
@@ -74,7 +79,7 @@ struct ServerConfig {
     /// The dsoc policy reuses a client's culler region while the client's reachable
     /// eye region stays inside it grown by this margin: larger margins re-test hidden
     /// entities' TBVs less often but cull less. [Units: world units] [Limit: 0..512]
-    float region_reuse_margin = 16.0f;
+    float region_reuse_margin = visibility::DSOCConfig{}.region_reuse_margin;
     /// Time the server must cover a client's own movement for: round trip plus the
     /// client's interpolation delay. Rounded up to whole ticks. [Units: ms] [Limit: 0..2000]
     int latency_allowance_ms = 150;
@@ -83,7 +88,7 @@ struct ServerConfig {
     /// Record every k-th tick in the trace. [Limit: >= 1]
     int trace_every = 1;
     /// Radius of the distance policy, from the viewer's eye. [Units: world units] [Limit: > 0]
-    float distance_radius = 1500.0f;
+    float distance_radius = interest::PolicySettings{}.distance_radius;
     /// Worker threads for the per-client work of a tick (interest evaluation and
     /// snapshot building); 0: one per core. The I/O thread is not one of them: it keeps
     /// serving sockets while they work. Results do not depend on it. [Limit: 0..256]
@@ -135,9 +140,9 @@ struct ServerConfig {
     std::string log_level = "info";
     /// Horizontal speed bound of every entity, enforced by the server. [Units: units/s] [Limit: >
     /// 0]
-    float max_speed = 320.0f;
+    float max_speed = interest::WorldSettings{}.max_speed;
     /// Seed for bots and spawn positions; the same seed gives the same bot motion.
-    std::uint64_t seed = 1;
+    std::uint64_t seed = interest::WorldSettings{}.seed;
     /// Stop by itself after this long; 0 runs until SIGINT/SIGTERM. [Units: s] [Limit: >= 0]
     double duration_s = 0.0;
     /// The [dsoc] table: visibility::DSOCConfig fields set by name (each at most once, in

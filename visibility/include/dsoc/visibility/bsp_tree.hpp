@@ -72,11 +72,8 @@ public:
         stack[top++] = root_;
         while (top > 0) {
             const BspNode& node = nodes_[static_cast<std::size_t>(stack[--top])];
-            if (!enter(node)) {
-                continue;
-            }
-            if (node.is_leaf()) {
-                if (!leaf(node.occluder)) {
+            if (const Step step = visit(node, enter, leaf); step != Step::descend) {
+                if (step == Step::stop) {
                     return;
                 }
                 continue;
@@ -110,11 +107,8 @@ public:
             std::pop_heap(heap.begin(), heap.end(), cmp);
             const BspNode& node = nodes_[static_cast<std::size_t>(heap.back().second)];
             heap.pop_back();
-            if (!enter(node)) {
-                continue;
-            }
-            if (node.is_leaf()) {
-                if (!leaf(node.occluder)) {
+            if (const Step step = visit(node, enter, leaf); step != Step::descend) {
+                if (step == Step::stop) {
                     return;
                 }
                 continue;
@@ -133,6 +127,20 @@ public:
                      std::vector<OccluderId>& out) const;
 
 private:
+    enum class Step : std::uint8_t { skip, stop, descend };
+    /// What both traversals do at a node: `enter` refuses it (skip), a leaf's callback
+    /// stops the walk (stop) or not (skip), or an inner node's children come next.
+    template <class Enter, class Leaf>
+    static Step visit(const BspNode& node, Enter& enter, Leaf& leaf) {
+        if (!enter(node)) {
+            return Step::skip;
+        }
+        if (node.is_leaf()) {
+            return leaf(node.occluder) ? Step::skip : Step::stop;
+        }
+        return Step::descend;
+    }
+
     std::vector<BspNode> nodes_;
     std::int32_t root_ = -1;
     int depth_ = 0;

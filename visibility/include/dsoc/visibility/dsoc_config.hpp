@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 namespace dsoc::visibility {
@@ -119,7 +120,38 @@ struct DSOCConfig {
 /// Every problem with the settings, each naming the field and why; empty when usable.
 [[nodiscard]] std::vector<std::string> validate(const DSOCConfig& config);
 
-/// Sets the field named `key` (as spelled in DSOCConfig; strategy takes "explicit",
+/// The one list of DSOCConfig's fields: calls `visit(name, member)` for every field of
+/// `config` (a DSOCConfig, const or not), in the order above, with its name as spelled
+/// in the struct. `member` is a reference to an int, float, bool or TbvStrategy.
+/// set_field() and the server's [dsoc] table (TOML reader, --print-config) read it; a
+/// test fails when a field is missing.
+template <class Config, class Visitor>
+requires std::is_same_v<std::remove_cvref_t<Config>, DSOCConfig>
+void visit_fields(Config&& config, Visitor&& visit) {
+    visit("tick_rate", config.tick_rate);
+    visit("strategy", config.strategy);
+    visit("default_tbv_duration", config.default_tbv_duration);
+    visit("tbv_expansion_factor", config.tbv_expansion_factor);
+    visit("max_tbvs_per_object", config.max_tbvs_per_object);
+    visit("max_tbvs_per_client", config.max_tbvs_per_client);
+    visit("velocity_threshold", config.velocity_threshold);
+    visit("min_adaptive_duration", config.min_adaptive_duration);
+    visit("max_adaptive_duration", config.max_adaptive_duration);
+    visit("fuzzy_confidence", config.fuzzy_confidence);
+    visit("tbv_merge_distance", config.tbv_merge_distance);
+    visit("region_reuse_margin", config.region_reuse_margin);
+    visit("lod_near_distance", config.lod_near_distance);
+    visit("lod_far_distance", config.lod_far_distance);
+    visit("entity_cluster_size", config.entity_cluster_size);
+    visit("tbvs_enabled", config.tbvs_enabled);
+    visit("reuse_buffers", config.reuse_buffers);
+    visit("exact_region_tests", config.exact_region_tests);
+    visit("blocker_hints", config.blocker_hints);
+    visit("full_test_interval", config.full_test_interval);
+    visit("validate_state", config.validate_state);
+}
+
+/// Sets the field named `key` (as visit_fields() names it; strategy takes "explicit",
 /// "adaptive" or "fuzzy"; flags take true/false/1/0) from text, for tools and config
 /// files. Returns "" on success, else what is wrong (unknown field, unparsable value).
 /// Does not validate(): call it after the last change.

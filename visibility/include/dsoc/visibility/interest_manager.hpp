@@ -93,8 +93,6 @@ struct Replicated {
     EntityId id = 0;
     /// Send an update every this many ticks (1, 2 or 4). [Units: ticks]
     std::uint8_t update_interval = 1;
-    /// Suggested position quantum. [Units: world units]
-    float position_precision = 0.125f;
 };
 
 /// What changed for one client in the last update. Ids in increasing order.

@@ -6,6 +6,7 @@
 
 #include "dsoc/visibility/box_visibility.hpp"
 #include "dsoc/visibility/bsp_tree.hpp"
+#include "dsoc/visibility/cube_z_pyramid.hpp"
 #include "dsoc/visibility/geometry.hpp"
 #include "dsoc/visibility/occluder_world.hpp"
 
@@ -93,34 +94,23 @@ public:
     [[nodiscard]] const Aabb& region() const { return region_; }
     [[nodiscard]] const OcclusionBufferConfig& config() const { return config_; }
     [[nodiscard]] const OcclusionBufferStats& stats() const { return stats_; }
-    [[nodiscard]] int levels() const { return levels_; }
+    [[nodiscard]] int levels() const { return pyramid_.levels(); }
     /// Texel of face `face` (0..5: +x, -x, +y, -y, +z, -z) at `level` (0 = finest).
-    [[nodiscard]] float depth(int face, int level, int x, int y) const;
+    [[nodiscard]] float depth(int face, int level, int x, int y) const {
+        return pyramid_.depth(face, level, x, y);
+    }
 
     static constexpr std::size_t kMaxOccluderPlanes = 64;
 
 private:
-    struct Rect {
-        int x0, y0, x1, y1;
+    struct Rect : TexelRect {
         float z_near;
     };
     /// Pixel rectangle on `face` covering the part of `rel_box` (relative to the eye)
     /// that lies in the face's frustum with view z >= min_z. False when none does.
     [[nodiscard]] bool face_rect(int face, const Aabb& rel_box, float min_z, Rect& rect) const;
-    /// True when every level-0 texel of `r` is nearer than `z` (linear scan; used
-    /// while building, before the pyramid exists).
-    [[nodiscard]] bool level0_hides(int face, const Rect& r, float z) const;
-    [[nodiscard]] bool rect_occluded(int face, const Rect& r, float z) const;
     void rasterize_face(int face, const Rect& rect, std::span<const Plane> planes, const float* num,
                         std::size_t plane_count);
-    [[nodiscard]] float* level_data(int face, int level) {
-        return depth_.data() + static_cast<std::size_t>(face) * face_stride_ +
-               level_offset_[static_cast<std::size_t>(level)];
-    }
-    [[nodiscard]] const float* level_data(int face, int level) const {
-        return depth_.data() + static_cast<std::size_t>(face) * face_stride_ +
-               level_offset_[static_cast<std::size_t>(level)];
-    }
 
     OcclusionBufferConfig config_;
     glm::vec3 eye_{0.0f};
@@ -128,11 +118,7 @@ private:
     bool region_mode_ = false;
     int eye_count_ = 1;
     glm::vec3 eyes_[8];
-    int resolution_ = 0;
-    int levels_ = 0;
-    std::vector<std::size_t> level_offset_;
-    std::size_t face_stride_ = 0;
-    std::vector<float> depth_;
+    CubeZPyramid pyramid_;
     std::vector<float> corner_u_; ///< u (or v) of corner k: -1 + 2k/N
     // Scratch for rasterization, sized once.
     std::vector<float> row_prev_, row_cur_, w_front_, w_back_;

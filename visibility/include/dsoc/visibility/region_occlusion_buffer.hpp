@@ -11,6 +11,7 @@
 
 #include "dsoc/visibility/box_visibility.hpp"
 #include "dsoc/visibility/bsp_tree.hpp"
+#include "dsoc/visibility/cube_z_pyramid.hpp"
 #include "dsoc/visibility/geometry.hpp"
 #include "dsoc/visibility/occluder_world.hpp"
 
@@ -99,37 +100,27 @@ public:
     [[nodiscard]] const Aabb& region() const { return region_; }
     [[nodiscard]] const RegionOcclusionBufferConfig& config() const { return config_; }
     [[nodiscard]] const RegionOcclusionBufferStats& stats() const { return stats_; }
-    [[nodiscard]] int levels() const { return levels_; }
+    [[nodiscard]] int levels() const { return pyramid_.levels(); }
     /// Texel of face `face` (0..5: +x, -x, +y, -y, +z, -z) at `level` (0 = finest);
     /// x runs along the face's first lateral axis (y for the x faces, else x), y along
     /// the second (z for the x and y faces, else y), both increasing with the world
     /// coordinate.
-    [[nodiscard]] float depth(int face, int level, int x, int y) const;
+    [[nodiscard]] float depth(int face, int level, int x, int y) const {
+        return pyramid_.depth(face, level, x, y);
+    }
 
     static constexpr std::size_t kMaxOccluderPlanes = 32;
     static constexpr int kMaxRegionCorners = 8;
 
 private:
-    struct Rect {
-        int x0, y0, x1, y1;
-    };
-    [[nodiscard]] bool rect_occluded(int face, const Rect& r, float z) const;
+    using Rect = TexelRect;
     /// Smallest forward offset (along a face's axis) from an eye of the region to a
     /// point `distance` away from it on a ray that leaves by that face.
     [[nodiscard]] float min_forward_distance(float distance) const;
-    [[nodiscard]] bool level0_hides(int face, const Rect& r, float z) const;
     /// Converts a face-coordinate interval to a texel range; false when it is empty.
     [[nodiscard]] bool texel_range(float lo, float hi, int& first, int& last) const;
     void rasterize_face(int face, const Rect& rect, std::span<const Plane> planes,
                         const double* plane_offset, float depth_near, float depth_far);
-    [[nodiscard]] float* level_data(int face, int level) {
-        return depth_.data() + static_cast<std::size_t>(face) * face_stride_ +
-               level_offset_[static_cast<std::size_t>(level)];
-    }
-    [[nodiscard]] const float* level_data(int face, int level) const {
-        return depth_.data() + static_cast<std::size_t>(face) * face_stride_ +
-               level_offset_[static_cast<std::size_t>(level)];
-    }
 
     RegionOcclusionBufferConfig config_;
     Aabb region_;
@@ -139,11 +130,7 @@ private:
     /// Region corners relative to the centre (deduplicated: 1, 2, 4 or 8).
     glm::vec3 corner_[kMaxRegionCorners];
     int corner_count_ = 0;
-    int resolution_ = 0;
-    int levels_ = 0;
-    std::vector<std::size_t> level_offset_;
-    std::size_t face_stride_ = 0;
-    std::vector<float> depth_;
+    CubeZPyramid pyramid_;
     std::vector<float> grid_s_; ///< face coordinate of texel corner k: -1 + 2k/N
     // Scratch for rasterization, sized once.
     std::vector<float> wf_, wb_, entry_prev_, entry_cur_;

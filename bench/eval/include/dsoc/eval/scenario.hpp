@@ -41,11 +41,9 @@ struct Scenario {
     /// Bots, viewers and spawn choices. Same seed, same motion.
     std::uint64_t seed = 1;
 
-    /// Latency allowance in ticks: ceil((rtt + interpolation) * tick_rate / 1000).
-    [[nodiscard]] int lookahead_ticks() const {
-        return static_cast<int>((static_cast<long>(rtt_ms + interpolation_ms) * tick_rate + 999) /
-                                1000);
-    }
+    /// Latency allowance in ticks: rtt + interpolation in whole ticks, rounded up
+    /// (interest::lookahead_ticks(), the server's rule).
+    [[nodiscard]] int lookahead_ticks() const;
     /// Every how many clients the oracle judges one.
     [[nodiscard]] int oracle_client_stride() const {
         return oracle_clients <= 0 || oracle_clients >= viewers

@@ -1,0 +1,105 @@
+#pragma once
+// Helpers the visibility tests share: a scene of box occluders with its BSP, boxes by
+// centre and half-size, and the invariant of both occlusion buffers' z-pyramids.
+
+#include "dsoc/visibility/bsp_tree.hpp"
+#include "dsoc/visibility/convex_polyhedron.hpp"
+#include "dsoc/visibility/geometry.hpp"
+#include "dsoc/visibility/occluder_world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <sstream>
+#include <string>
+
+namespace dsoc::visibility::testing {
+
+/// Box occluders; build() once they are all added.
+struct Scene {
+    OccluderWorld world;
+    BspTree bsp;
+    void add_box(glm::vec3 lo, glm::vec3 hi) {
+        (void)world.add(ConvexPolyhedron::from_aabb({lo, hi}));
+    }
+    void build() { bsp.build(world); }
+};
+
+/// The cube of half-size `h` around `c`.
+inline Aabb cube(glm::vec3 c, float h) {
+    return Aabb::from_center_half_extents(c, glm::vec3(h));
+}
+
+/// The box of half-extents `h` around `c`.
+inline Aabb region_at(glm::vec3 c, glm::vec3 h) {
+    return Aabb::from_center_half_extents(c, h);
+}
+
+/// Expects every texel of levels 1.. of `buffer` (an OcclusionBuffer or a
+/// RegionOcclusionBuffer of `face_resolution`) to hold the max of its four children;
+/// returns how many of them are finite.
+template <class Buffer>
+int expect_max_pyramid(const Buffer& buffer, int face_resolution) {
+    int finite = 0;
+    for (int face = 0; face < 6; ++face) {
+        for (int level = 1; level < buffer.levels(); ++level) {
+            const int size = face_resolution >> level;
+            for (int y = 0; y < size; ++y) {
+                for (int x = 0; x < size; ++x) {
+                    const float expected =
+                        std::max(std::max(buffer.depth(face, level - 1, 2 * x, 2 * y),
+                                          buffer.depth(face, level - 1, 2 * x + 1, 2 * y)),
+                                 std::max(buffer.depth(face, level - 1, 2 * x, 2 * y + 1),
+                                          buffer.depth(face, level - 1, 2 * x + 1, 2 * y + 1)));
+                    EXPECT_EQ(buffer.depth(face, level, x, y), expected);
+                    finite += expected < 1e30f ? 1 : 0;
+                }
+            }
+        }
+    }
+    return finite;
+}
+
+/// Half-sizes of the property tests' random boxes: a fifth `tiny`, seven tenths
+/// mid + mid_span * u, the rest large + large_span * u (u uniform in [0, 1)).
+struct BoxSizes {
+    float tiny, mid, mid_span, large, large_span;
+};
+
+/// The property tests' random box number `b`: odd ones around a random vertex of a
+/// random occluder of `world`, the others around `random_point()`; each axis of the
+/// half-size scaled by 0.5..1.5. Draws from `rng` in a fixed order (the same boxes
+/// for a seed).
+template <class RandomPoint>
+Aabb random_test_box(std::mt19937& rng, std::uniform_real_distribution<float>& unit,
+                     RandomPoint&& random_point, const OccluderWorld& world, int b,
+                     const BoxSizes& sizes) {
+    const float size_pick = unit(rng);
+    const float h = size_pick < 0.2f
+                        ? sizes.tiny
+                        : (size_pick < 0.9f ? sizes.mid + sizes.mid_span * unit(rng)
+                                            : sizes.large + sizes.large_span * unit(rng));
+    glm::vec3 c = random_point();
+    if (b % 2 == 1) {
+        const auto& near = world.occluder(static_cast<OccluderId>(rng() % world.size()));
+        c = near.vertices()[rng() % near.vertices().size()] +
+            glm::vec3(unit(rng) - 0.5f, unit(rng) - 0.5f, unit(rng) - 0.5f) * 40.0f;
+    }
+    const glm::vec3 half(h * (0.5f + unit(rng)), h * (0.5f + unit(rng)), h * (0.5f + unit(rng)));
+    return Aabb::from_center_half_extents(c, half);
+}
+
+/// "(x, y, z)", for failure messages.
+inline std::string text(glm::vec3 p) {
+    std::ostringstream out;
+    out << "(" << p.x << ", " << p.y << ", " << p.z << ")";
+    return out.str();
+}
+
+/// "(min)-(max)", for failure messages.
+inline std::string text(const Aabb& box) {
+    return text(box.min) + "-" + text(box.max);
+}
+
+} // namespace dsoc::visibility::testing
