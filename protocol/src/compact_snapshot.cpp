@@ -29,12 +29,18 @@ std::size_t packed_size(std::size_t payload) {
     return payload == 0 ? 0 : 1 + varint_size(payload) + payload;
 }
 
-/// `delta` wrapped into [-steps/2, steps/2).
+/// `delta` wrapped into [steps/2 - steps, steps/2) (integer halves).
 std::int32_t wrap_angle_delta(std::int64_t delta, std::uint32_t steps) {
     const auto n = static_cast<std::int64_t>(steps);
-    std::int64_t d = ((delta % n) + n) % n;
-    if (d >= n / 2) {
+    const std::int64_t half = n / 2;
+    std::int64_t d = delta;
+    if (d <= -n || d >= n) {
+        d = ((d % n) + n) % n; // not between two quantized yaws: the general rule
+    }
+    if (d >= half) {
         d -= n;
+    } else if (d < half - n) {
+        d += n;
     }
     return static_cast<std::int32_t>(d);
 }

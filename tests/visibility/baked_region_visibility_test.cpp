@@ -127,7 +127,7 @@ TEST(BakedRegionVisibility, WhatTheTableDoesNotCoverGoesToTheNextStage) {
     EXPECT_EQ(alone.test_box(straddling), Visibility::visible);
 }
 
-TEST(BakedRegionVisibility, PreparedRunsAnswerAsCellsAndMergedKeysHideOnlyTogether) {
+TEST(BakedRegionVisibility, PreparedWordsAnswerAsCellsAndMergedKeysHideOnlyTogether) {
     const Baked& b = corridor_table();
     const CellVisibilityTable& t = *b.table;
     BakedRegionVisibility stage(b.table, nullptr);
@@ -140,7 +140,7 @@ TEST(BakedRegionVisibility, PreparedRunsAnswerAsCellsAndMergedKeysHideOnlyTogeth
         for (auto& p : boxes) {
             const Aabb box = random_box(rng, b.play_area, 16.0f, 200.0f);
             stage.prepare(box, p);
-            // The runs hold exactly the open cells of the box (cell by cell here).
+            // The keys hold exactly the open cells of the box (cell by cell here).
             std::vector<OpenCell> cells;
             glm::ivec3 lo;
             glm::ivec3 hi;
@@ -156,14 +156,21 @@ TEST(BakedRegionVisibility, PreparedRunsAnswerAsCellsAndMergedKeysHideOnlyTogeth
                 }
             }
             ASSERT_EQ(in_grid && !cells.empty(), p.prepared);
-            std::vector<OpenCell> from_runs;
-            for (std::size_t k = 0; k + 1 < p.keys.size(); k += 2) {
-                for (OpenCell c = p.keys[k]; c < p.keys[k + 1]; ++c) {
-                    from_runs.push_back(c);
+            std::vector<OpenCell> from_words; // triples (word, low bits, high bits)
+            for (std::size_t k = 0; k + 2 < p.keys.size(); k += 3) {
+                ASSERT_TRUE(k == 0 || p.keys[k - 3] < p.keys[k]) << "words must increase";
+                const std::uint64_t mask = static_cast<std::uint32_t>(p.keys[k + 1]) |
+                                           std::uint64_t{static_cast<std::uint32_t>(p.keys[k + 2])}
+                                               << 32;
+                ASSERT_NE(mask, 0u);
+                for (int bit = 0; bit < 64; ++bit) {
+                    if ((mask >> bit & 1u) != 0) {
+                        from_words.push_back(static_cast<OpenCell>(p.keys[k] * 64 + bit));
+                    }
                 }
             }
             std::sort(cells.begin(), cells.end());
-            ASSERT_EQ(cells, from_runs);
+            ASSERT_EQ(cells, from_words);
             ASSERT_EQ(stage.test_prepared(p), stage.test_box(box));
         }
         for (std::size_t i = 0; i + 1 < boxes.size(); i += 2) {

@@ -79,12 +79,14 @@ TEST(CellVisibilityTable, CompressedRowsGiveTheDenseRowsAnswers) {
     }
 }
 
-TEST(CellVisibilityTable, RunsOfABoxAreExactlyItsOpenCellsSortedAndJoined) {
+TEST(CellVisibilityTable, RunsAndWordsOfABoxAreExactlyItsOpenCells) {
     std::mt19937 random(99);
     const CellVisibilityTable table = random_table(random, {19, 11, 7});
     const CellGrid& grid = table.grid();
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     std::vector<std::int32_t> runs;
+    std::vector<std::int32_t> words;
+    std::vector<std::int32_t> scratch;
     int answered = 0;
     for (int trial = 0; trial < 2000; ++trial) {
         const glm::vec3 size = grid.bounds().size();
@@ -95,6 +97,7 @@ TEST(CellVisibilityTable, RunsOfABoxAreExactlyItsOpenCellsSortedAndJoined) {
         glm::ivec3 hi;
         const bool covered = grid.range_of(box, lo, hi);
         const bool answer = table.open_runs_of(box, runs);
+        ASSERT_EQ(table.open_words_of(box, words, scratch), answer);
         if (!covered) {
             EXPECT_FALSE(answer);
             continue;
@@ -122,6 +125,20 @@ TEST(CellVisibilityTable, RunsOfABoxAreExactlyItsOpenCellsSortedAndJoined) {
             }
         }
         ASSERT_EQ(got, expected);
+        std::set<std::int32_t> from_words; // triples (word, low 32 bits, high 32 bits)
+        for (std::size_t k = 0; k + 2 < words.size(); k += 3) {
+            ASSERT_TRUE(k == 0 || words[k - 3] < words[k]) << "one triple per word, increasing";
+            const std::uint64_t mask = static_cast<std::uint32_t>(words[k + 1]) |
+                                       std::uint64_t{static_cast<std::uint32_t>(words[k + 2])}
+                                           << 32;
+            ASSERT_NE(mask, 0u);
+            for (int bit = 0; bit < 64; ++bit) {
+                if ((mask >> bit & 1u) != 0) {
+                    from_words.insert(words[k] * 64 + bit);
+                }
+            }
+        }
+        ASSERT_EQ(from_words, expected);
         answered += answer ? 1 : 0;
     }
     EXPECT_GT(answered, 500);

@@ -85,24 +85,14 @@ void BakedRegionVisibility::build(const Aabb& region) {
     }
 }
 
-bool BakedRegionVisibility::hidden(const std::vector<std::int32_t>& runs) const {
-    for (std::size_t k = 0; k + 1 < runs.size(); k += 2) {
-        const auto first = static_cast<std::size_t>(runs[k]);
-        const auto end = static_cast<std::size_t>(runs[k + 1]);
-        std::size_t w = first >> 6;
-        const std::size_t last = (end - 1) >> 6;
-        std::uint64_t mask = ~std::uint64_t{0} << (first & 63);
-        for (; w < last; ++w, mask = ~std::uint64_t{0}) {
-            if ((visible_[w] & mask) != 0) {
-                return false;
-            }
-        }
-        mask &= ~std::uint64_t{0} >> (63 - ((end - 1) & 63));
-        if ((visible_[w] & mask) != 0) {
-            return false;
-        }
+bool BakedRegionVisibility::hidden(const std::vector<std::int32_t>& words) const {
+    std::uint64_t seen = 0;
+    for (std::size_t k = 0; k + 2 < words.size(); k += 3) {
+        const std::uint64_t mask = static_cast<std::uint32_t>(words[k + 1]) |
+                                   std::uint64_t{static_cast<std::uint32_t>(words[k + 2])} << 32;
+        seen |= visible_[static_cast<std::size_t>(words[k])] & mask;
     }
-    return true;
+    return seen == 0;
 }
 
 bool BakedRegionVisibility::prepared_hidden(const PreparedBox& p) const {
@@ -110,7 +100,7 @@ bool BakedRegionVisibility::prepared_hidden(const PreparedBox& p) const {
 }
 
 bool BakedRegionVisibility::box_hidden(const Aabb& box) const {
-    return active_ && table_->open_runs_of(box, scratch_) && hidden(scratch_);
+    return active_ && table_->open_words_of(box, scratch_, scratch_runs_) && hidden(scratch_);
 }
 
 Visibility BakedRegionVisibility::test_box(const Aabb& box) const {
@@ -136,7 +126,8 @@ Visibility BakedRegionVisibility::test_box_hinted(const Aabb& box, std::uint32_t
 
 void BakedRegionVisibility::prepare(const Aabb& box, PreparedBox& out) const {
     out.box = box;
-    out.prepared = table_->open_runs_of(box, out.keys);
+    thread_local std::vector<std::int32_t> runs;
+    out.prepared = table_->open_words_of(box, out.keys, runs);
     if (next_ && next_->has_prepared_stage()) {
         out.inner.resize(1);
         next_->prepare(box, out.inner.front());
@@ -147,21 +138,23 @@ void BakedRegionVisibility::prepare(const Aabb& box, PreparedBox& out) const {
 
 // The next stage gets its own preparation of the box when it has one (same box).
 Visibility BakedRegionVisibility::test_prepared(const PreparedBox& p) const {
-    if (prepared_hidden(p)) {
-        return Visibility::occluded;
+    const bool hidden = prepared_hidden(p);
+    if (!next_) { // the table alone: no branch on the answer
+        return hidden ? Visibility::occluded : Visibility::visible;
     }
-    if (!next_) {
-        return Visibility::visible;
+    if (hidden) {
+        return Visibility::occluded;
     }
     return p.inner.empty() ? next_->test_box(p.box) : next_->test_prepared(p.inner.front());
 }
 
 Visibility BakedRegionVisibility::test_prepared_quick(const PreparedBox& p) const {
-    if (prepared_hidden(p)) {
-        return Visibility::occluded;
-    }
+    const bool hidden = prepared_hidden(p);
     if (!next_) {
-        return Visibility::visible;
+        return hidden ? Visibility::occluded : Visibility::visible;
+    }
+    if (hidden) {
+        return Visibility::occluded;
     }
     return p.inner.empty() ? next_->test_box_quick(p.box)
                            : next_->test_prepared_quick(p.inner.front());
@@ -169,11 +162,12 @@ Visibility BakedRegionVisibility::test_prepared_quick(const PreparedBox& p) cons
 
 Visibility BakedRegionVisibility::test_prepared_hinted(const PreparedBox& p,
                                                        std::uint32_t& hint) const {
-    if (prepared_hidden(p)) {
-        return Visibility::occluded;
-    }
+    const bool hidden = prepared_hidden(p);
     if (!next_) {
-        return Visibility::visible;
+        return hidden ? Visibility::occluded : Visibility::visible;
+    }
+    if (hidden) {
+        return Visibility::occluded;
     }
     return p.inner.empty() ? next_->test_box_hinted(p.box, hint)
                            : next_->test_prepared_hinted(p.inner.front(), hint);
@@ -184,24 +178,26 @@ Visibility BakedRegionVisibility::test_prepared_coarse(const PreparedBox& p) con
 }
 
 void BakedRegionVisibility::merge_prepared(PreparedBox& into, const PreparedBox& more) const {
-    // Both lists are sorted (open_runs_of() makes them so, and so does this): one pass.
+    // Both lists have increasing words (open_words_of() makes them so, and so does
+    // this): one pass, a word in both gets the OR of its masks.
     thread_local std::vector<std::int32_t> merged;
     merged.clear();
     const auto& a = into.keys;
     const auto& b = more.keys;
     std::size_t i = 0;
     std::size_t j = 0;
-    while (i + 1 < a.size() || j + 1 < b.size()) {
-        const bool take_a = j + 1 >= b.size() || (i + 1 < a.size() && a[i] <= b[j]);
-        const std::int32_t first = take_a ? a[i] : b[j];
-        const std::int32_t end = take_a ? a[i + 1] : b[j + 1];
-        (take_a ? i : j) += 2;
-        if (!merged.empty() && first <= merged.back()) {
-            merged.back() = std::max(merged.back(), end);
+    while (i + 2 < a.size() || j + 2 < b.size()) {
+        const bool take_a = j + 2 >= b.size() || (i + 2 < a.size() && a[i] <= b[j]);
+        const std::vector<std::int32_t>& from = take_a ? a : b;
+        std::size_t& k = take_a ? i : j;
+        if (!merged.empty() && merged[merged.size() - 3] == from[k]) {
+            merged[merged.size() - 2] |= from[k + 1];
+            merged.back() |= from[k + 2];
         } else {
-            merged.push_back(first);
-            merged.push_back(end);
+            merged.insert(merged.end(), from.begin() + static_cast<std::ptrdiff_t>(k),
+                          from.begin() + static_cast<std::ptrdiff_t>(k + 3));
         }
+        k += 3;
     }
     into.keys.assign(merged.begin(), merged.end());
     into.inner.clear(); // the next stage's preparation was of one member's box only

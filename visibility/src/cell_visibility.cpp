@@ -272,6 +272,36 @@ bool CellVisibilityTable::open_runs_of(const Aabb& box, std::vector<std::int32_t
     return true;
 }
 
+bool CellVisibilityTable::open_words_of(const Aabb& box, std::vector<std::int32_t>& out,
+                                        std::vector<std::int32_t>& runs) const {
+    out.clear();
+    if (!open_runs_of(box, runs)) {
+        return false;
+    }
+    // The runs are sorted and disjoint, so their words come in order; a word two runs
+    // share is the last triple.
+    const auto add = [&out](std::size_t word, std::uint64_t mask) {
+        if (!out.empty() && static_cast<std::size_t>(out[out.size() - 3]) == word) {
+            mask |= static_cast<std::uint32_t>(out[out.size() - 2]) |
+                    std::uint64_t{static_cast<std::uint32_t>(out.back())} << 32;
+            out.resize(out.size() - 3);
+        }
+        out.push_back(static_cast<std::int32_t>(word));
+        out.push_back(static_cast<std::int32_t>(static_cast<std::uint32_t>(mask)));
+        out.push_back(static_cast<std::int32_t>(static_cast<std::uint32_t>(mask >> 32)));
+    };
+    for (std::size_t k = 0; k + 1 < runs.size(); k += 2) {
+        const auto first = static_cast<std::size_t>(runs[k]);
+        const auto last = static_cast<std::size_t>(runs[k + 1]) - 1;
+        for (std::size_t w = first >> 6; w <= last >> 6; ++w) {
+            const std::size_t lo = std::max(first, w << 6) & 63;
+            const std::size_t hi = std::min(last, (w << 6) + 63) & 63;
+            add(w, (~std::uint64_t{0} << lo) & (~std::uint64_t{0} >> (63 - hi)));
+        }
+    }
+    return true;
+}
+
 std::uint64_t CellVisibilityTable::hidden_pairs() const {
     std::uint64_t visible = 0;
     if (!compressed()) {

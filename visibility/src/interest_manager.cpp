@@ -60,6 +60,7 @@ bool InterestManager::add_entity(EntityId id, const EntityDesc& desc, const Aabb
     } else {
         slot = static_cast<std::uint32_t>(entities_.size());
         entities_.emplace_back();
+        views_.emplace_back();
         counts.emplace_back(0);
         for (auto& c : clients_) {
             c->pairs.resize(entities_.size());
@@ -72,6 +73,7 @@ bool InterestManager::add_entity(EntityId id, const EntityDesc& desc, const Aabb
     e.desc = desc;
     e.box = box;
     e.box_at_last_update = box;
+    views_[slot] = {box, id, true, e.prepared_is_current()};
     counts[slot].store(0);
     entity_slot_[id] = slot;
     return true;
@@ -90,6 +92,7 @@ bool InterestManager::remove_entity(EntityId id) {
         c->pairs[slot] = {};
     }
     entities_[slot].alive = false;
+    views_[slot].alive = false;
     entity_slot_.erase(it);
     free_entity_slots_.push_back(slot);
     return true;
@@ -102,6 +105,8 @@ bool InterestManager::set_entity_box(EntityId id, const Aabb& box, glm::vec3 vel
     }
     EntitySlot& e = entities_[it->second];
     e.box = box;
+    views_[it->second].box = box;
+    views_[it->second].prepared_current = e.prepared_is_current();
     e.down_velocity = std::isfinite(velocity.z) ? std::max(0.0f, -velocity.z) : -1.0f;
     return true;
 }

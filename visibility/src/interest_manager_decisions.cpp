@@ -11,26 +11,21 @@ namespace dsoc::visibility {
 
 namespace {
 
-/// Distance between the nearest points of `region` and `box` (0 when they touch):
-/// no eye the client can reach is nearer to the entity. [Units: world units]
-float conservative_distance(const Aabb& region, const Aabb& box) {
+/// Squared distance between the nearest points of `region` and `box` (0 when they
+/// touch): no eye the client can reach is nearer to the entity. [Units: world units²]
+float conservative_distance_squared(const Aabb& region, const Aabb& box) {
     const glm::vec3 gap =
         glm::max(glm::vec3(0.0f), glm::max(region.min - box.max, box.min - region.max));
-    return std::sqrt(glm::dot(gap, gap));
+    return glm::dot(gap, gap);
 }
 
-/// The level of detail for an entity `distance` from the eye region: every tick near
-/// (lod_near_distance), every other tick between, every fourth tick beyond
-/// lod_far_distance. How coarse each tier's positions are is the user's to choose (the
-/// server's position_quantum_near/mid/far).
-void set_level_of_detail(Replicated& r, float distance, const DSOCConfig& config) {
-    if (distance < config.lod_near_distance) {
-        r.update_interval = 1;
-    } else if (distance < config.lod_far_distance) {
-        r.update_interval = 2;
-    } else {
-        r.update_interval = 4;
-    }
+/// The level of detail for an entity whose squared distance from the eye region is
+/// `distance_squared`: every tick near (lod_near_distance), every other tick between,
+/// every fourth tick beyond lod_far_distance. How coarse each tier's positions are is
+/// the user's to choose (the server's position_quantum_near/mid/far).
+std::uint8_t level_of_detail(float distance_squared, float near_squared, float far_squared) {
+    const std::uint8_t beyond_near = distance_squared < far_squared ? 2 : 4;
+    return distance_squared < near_squared ? 1 : beyond_near;
 }
 
 /// Ids in `previous` and not in `now` go to `leave`, the reverse to `enter`. Both
@@ -57,19 +52,27 @@ void InterestManager::decide(ClientSlot& c) {
     ClientDecisions& d = c.decisions;
     d.enter.clear();
     d.leave.clear();
-    d.replicated.clear();
+    const float near_squared = config_.lod_near_distance * config_.lod_near_distance;
+    const float far_squared = config_.lod_far_distance * config_.lod_far_distance;
+    const Aabb region = c.region; // a local: the writes below cannot alias it
+    d.replicated.resize(entities_.size());
+    Replicated* out = d.replicated.data();
+    std::size_t kept = 0;
+    bool increasing = true; // slots are reused, so ids need not follow slot order
     for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
-        const EntitySlot& e = entities_[slot];
+        const EntityView& e = views_[slot];
         if (!e.alive || c.pairs[slot].state != PairState::visible) {
             continue;
         }
-        Replicated r;
-        r.id = e.id;
-        set_level_of_detail(r, conservative_distance(c.region, e.box), config_);
-        d.replicated.push_back(r);
+        increasing = increasing && (kept == 0 || out[kept - 1].id < e.id);
+        out[kept++] = {e.id, level_of_detail(conservative_distance_squared(region, e.box),
+                                             near_squared, far_squared)};
     }
-    std::sort(d.replicated.begin(), d.replicated.end(),
-              [](const Replicated& a, const Replicated& b) { return a.id < b.id; });
+    d.replicated.resize(kept);
+    if (!increasing) {
+        std::sort(d.replicated.begin(), d.replicated.end(),
+                  [](const Replicated& a, const Replicated& b) { return a.id < b.id; });
+    }
     diff_sets(c.previous, d.replicated, d.enter, d.leave);
     c.previous.clear();
     for (const auto& r : d.replicated) {

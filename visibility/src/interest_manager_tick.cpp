@@ -73,6 +73,8 @@ void InterestManager::begin_update(std::uint64_t tick) {
         e.tbvs_at_tick_start = tbv_counts_[static_cast<std::size_t>(&e - entities_.data())].load(
             std::memory_order_relaxed);
         prepare_box(e);
+        views_[static_cast<std::size_t>(&e - entities_.data())].prepared_current =
+            e.prepared_is_current();
         refresh_tbv_candidates(e);
     }
     build_clusters();
@@ -239,6 +241,9 @@ void InterestManager::void_broken_tbvs(ClientSlot& c) {
     // 3. Teleports void the TBVs of the entity that jumped. A fuzzy TBV is a prediction,
     //    not a bound: one the entity has left is void too (caught the first tick it is
     //    outside, so its box is tested before it could be seen).
+    if (c.live_groups == 0) {
+        return; // no pair is hidden with a TBV
+    }
     const bool fuzzy = config_.strategy == TbvStrategy::fuzzy;
     for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
         const EntitySlot& e = entities_[slot];
@@ -294,27 +299,35 @@ std::uint32_t InterestManager::viewer_slot_of(const ClientSlot& c) const {
 bool InterestManager::takes_quick_test(const ClientSlot& c, std::uint32_t slot) const {
     // Temporal coherence: an entity visible last tick most likely still is; give it
     // the full (slower) test only every full_test_interval ticks, staggered.
-    return c.pairs[slot].state == PairState::visible &&
-           (tick_ + slot) % static_cast<std::uint64_t>(config_.full_test_interval) != 0;
+    return c.pairs[slot].state == PairState::visible && full_test_phase(slot) != 0;
+}
+
+std::uint32_t InterestManager::full_test_phase(std::uint32_t slot) const {
+    const auto interval = static_cast<std::uint64_t>(config_.full_test_interval);
+    return static_cast<std::uint32_t>((tick_ + slot) % interval);
 }
 
 void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
                                     std::uint32_t viewer, bool cheapest) {
     // 5b. Every entity without a hidden TBV: test its current box (or take its
-    //     cluster's answer, step 5a).
-    for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
-        const EntitySlot& e = entities_[slot];
+    //     cluster's answer, step 5a). `phase` is full_test_phase(slot), stepped with the
+    //     slot (a division per entity costs more than the bit test that follows).
+    const auto interval = static_cast<std::uint32_t>(config_.full_test_interval);
+    std::uint32_t phase = full_test_phase(0);
+    for (std::uint32_t slot = 0; slot < entities_.size();
+         ++slot, phase = phase + 1 == interval ? 0 : phase + 1) {
+        const EntityView& view = views_[slot];
         auto& pair = c.pairs[slot];
-        if (!e.alive || pair.state == PairState::hidden_with_tbv) {
+        if (!view.alive || pair.state == PairState::hidden_with_tbv) {
             continue;
         }
         if (slot == viewer) {
             pair.state = PairState::visible;
             continue;
         }
-        // e.prepared (and its cluster's box) is current unless the box was set after
-        // begin_update().
-        const bool fresh = e.prepared_is_current();
+        // The preparation (and the cluster's box) is current unless the box was set
+        // after begin_update().
+        const bool fresh = view.prepared_current;
         const std::uint32_t cluster = cluster_of_[slot];
         if (fresh && cluster != kNoCluster && c.cluster_hidden[cluster] != 0) {
             // Hidden with its cluster (whose box holds this one's current box).
@@ -328,6 +341,7 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
             continue;
         }
         ++c.stats.box_tests;
+        const EntitySlot& e = entities_[slot];
         if (cheapest) {
             // A box set after begin_update() has no preparation: visible, never guessed.
             const bool hidden =
@@ -335,9 +349,13 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
             pair.state = hidden ? PairState::hidden_expired : PairState::visible;
             continue;
         }
-        const BoxTest kind = box_test_for(takes_quick_test(c, slot), config_.blocker_hints);
-        if (test_current_box(now, kind, e.prepared, e.box, fresh, pair.hint) ==
-            Visibility::visible) {
+        const bool quick = pair.state == PairState::visible && phase != 0; // takes_quick_test()
+        const BoxTest kind = box_test_for(quick, config_.blocker_hints);
+        const bool visible = test_current_box(now, kind, e.prepared, view.box, fresh, pair.hint) ==
+                             Visibility::visible;
+        if (!tbvs_enabled_) { // hide() would only mark it: no branch on the answer
+            pair.state = visible ? PairState::visible : PairState::hidden_expired;
+        } else if (visible) {
             pair.state = PairState::visible;
         } else {
             hide(c, slot);

@@ -16,6 +16,16 @@ std::vector<std::string> InterestManager::validate_state() const {
         problems.push_back("client " + std::to_string(c) + ", entity " + std::to_string(e) + ": " +
                            what);
     };
+    for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
+        const EntitySlot& e = entities_[slot];
+        const EntityView& v = views_[slot];
+        if (v.alive != e.alive ||
+            (e.alive && (v.id != e.id || v.box.min != e.box.min || v.box.max != e.box.max ||
+                         v.prepared_current != e.prepared_is_current()))) {
+            problems.push_back("entity slot " + std::to_string(slot) +
+                               ": its packed view disagrees with the slot");
+        }
+    }
     for (const auto& cp : clients_) {
         const ClientSlot& c = *cp;
         std::size_t live = 0;

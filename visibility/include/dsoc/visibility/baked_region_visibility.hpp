@@ -39,18 +39,17 @@ public:
     [[nodiscard]] bool pair_shortcuts_pay() const override { return false; }
     /// The table alone: `visible` whenever it passes the box (the next stage is skipped).
     [[nodiscard]] Visibility test_prepared_coarse(const PreparedBox& p) const override;
-    /// Keys are runs of open cells (CellVisibilityTable::open_runs_of): the union of
-    /// both lists, sorted, overlapping and adjacent runs joined, so that a group that
-    /// keeps merging holds at most one run per row of cells per block it covers.
+    /// Keys are row words of open cells (CellVisibilityTable::open_words_of): the union
+    /// of both lists, one triple per word, masks ORed.
     void merge_prepared(PreparedBox& into, const PreparedBox& more) const override;
 
     /// True when the last build() found the region covered by the table.
     [[nodiscard]] bool active() const { return active_; }
 
 private:
-    /// True when the table proves every run of open cells in `runs` hidden from the
-    /// built region.
-    [[nodiscard]] bool hidden(const std::vector<std::int32_t>& runs) const;
+    /// True when the table proves every open cell of `words` (open_words_of()'s
+    /// triples) hidden from the built region.
+    [[nodiscard]] bool hidden(const std::vector<std::int32_t>& words) const;
     [[nodiscard]] bool box_hidden(const Aabb& box) const;
     /// The table proves a box prepared by this stage hidden from the built region.
     [[nodiscard]] bool prepared_hidden(const PreparedBox& p) const;
@@ -66,6 +65,7 @@ private:
     std::vector<std::uint64_t> slabs_;
     std::vector<char> slab_open_;
     mutable std::vector<std::int32_t> scratch_;
+    mutable std::vector<std::int32_t> scratch_runs_;
 };
 
 /// Puts the table in front of every culler `make_next` makes (`make_next` empty: the

@@ -98,6 +98,13 @@ public:
     /// does not cover the whole box, or when every cell it touches is solid: then the
     /// table must not answer for it.
     bool open_runs_of(const Aabb& box, std::vector<std::int32_t>& out) const;
+    /// The same cells as row words: triples (word, low 32 bits, high 32 bits) appended
+    /// to `out` (cleared first), one per 64-bit word of a row that holds any of them,
+    /// increasing words; the mask's bit b of word w is open cell 64w + b. Testing a
+    /// box against a row's words is then one AND per word (a block's open cells span
+    /// at most two words). `runs` is scratch. False when open_runs_of() is.
+    bool open_words_of(const Aabb& box, std::vector<std::int32_t>& out,
+                       std::vector<std::int32_t>& runs) const;
 
     /// Pairs (ordered, self pairs included) whose bit is clear, i.e. proven hidden.
     [[nodiscard]] std::uint64_t hidden_pairs() const;

@@ -210,6 +210,7 @@ private:
     // Defined in the library's private interest_manager_state.hpp, with the map of
     // which source file does which job.
     struct EntitySlot;
+    struct EntityView;
     struct ClientSlot;
     struct TbvGroup;
     struct EntityCluster;
@@ -254,6 +255,8 @@ private:
     [[nodiscard]] std::uint32_t viewer_slot_of(const ClientSlot& c) const;
     /// The entity was visible last tick and is not due its staggered full test.
     [[nodiscard]] bool takes_quick_test(const ClientSlot& c, std::uint32_t slot) const;
+    /// (tick + slot) mod full_test_interval: the pair's full test is due at 0.
+    [[nodiscard]] std::uint32_t full_test_phase(std::uint32_t slot) const;
 
     // TBVs.
     [[nodiscard]] int tbv_duration(const EntitySlot& e) const;
@@ -298,6 +301,9 @@ private:
     float tick_seconds_;
     std::uint64_t tick_ = 0;
     std::vector<EntitySlot> entities_;
+    /// By slot, beside entities_: what every client's steps read of each entity,
+    /// packed (see EntityView).
+    std::vector<EntityView> views_;
     std::vector<std::uint32_t> free_entity_slots_;
     std::unordered_map<EntityId, std::uint32_t> entity_slot_;
     std::vector<std::unique_ptr<ClientSlot>> clients_;
