@@ -59,6 +59,9 @@ public:
     /// `id` (known) leaves; the connection forgets it.
     void leave(std::uint32_t id, pb::Snapshot& out);
 
+    /// A hint that update(id) comes soon (see FlatIdMap::prefetch).
+    void prefetch(std::uint32_t id) const { baseline_.prefetch(id); }
+
     [[nodiscard]] bool knows(std::uint32_t id) const { return baseline_.contains(id); }
     [[nodiscard]] std::size_t known_count() const { return baseline_.size(); }
     [[nodiscard]] const QuantizationSettings& settings() const { return settings_; }
