@@ -2,6 +2,7 @@
 
 #include "dsoc/visibility/reference_visibility.hpp"
 #include "dsoc/visibility/shaft_occlusion.hpp"
+#include "dsoc/visibility/shuffled_pairs.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -367,40 +368,35 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress) {
             blocks.push_back(i);
         }
     }
-    // Every unordered pair of top blocks, a block with itself included; shuffled so
-    // that the cost is spread evenly over time (progress and ETA stay honest).
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> work;
-    work.reserve(blocks.size() * (blocks.size() + 1) / 2);
-    for (std::size_t i = 0; i < blocks.size(); ++i) {
-        for (std::size_t j = i; j < blocks.size(); ++j) {
-            work.emplace_back(blocks[i], blocks[j]);
-        }
-    }
-    std::shuffle(work.begin(), work.end(), std::mt19937_64(0x5eedba4e));
+    // Every unordered pair of top blocks, a block with itself included, in a scattered
+    // order (ShuffledPairs: no list of n² pairs is held).
+    const ShuffledPairs work(blocks.size());
 
     unsigned threads = config_.threads > 0 ? static_cast<unsigned>(config_.threads)
                                            : std::max(1u, std::thread::hardware_concurrency());
-    threads =
-        std::min<unsigned>(threads, static_cast<unsigned>(std::max<std::size_t>(1, work.size())));
-    std::atomic<std::size_t> next{0};
-    std::atomic<std::size_t> done{0};
+    threads = static_cast<unsigned>(
+        std::min<std::uint64_t>(threads, std::max<std::uint64_t>(1, work.count())));
+    std::atomic<std::uint64_t> next{0};
+    std::atomic<std::uint64_t> done{0};
     std::vector<Worker> workers(threads);
     const auto body = [&](unsigned t) {
         Worker& w = workers[t];
         auto last_report = std::chrono::steady_clock::now();
-        for (std::size_t k = next.fetch_add(1); k < work.size(); k = next.fetch_add(1)) {
-            const auto [i, j] = work[k];
+        for (std::uint64_t k = next.fetch_add(1); k < work.count(); k = next.fetch_add(1)) {
+            const auto [a, b] = work.at(k);
+            const std::uint32_t i = blocks[a];
+            const std::uint32_t j = blocks[b];
             if (i == j) {
                 resolve_self(w, Node{top, i});
             } else {
                 resolve(w, Node{top, i}, Node{top, j});
             }
-            const std::size_t finished = done.fetch_add(1) + 1;
+            const std::uint64_t finished = done.fetch_add(1) + 1;
             if (t == 0 && progress) {
                 const auto now = std::chrono::steady_clock::now();
                 if (now - last_report > std::chrono::milliseconds(500)) {
                     last_report = now;
-                    progress(static_cast<double>(finished) / static_cast<double>(work.size()),
+                    progress(static_cast<double>(finished) / static_cast<double>(work.count()),
                              std::chrono::duration<double>(now - start).count());
                 }
             }
