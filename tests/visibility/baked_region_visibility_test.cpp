@@ -1,9 +1,11 @@
 // The baked table as a culler stage: what it proves holds against brute-force rays,
-// what it does not cover goes to the next stage (never culled by guess), and prepared
-// boxes, their runs of cells and merged TBV keys answer as the plain boxes do.
+// what it does not cover goes to the next stage (never culled by guess), prepared
+// boxes, their row words and merged TBV keys answer as the plain boxes do, and the
+// InterestManager's bulk answers behind the table alone are its one-by-one answers.
 
 #include "dsoc/visibility/baked_region_visibility.hpp"
 #include "dsoc/visibility/cell_bake.hpp"
+#include "dsoc/visibility/interest_manager.hpp"
 #include "dsoc/visibility/reference_visibility.hpp"
 #include "dsoc/visibility/test_worlds.hpp"
 
@@ -230,6 +232,131 @@ TEST(BakedRegionVisibility, AFactoryWithoutATableIsTheNextStage) {
         nullptr, [&calls] { return std::make_unique<CountingStage>(Visibility::visible, &calls); });
     const auto culler = factory();
     EXPECT_EQ(dynamic_cast<BakedRegionVisibility*>(culler.get()), nullptr);
+}
+
+/// A BakedRegionVisibility that does not say its prepared tests are all its coarse
+/// one, so that the InterestManager asks it entity by entity: the slow twin of the
+/// manager's bulk path (test_entities_in_bulk()).
+class OneByOne final : public RegionVisibility {
+public:
+    explicit OneByOne(std::shared_ptr<const CellVisibilityTable> table) : stage_(table, nullptr) {}
+    void build(const Aabb& region) override { stage_.build(region); }
+    [[nodiscard]] Visibility test_box(const Aabb& box) const override {
+        return stage_.test_box(box);
+    }
+    [[nodiscard]] Visibility test_box_quick(const Aabb& box) const override {
+        return stage_.test_box_quick(box);
+    }
+    [[nodiscard]] bool has_prepared_stage() const override { return stage_.has_prepared_stage(); }
+    void prepare(const Aabb& box, PreparedBox& out) const override { stage_.prepare(box, out); }
+    [[nodiscard]] Visibility test_prepared(const PreparedBox& p) const override {
+        return stage_.test_prepared(p);
+    }
+    [[nodiscard]] Visibility test_prepared_quick(const PreparedBox& p) const override {
+        return stage_.test_prepared_quick(p);
+    }
+    [[nodiscard]] Visibility test_box_hinted(const Aabb& box, std::uint32_t& hint) const override {
+        return stage_.test_box_hinted(box, hint);
+    }
+    [[nodiscard]] Visibility test_prepared_hinted(const PreparedBox& p,
+                                                  std::uint32_t& hint) const override {
+        return stage_.test_prepared_hinted(p, hint);
+    }
+    void merge_prepared(PreparedBox& into, const PreparedBox& more) const override {
+        stage_.merge_prepared(into, more);
+    }
+    [[nodiscard]] bool pair_shortcuts_pay() const override { return stage_.pair_shortcuts_pay(); }
+    [[nodiscard]] Visibility test_prepared_coarse(const PreparedBox& p) const override {
+        return stage_.test_prepared_coarse(p);
+    }
+
+private:
+    BakedRegionVisibility stage_;
+};
+
+TEST(BakedRegionVisibility, TheManagersBulkAnswersAreItsOneByOneAnswers) {
+    // Two managers over the same table and the same wandering entities: one takes the
+    // bulk path (the table alone says every prepared test is its coarse one), the
+    // other asks entity by entity. Boxes set after begin_update() (no preparation) and
+    // the cheapest effort are mixed in. Every decision must be the same.
+    const Baked& b = corridor_table();
+    ASSERT_TRUE(BakedRegionVisibility(b.table, nullptr).prepared_tests_are_coarse());
+    ASSERT_FALSE(OneByOne(b.table).prepared_tests_are_coarse());
+    DSOCConfig config;
+    config.validate_state = true;
+    const Aabb world = b.table->grid().bounds();
+    InterestManager bulk(config, world, [&b]() -> std::unique_ptr<RegionVisibility> {
+        return std::make_unique<BakedRegionVisibility>(b.table, nullptr);
+    });
+    InterestManager one(config, world, [&b]() -> std::unique_ptr<RegionVisibility> {
+        return std::make_unique<OneByOne>(b.table);
+    });
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::uniform_real_distribution<float> step(-6.0f, 6.0f);
+    const glm::vec3 half{15.0f, 15.0f, 28.0f};
+    const Aabb area = b.play_area;
+    const auto inside = [&](glm::vec3 c) {
+        return glm::clamp(c, area.min + half, glm::max(area.min + half, area.max - half));
+    };
+    constexpr EntityId kEntities = 40;
+    std::vector<glm::vec3> centre(kEntities + 1);
+    for (EntityId id = 1; id <= kEntities; ++id) {
+        centre[id] = inside(area.min + area.size() * glm::vec3(unit(rng), unit(rng), unit(rng)));
+        const Aabb box = Aabb::from_center_half_extents(centre[id], half);
+        ASSERT_TRUE(bulk.add_entity(id, EntityDesc{half, {}}, box));
+        ASSERT_TRUE(one.add_entity(id, EntityDesc{half, {}}, box));
+    }
+    for (ClientId c = 1; c <= 6; ++c) {
+        ClientDesc d;
+        d.viewer = static_cast<EntityId>(c * 6);
+        ASSERT_TRUE(bulk.add_client(c, d));
+        ASSERT_TRUE(one.add_client(c, d));
+    }
+    const auto move = [&](EntityId id) {
+        centre[id] = inside(centre[id] + glm::vec3(step(rng), step(rng), 0.0f));
+        const Aabb box = Aabb::from_center_half_extents(centre[id], half);
+        ASSERT_TRUE(bulk.set_entity_box(id, box));
+        ASSERT_TRUE(one.set_entity_box(id, box));
+    };
+    std::size_t visible = 0;
+    std::size_t hidden = 0;
+    for (std::uint64_t tick = 1; tick <= 150; ++tick) {
+        for (EntityId id = 1; id <= kEntities; ++id) {
+            move(id);
+        }
+        bulk.begin_update(tick);
+        one.begin_update(tick);
+        if (tick % 5 == 0) {
+            for (EntityId id = 1; id <= kEntities; id += 7) {
+                move(id); // after begin_update(): a box with no preparation
+            }
+        }
+        for (std::size_t i = 0; i < bulk.client_count(); ++i) {
+            const UpdateEffort effort =
+                (tick + i) % 3 == 0 ? UpdateEffort::cheapest : UpdateEffort::full;
+            bulk.update_client(i, effort);
+            one.update_client(i, effort);
+            const ClientId c = bulk.client_at(i);
+            ASSERT_EQ(one.client_at(i), c);
+            const ClientDecisions& a = *bulk.decisions(c);
+            const ClientDecisions& o = *one.decisions(c);
+            ASSERT_EQ(a.replicated.size(), o.replicated.size()) << "tick " << tick;
+            for (std::size_t k = 0; k < a.replicated.size(); ++k) {
+                ASSERT_EQ(a.replicated[k].id, o.replicated[k].id) << "tick " << tick;
+                ASSERT_EQ(a.replicated[k].update_interval, o.replicated[k].update_interval);
+            }
+            ASSERT_EQ(a.enter, o.enter) << "tick " << tick;
+            ASSERT_EQ(a.leave, o.leave) << "tick " << tick;
+            ASSERT_EQ(bulk.stats(c)->box_tests, one.stats(c)->box_tests);
+            visible += a.replicated.size();
+            hidden += kEntities - a.replicated.size();
+        }
+        bulk.require_valid_state("at tick " + std::to_string(tick));
+        one.require_valid_state("at tick " + std::to_string(tick));
+    }
+    EXPECT_GT(hidden, 500u) << "the table hides something";
+    EXPECT_GT(visible, 500u);
 }
 
 } // namespace

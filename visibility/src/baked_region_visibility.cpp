@@ -177,6 +177,14 @@ Visibility BakedRegionVisibility::test_prepared_coarse(const PreparedBox& p) con
     return prepared_hidden(p) ? Visibility::occluded : Visibility::visible;
 }
 
+void BakedRegionVisibility::coarse_hidden_all(std::span<const PreparedBox* const> boxes,
+                                              std::span<std::uint8_t> hidden) const {
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+        const PreparedBox* p = boxes[i];
+        hidden[i] = p != nullptr && prepared_hidden(*p) ? 1 : 0;
+    }
+}
+
 void BakedRegionVisibility::merge_prepared(PreparedBox& into, const PreparedBox& more) const {
     // Both lists have increasing words (open_words_of() makes them so, and so does
     // this): one pass, a word in both gets the OR of its masks.

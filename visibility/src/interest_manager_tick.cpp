@@ -307,11 +307,50 @@ std::uint32_t InterestManager::full_test_phase(std::uint32_t slot) const {
     return static_cast<std::uint32_t>((tick_ + slot) % interval);
 }
 
+void InterestManager::test_entities_in_bulk(ClientSlot& c, const RegionVisibility& now,
+                                            std::uint32_t viewer, bool cheapest) {
+    // What test_entities() does when no pair holds a TBV, no entity is in a cluster,
+    // hide() only marks the pair, and every kind of test is the coarse one: the boxes
+    // prepared this tick are answered first, all together, then the pairs are set.
+    const std::size_t n = entities_.size();
+    c.bulk_boxes.resize(n);
+    c.bulk_hidden.resize(n);
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+        const EntityView& view = views_[slot];
+        c.bulk_boxes[slot] =
+            view.alive && view.prepared_current ? &entities_[slot].prepared : nullptr;
+    }
+    now.coarse_hidden_all(c.bulk_boxes, c.bulk_hidden);
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+        const EntityView& view = views_[slot];
+        if (!view.alive) {
+            continue;
+        }
+        auto& pair = c.pairs[slot];
+        if (slot == viewer) {
+            pair.state = PairState::visible;
+            continue;
+        }
+        ++c.stats.box_tests;
+        // A box set after begin_update() has no preparation: tested as it is, or
+        // visible for the cheapest effort (never guessed).
+        const bool hidden = view.prepared_current
+                                ? c.bulk_hidden[slot] != 0
+                                : !cheapest && now.test_box(view.box) == Visibility::occluded;
+        pair.state = hidden ? PairState::hidden_expired : PairState::visible;
+    }
+}
+
 void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
                                     std::uint32_t viewer, bool cheapest) {
     // 5b. Every entity without a hidden TBV: test its current box (or take its
-    //     cluster's answer, step 5a). `phase` is full_test_phase(slot), stepped with the
-    //     slot (a division per entity costs more than the bit test that follows).
+    //     cluster's answer, step 5a).
+    if (!tbvs_enabled_ && !clusters_enabled_ && now.prepared_tests_are_coarse()) {
+        test_entities_in_bulk(c, now, viewer, cheapest);
+        return;
+    }
+    // `phase` is full_test_phase(slot), stepped with the slot (a division per entity
+    // costs more than the bit test that follows).
     const auto interval = static_cast<std::uint32_t>(config_.full_test_interval);
     std::uint32_t phase = full_test_phase(0);
     for (std::uint32_t slot = 0; slot < entities_.size();

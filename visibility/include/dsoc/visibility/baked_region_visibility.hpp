@@ -39,6 +39,10 @@ public:
     [[nodiscard]] bool pair_shortcuts_pay() const override { return false; }
     /// The table alone: `visible` whenever it passes the box (the next stage is skipped).
     [[nodiscard]] Visibility test_prepared_coarse(const PreparedBox& p) const override;
+    /// The table alone (no next stage): every prepared test is the coarse one.
+    [[nodiscard]] bool prepared_tests_are_coarse() const override { return next_ == nullptr; }
+    void coarse_hidden_all(std::span<const PreparedBox* const> boxes,
+                           std::span<std::uint8_t> hidden) const override;
     /// Keys are row words of open cells (CellVisibilityTable::open_words_of): the union
     /// of both lists, one triple per word, masks ORed.
     void merge_prepared(PreparedBox& into, const PreparedBox& more) const override;

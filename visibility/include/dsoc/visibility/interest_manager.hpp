@@ -246,6 +246,11 @@ private:
     void test_clusters(ClientSlot& c, const RegionVisibility& now, std::uint32_t viewer,
                        bool cheapest);
     /// Step 5b: every entity without a hidden TBV, visible or hidden (hide()).
+    /// test_entities() without TBVs and clusters behind a culler whose prepared tests
+    /// are all its coarse one (RegionVisibility::prepared_tests_are_coarse()): the same
+    /// answers, the prepared boxes answered in one pass.
+    void test_entities_in_bulk(ClientSlot& c, const RegionVisibility& now, std::uint32_t viewer,
+                               bool cheapest);
     void test_entities(ClientSlot& c, const RegionVisibility& now, std::uint32_t viewer,
                        bool cheapest);
     /// Step 6: the replication set, its level of detail, enter and leave.

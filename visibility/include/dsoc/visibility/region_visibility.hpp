@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <span>
 #include <vector>
 
 namespace dsoc::visibility {
@@ -92,6 +93,23 @@ public:
     /// Without a prepared stage this is test_prepared().
     [[nodiscard]] virtual Visibility test_prepared_coarse(const PreparedBox& p) const {
         return test_prepared(p);
+    }
+    /// True when test_prepared(), test_prepared_quick() and test_prepared_hinted() of a
+    /// box this culler prepared all give test_prepared_coarse()'s answer, test_box(),
+    /// test_box_quick() and test_box_hinted() all give test_box()'s, and no test
+    /// touches a hint (a cheap stage with nothing behind it): the caller may then
+    /// answer a tick's prepared boxes in bulk with coarse_hidden_all().
+    [[nodiscard]] virtual bool prepared_tests_are_coarse() const { return false; }
+    /// For every i: hidden[i] = 1 when boxes[i] (prepared by this culler) is `occluded`
+    /// by test_prepared_coarse(), else 0; 0 for a null box. `hidden` has boxes.size()
+    /// elements. The default asks box by box; a stage may answer without a branch per
+    /// box, so that the cache misses of many boxes overlap.
+    virtual void coarse_hidden_all(std::span<const PreparedBox* const> boxes,
+                                   std::span<std::uint8_t> hidden) const {
+        for (std::size_t i = 0; i < boxes.size(); ++i) {
+            hidden[i] =
+                boxes[i] != nullptr && test_prepared_coarse(*boxes[i]) == Visibility::occluded;
+        }
     }
 };
 
