@@ -101,8 +101,8 @@ Result<Map> load_map(std::string_view spec, const MapSearch& search) {
             if (names.value().size() != 1) {
                 return LoadError{path.string(), "",
                                  "archive holds " + std::to_string(names.value().size()) +
-                                     " maps; pass it with --pak (or DSOC_MAP_PATH) and give a "
-                                     "map name"};
+                                     " maps: give one map's name, with the archive on the map "
+                                     "search path (DSOC_MAP_PATH)"};
             }
             return load_q3_map_from_pk3(path, names.value().front());
         }
@@ -157,8 +157,7 @@ Result<q3::Q3Bsp> find_q3_bsp(std::string_view name, const MapSearch& search) {
     }
     return LoadError{std::string(name), "",
                      "no map of that name (looked for " + entry + " in " +
-                         (looked.empty() ? std::string("no archives") : looked) +
-                         "; set DSOC_MAP_PATH or pass --pak)" + unreadable};
+                         (looked.empty() ? std::string("no archives") : looked) + ")" + unreadable};
 }
 
 std::vector<std::string> list_maps(const MapSearch& search) {

@@ -211,9 +211,16 @@ std::vector<std::string> apply_config_file(const std::string& path, ServerConfig
     return apply_config_toml(text.str(), path, config);
 }
 
-std::string format_config_toml(const ServerConfig& config) {
+std::string format_config_toml(const ServerConfig& config,
+                               const std::vector<std::string>& problems) {
     std::ostringstream out;
     out << "# dsoc-server settings (TOML); every key is optional.\n";
+    if (!problems.empty()) {
+        out << "# The server refuses to start with these settings until this is fixed:\n";
+        for (const auto& problem : problems) {
+            out << "#   " << problem << "\n";
+        }
+    }
     visit_config_fields(config, [&](const char* name, const auto& field) {
         using T = std::decay_t<decltype(field)>;
         toml::table line; // one key per table keeps the declaration order

@@ -1,43 +1,75 @@
 // dsoc-server: the game server with occlusion-aware interest management.
+//
+// Start-up, in order: the settings (the config file from --config or $DSOC_CONFIG, the
+// flags over it) and their checks; the token key; the log; the /metrics, /healthz and
+// /readyz endpoint, which answers from then on (/readyz: 503 until the first tick);
+// the map and its baked table (a minute the first time); the game port and the tick
+// loop. Exit statuses as every dsoc program's (dsoc/cli/program.hpp): 0 after a
+// clean stop, 1 when serving failed, 2 when the settings, the key or the map are wrong.
 
+#include "dsoc/cli/build_info.hpp"
+#include "dsoc/cli/program.hpp"
 #include "dsoc/maps/map_checks.hpp"
 #include "dsoc/maps/map_source.hpp"
+#include "dsoc/protocol/connect_token.hpp"
 #include "dsoc/server/config_file.hpp"
 #include "dsoc/server/dsoc_settings.hpp"
+#include "dsoc/server/logging.hpp"
 #include "dsoc/server/metrics_endpoint.hpp"
+#include "dsoc/server/process_metrics.hpp"
 #include "dsoc/server/server.hpp"
 #include "dsoc/server/stats_report.hpp"
 
 #include "program_options.hpp"
 
 #include <CLI/CLI.hpp>
+#include <boost/asio/executor_work_guard.hpp>
 #include <boost/asio/signal_set.hpp>
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <memory>
+#include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace {
+
+using dsoc::cli::exit_failure;
+using dsoc::cli::exit_ok;
+using dsoc::cli::exit_usage;
+using dsoc::server::ServerConfig;
+
+/// The environment variable naming the config file when --config is not given.
+constexpr const char* kConfigEnvironment = "DSOC_CONFIG";
 
 struct ProgramOptions {
     std::string config_file;
     std::string stats_json;
     bool print_config = false;
+    bool check_config = false;
     std::vector<std::string> dsoc; ///< --dsoc KEY=VALUE, in order
 };
 
 /// Every flag, bound to `config` and `options`. Flags given on the command line
 /// overwrite what the config file set.
-void add_options(CLI::App& app, dsoc::server::ServerConfig& config, ProgramOptions& options) {
+void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
     app.add_option("--config", options.config_file,
-                   "TOML file with settings (keys as in --print-config); flags override it");
+                   "TOML file with settings (keys as in --print-config); flags override it. "
+                   "Default: $DSOC_CONFIG when set");
     app.add_flag("--print-config", options.print_config,
-                 "Print the effective settings as TOML and exit (2 when they are invalid)");
+                 "Print the effective settings as TOML and exit 0; what keeps them from "
+                 "starting the server is listed in comments at the top and on stderr");
+    app.add_flag("--check-config", options.check_config,
+                 "Check the settings, the token key file and the map as a start would, "
+                 "without serving; exit 0 when the server would start, 2 (naming every "
+                 "problem) when not");
     app.add_option("--bind", config.bind_address, "Address to listen on")->capture_default_str();
     app.add_option("--port", config.port, "TCP port; 0 picks a free one")->capture_default_str();
     dsoc::server::add_world_options(app, config);
@@ -120,6 +152,10 @@ void add_options(CLI::App& app, dsoc::server::ServerConfig& config, ProgramOptio
         ->capture_default_str();
     app.add_option("--log-level", config.log_level, "trace|debug|info|warn|error|critical|off")
         ->capture_default_str();
+    app.add_option("--log-format", config.log_format,
+                   "Log on stderr as text, or as json (one object a line: time, level, "
+                   "logger, msg)")
+        ->capture_default_str();
     app.add_option("--dsoc", options.dsoc,
                    "A dsoc/occlusion culler setting, KEY=VALUE with KEY a field of "
                    "visibility::DSOCConfig (the [dsoc] table; --print-config lists them); "
@@ -129,144 +165,310 @@ void add_options(CLI::App& app, dsoc::server::ServerConfig& config, ProgramOptio
                    "Write the end-of-run figures as JSON to this file");
 }
 
-} // namespace
-
-int main(int argc, char** argv) {
-    dsoc::server::ServerConfig config;
-    ProgramOptions options;
-    const char* description = "dsoc-server: authoritative game server with interest management";
-    {
-        // First pass: only to find --config (and to answer --help and bad flags).
-        dsoc::server::ServerConfig scratch;
-        CLI::App app{description};
-        add_options(app, scratch, options);
-        CLI11_PARSE(app, argc, argv);
+/// The settings: the config file (--config, else $DSOC_CONFIG), then the flags over
+/// it. Returns the exit status when the program must stop here: --help or --version,
+/// or a command line or file that cannot be read. Values of --dsoc flags that cannot
+/// be used are added to `flag_problems`.
+std::optional<int> read_settings(int argc, char** argv, ServerConfig& config,
+                                 ProgramOptions& options, std::vector<std::string>& flag_problems) {
+    const auto parse_flags = [&](ServerConfig& into) {
+        CLI::App app{"dsoc-server: authoritative game server with interest management"};
+        dsoc::cli::set_up(app, "dsoc-server");
+        add_options(app, into, options);
+        return dsoc::cli::parse(app, argc, argv);
+    };
+    // First pass: only to find --config (and to answer --help, --version, bad flags).
+    if (ServerConfig scratch; const auto stop = parse_flags(scratch)) {
+        return stop;
+    }
+    std::string origin;
+    if (options.config_file.empty()) {
+        if (const char* path = std::getenv(kConfigEnvironment); path != nullptr && *path != '\0') {
+            options.config_file = path;
+            origin = std::string(" (from ") + kConfigEnvironment + ")";
+        }
     }
     if (!options.config_file.empty()) {
         if (const auto problems = dsoc::server::apply_config_file(options.config_file, config);
             !problems.empty()) {
             for (const auto& p : problems) {
-                std::fprintf(stderr, "invalid config file: %s\n", p.c_str());
+                std::fprintf(stderr, "invalid config file%s: %s\n", origin.c_str(), p.c_str());
             }
-            return 2;
+            return exit_usage;
         }
     }
-    {
-        // Second pass: the flags over the file's settings.
-        CLI::App app{description};
-        add_options(app, config, options);
-        CLI11_PARSE(app, argc, argv);
+    // Second pass: the flags over the file's settings.
+    if (const auto stop = parse_flags(config)) {
+        return stop;
     }
-    std::vector<std::string> flag_problems;
     for (const auto& key_value : options.dsoc) { // over the file's [dsoc] entries
         if (auto why = dsoc::server::set_dsoc_setting_from_flag(config.dsoc, key_value);
             !why.empty()) {
             flag_problems.push_back(std::move(why));
         }
     }
-    auto problems = dsoc::server::validate(config);
-    problems.insert(problems.begin(), flag_problems.begin(), flag_problems.end());
-    if (options.print_config) {
-        std::fputs(dsoc::server::format_config_toml(config).c_str(), stdout);
-    }
-    if (!problems.empty()) {
-        for (const auto& p : problems) {
-            std::fprintf(stderr, "invalid setting: %s\n", p.c_str());
-        }
-        return 2;
-    }
-    if (options.print_config) {
-        return 0;
-    }
+    return std::nullopt;
+}
 
-    spdlog::set_default_logger(spdlog::stderr_color_mt("server"));
-    spdlog::set_level(spdlog::level::from_str(config.log_level));
-    spdlog::set_pattern("[%H:%M:%S.%e] [server] [%^%l%$] %v");
+/// Whether the token key file can be read (Server::start() reads it again): a problem
+/// naming the file and why, or empty.
+std::string token_key_problem(const ServerConfig& config) {
+    if (config.insecure || config.token_key_file.empty()) {
+        return {}; // validate() names a missing key file
+    }
+    dsoc::protocol::TokenKey key;
+    std::string error;
+    if (!dsoc::protocol::load_token_key(config.token_key_file, key, error)) {
+        return "token_key_file: " + error;
+    }
+    return {};
+}
 
+/// config.map loaded and checked as the server does at start.
+struct CheckedMap {
+    std::shared_ptr<const dsoc::maps::Map> map; ///< null when it did not load
+    std::string load_problem;                   ///< why it did not load
+    std::vector<dsoc::maps::MapFinding> findings;
+    double load_ms = 0.0;
+
+    [[nodiscard]] bool usable() const {
+        return map != nullptr && !dsoc::maps::any_unusable(findings);
+    }
+};
+
+CheckedMap load_checked_map(const ServerConfig& config) {
+    CheckedMap checked;
     const auto started = std::chrono::steady_clock::now();
     auto loaded = dsoc::maps::load_map(config.map, dsoc::maps::MapSearch::from_environment());
+    checked.load_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started)
+            .count();
     if (!loaded) {
-        spdlog::error("cannot load map '{}': {}", config.map, loaded.error().message());
-        return 2;
+        checked.load_problem =
+            dsoc::cli::map_load_failure("--map", config.map, loaded.error().message());
+        return checked;
     }
-    auto map = std::make_shared<const dsoc::maps::Map>(std::move(loaded).value());
-    // The map's sanity findings, logged once here (dsoc-mapinfo lists the same).
-    const auto findings = dsoc::maps::check_map(*map);
-    for (const auto& finding : findings) {
+    checked.map = std::make_shared<const dsoc::maps::Map>(std::move(loaded).value());
+    // The map's sanity findings (dsoc-mapinfo lists the same).
+    checked.findings = dsoc::maps::check_map(*checked.map);
+    return checked;
+}
+
+/// "map 'X' is unusable: code: text" or "map 'X': code: text".
+std::string finding_text(const ServerConfig& config, const dsoc::maps::MapFinding& finding) {
+    const bool unusable = finding.severity == dsoc::maps::FindingSeverity::unusable;
+    return "map '" + config.map + "'" + (unusable ? " is unusable: " : ": ") + finding.code + ": " +
+           finding.text;
+}
+
+/// --check-config: everything a start checks, without serving.
+int check_config(const ServerConfig& config, std::vector<std::string> problems) {
+    if (auto key = token_key_problem(config); !key.empty()) {
+        problems.push_back(std::move(key));
+    }
+    const CheckedMap checked = load_checked_map(config);
+    if (!checked.load_problem.empty()) {
+        problems.push_back("map: " + checked.load_problem);
+    }
+    for (const auto& finding : checked.findings) {
         if (finding.severity == dsoc::maps::FindingSeverity::unusable) {
-            spdlog::error("map '{}' is unusable: {}: {}", config.map, finding.code, finding.text);
+            problems.push_back(finding_text(config, finding));
         } else {
-            spdlog::warn("map '{}': {}: {}", config.map, finding.code, finding.text);
+            std::printf("warning: %s\n", finding_text(config, finding).c_str());
         }
     }
-    if (dsoc::maps::any_unusable(findings)) {
-        return 2;
+    for (const auto& p : problems) {
+        std::fprintf(stderr, "invalid setting: %s\n", p.c_str());
     }
-    spdlog::info(
-        "map {} loaded in {:.0f} ms: {} occluders, {} collision brushes, {} spawn points",
-        map->name,
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started)
-            .count(),
-        map->occluders.size(), map->collision_brushes.size(), map->spawn_points.size());
+    if (!problems.empty()) {
+        return exit_usage;
+    }
+    std::printf("dsoc-server: the settings are good: map %s (%zu occluders), policy %s, port %u\n",
+                checked.map->name.c_str(), checked.map->occluders.size(), config.policy.c_str(),
+                static_cast<unsigned>(config.port));
+    return exit_ok;
+}
+
+/// Runs the io_context on a thread of its own while the caller is busy (loading the
+/// map, baking its table), so that /healthz and /readyz answer meanwhile. On
+/// destruction it stops that thread and hands the io_context back, with its pending
+/// work, to run on the caller's thread: one I/O thread at a time, as the server needs.
+class IoDuringStartup {
+public:
+    IoDuringStartup(boost::asio::io_context& io, bool needed) : io_(io) {
+        if (needed) {
+            work_.emplace(io.get_executor());
+            thread_ = std::thread([&io] { io.run(); });
+        }
+    }
+    ~IoDuringStartup() {
+        if (thread_.joinable()) {
+            work_.reset();
+            io_.stop();
+            thread_.join();
+            io_.restart();
+        }
+    }
+    IoDuringStartup(const IoDuringStartup&) = delete;
+    IoDuringStartup& operator=(const IoDuringStartup&) = delete;
+
+private:
+    boost::asio::io_context& io_;
+    std::optional<boost::asio::executor_work_guard<boost::asio::io_context::executor_type>> work_;
+    std::thread thread_;
+};
+
+/// The server, from the metrics endpoint to the end-of-run summary.
+int serve(const ServerConfig& config, const ProgramOptions& options) {
+    dsoc::server::set_up_logging(config);
+    spdlog::info("{}", dsoc::cli::version_line("dsoc-server"));
 
     boost::asio::io_context io;
-    dsoc::server::Server server(io, config, map);
-    std::uint16_t port = 0;
-    try {
-        port = server.start();
-    } catch (const std::exception& e) {
-        spdlog::error("cannot start on {}:{}: {}", config.bind_address, config.port, e.what());
-        return 1;
-    }
-    // Machine-readable lines for scripts that started us with --port 0.
-    std::printf("listening on port %u\n", static_cast<unsigned>(port));
-
-    dsoc::server::MetricsEndpoint metrics(io, [&server] { return server.render_metrics(); });
+    dsoc::server::Server* live = nullptr; // the server, once it runs on this thread
+    const auto& build = dsoc::cli::build_info();
+    dsoc::server::MetricsEndpoint metrics(
+        io,
+        [&] {
+            std::string text = live != nullptr ? live->render_metrics() : std::string();
+            dsoc::server::PrometheusText process;
+            dsoc::server::write_build_info(process, build.version, build.commit);
+            dsoc::server::write_process_metrics(process, dsoc::server::read_process_sample());
+            return text + process.text();
+        },
+        [&] {
+            return live != nullptr
+                       ? live->readiness()
+                       : dsoc::server::Readiness{false, "loading map '" + config.map + "'"};
+        });
     if (config.metrics_port >= 0) {
         try {
             const auto metrics_port = metrics.start(
                 config.metrics_bind_address, static_cast<std::uint16_t>(config.metrics_port));
-            spdlog::info("metrics on http://{}:{}/metrics", config.metrics_bind_address,
-                         metrics_port);
+            spdlog::info("metrics on http://{}:{}/metrics (and /healthz, /readyz)",
+                         config.metrics_bind_address, metrics_port);
             std::printf("metrics on port %u\n", static_cast<unsigned>(metrics_port));
+            std::fflush(stdout);
         } catch (const std::exception& e) {
             spdlog::error("cannot serve metrics on {}:{}: {}", config.metrics_bind_address,
                           config.metrics_port, e.what());
-            return 1;
+            return exit_failure;
         }
     }
+
+    std::unique_ptr<dsoc::server::Server> server;
+    {
+        const IoDuringStartup probes(io, config.metrics_port >= 0);
+        const CheckedMap checked = load_checked_map(config);
+        if (!checked.load_problem.empty()) {
+            spdlog::error("{}", checked.load_problem);
+            return exit_usage;
+        }
+        for (const auto& finding : checked.findings) {
+            if (finding.severity == dsoc::maps::FindingSeverity::unusable) {
+                spdlog::error("{}", finding_text(config, finding));
+            } else {
+                spdlog::warn("{}", finding_text(config, finding));
+            }
+        }
+        if (!checked.usable()) {
+            return exit_usage;
+        }
+        spdlog::info(
+            "map {} loaded in {:.0f} ms: {} occluders, {} collision brushes, {} spawn points",
+            checked.map->name, checked.load_ms, checked.map->occluders.size(),
+            checked.map->collision_brushes.size(), checked.map->spawn_points.size());
+        // Builds the policy: loads the map's baked table from the cache, or bakes it.
+        server = std::make_unique<dsoc::server::Server>(io, config, checked.map);
+    }
+    live = server.get();
+    std::uint16_t port = 0;
+    try {
+        port = server->start();
+    } catch (const std::exception& e) {
+        spdlog::error("cannot start on {}:{}: {}", config.bind_address, config.port, e.what());
+        return exit_failure;
+    }
+    // Machine-readable line for scripts that started us with --port 0.
+    std::printf("listening on port %u\n", static_cast<unsigned>(port));
     std::fflush(stdout);
 
     boost::asio::signal_set signals(io, SIGINT, SIGTERM);
+    boost::asio::steady_timer stop_timer(io);
+    // /readyz says 503 from here on; the endpoint closes once the clients are gone.
+    const auto stop = [&] {
+        server->shutdown([&] {
+            metrics.stop();
+            signals.cancel();
+            stop_timer.cancel();
+        });
+    };
     signals.async_wait([&](const boost::system::error_code& ec, int signal) {
         if (!ec) {
             spdlog::info("signal {} received", signal);
-            metrics.stop();
-            server.shutdown([&] { signals.cancel(); });
+            stop();
         }
     });
-    boost::asio::steady_timer stop_timer(io);
     if (config.duration_s > 0.0) {
         stop_timer.expires_after(
             std::chrono::milliseconds(static_cast<long>(config.duration_s * 1000)));
         stop_timer.async_wait([&](const boost::system::error_code& ec) {
             if (!ec) {
-                metrics.stop();
-                server.shutdown([&] { signals.cancel(); });
+                stop();
             }
         });
     }
 
     io.run();
 
-    std::cout << dsoc::server::format_summary(server.stats(), config);
+    std::cout << dsoc::server::format_summary(server->stats(), config);
     if (!options.stats_json.empty()) {
         std::ofstream out(options.stats_json);
-        out << dsoc::server::format_json(server.stats(), config) << "\n";
+        out << dsoc::server::format_json(server->stats(), config) << "\n";
         if (!out) {
             spdlog::error("cannot write {}", options.stats_json);
-            return 1;
+            return exit_failure;
         }
     }
-    return 0;
+    return exit_ok;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    ServerConfig config;
+    ProgramOptions options;
+    std::vector<std::string> problems; // every one is listed, each naming the field and why
+    if (const auto stop = read_settings(argc, argv, config, options, problems)) {
+        return *stop;
+    }
+    const bool bad_flags = !problems.empty();
+    for (auto& p : dsoc::server::validate(config)) {
+        problems.push_back(std::move(p));
+    }
+    if (options.print_config && !bad_flags) {
+        // Printed whatever validate() says: the first step of writing a config file.
+        std::fputs(dsoc::server::format_config_toml(config, problems).c_str(), stdout);
+        for (const auto& p : problems) {
+            std::fprintf(stderr,
+                         "dsoc-server: to fix before the server starts with these "
+                         "settings: %s\n",
+                         p.c_str());
+        }
+        return exit_ok;
+    }
+    if (options.check_config) {
+        return check_config(config, std::move(problems));
+    }
+    if (problems.empty()) {
+        if (auto key = token_key_problem(config); !key.empty()) {
+            problems.push_back(std::move(key)); // now, not after a minute of baking
+        }
+    }
+    if (!problems.empty()) {
+        for (const auto& p : problems) {
+            std::fprintf(stderr, "invalid setting: %s\n", p.c_str());
+        }
+        return exit_usage;
+    }
+    return serve(config, options);
 }

@@ -104,6 +104,12 @@ void PrometheusText::gauge(std::string_view name, std::string_view help, double 
     sample(name, {}, value);
 }
 
+void PrometheusText::gauge(std::string_view name, std::string_view help, const MetricLabels& labels,
+                           double value) {
+    header(name, help, "gauge");
+    sample(name, labels, value);
+}
+
 void PrometheusText::counter_family(std::string_view name, std::string_view help,
                                     const std::vector<std::pair<MetricLabels, double>>& samples) {
     header(name, help, "counter");

@@ -22,12 +22,12 @@ namespace {
 constexpr std::size_t kMaxRequestBytes = 8 * 1024;
 constexpr auto kRequestTimeout = std::chrono::seconds(5);
 
-/// One scrape: read a request, answer, close.
+/// One request: read it, answer, close.
 class Exchange : public std::enable_shared_from_this<Exchange> {
 public:
     Exchange(asio::ip::tcp::socket socket, const MetricsEndpoint::Render& render,
-             std::uint64_t& served)
-        : stream_(std::move(socket)), render_(render), served_(served) {}
+             const MetricsEndpoint::Ready& ready, std::uint64_t& served)
+        : stream_(std::move(socket)), render_(render), ready_(ready), served_(served) {}
 
     void start() {
         parser_.header_limit(kMaxRequestBytes);
@@ -44,18 +44,24 @@ public:
 private:
     void respond() {
         const auto& request = parser_.get();
+        const auto target = request.target();
         response_.version(request.version());
         response_.keep_alive(false);
         response_.set(http::field::server, "dsoc-server");
-        if (request.target() != "/metrics") {
-            response_.result(http::status::not_found);
-            response_.set(http::field::content_type, "text/plain");
-            response_.body() = "not found: metrics are at /metrics\n";
+        if (target != "/metrics" && target != "/healthz" && target != "/readyz") {
+            text(http::status::not_found, "not found: /metrics, /healthz and /readyz are here\n");
         } else if (request.method() != http::verb::get) {
-            response_.result(http::status::method_not_allowed);
             response_.set(http::field::allow, "GET");
-            response_.set(http::field::content_type, "text/plain");
-            response_.body() = "only GET\n";
+            text(http::status::method_not_allowed, "only GET\n");
+        } else if (target == "/healthz") {
+            text(http::status::ok, "ok\n");
+        } else if (target == "/readyz") {
+            const Readiness readiness = ready_ ? ready_() : Readiness{true, {}};
+            if (readiness.ready) {
+                text(http::status::ok, "ready\n");
+            } else {
+                text(http::status::service_unavailable, "not ready: " + readiness.why + "\n");
+            }
         } else {
             response_.result(http::status::ok);
             response_.set(http::field::content_type, std::string(kPrometheusContentType));
@@ -70,18 +76,25 @@ private:
             });
     }
 
+    void text(http::status status, std::string body) {
+        response_.result(status);
+        response_.set(http::field::content_type, "text/plain; charset=utf-8");
+        response_.body() = std::move(body);
+    }
+
     beast::tcp_stream stream_;
     beast::flat_buffer buffer_;
     http::request_parser<http::string_body> parser_;
     http::response<http::string_body> response_;
     const MetricsEndpoint::Render& render_;
+    const MetricsEndpoint::Ready& ready_;
     std::uint64_t& served_;
 };
 
 } // namespace
 
-MetricsEndpoint::MetricsEndpoint(asio::io_context& io, Render render)
-    : acceptor_(io), render_(std::move(render)) {}
+MetricsEndpoint::MetricsEndpoint(asio::io_context& io, Render render, Ready ready)
+    : acceptor_(io), render_(std::move(render)), ready_(std::move(ready)) {}
 
 std::uint16_t MetricsEndpoint::start(const std::string& address, std::uint16_t port) {
     const asio::ip::tcp::endpoint endpoint(asio::ip::make_address(address), port);
@@ -107,7 +120,7 @@ void MetricsEndpoint::accept_next() {
             }
             return;
         }
-        std::make_shared<Exchange>(std::move(socket), render_, requests_served_)->start();
+        std::make_shared<Exchange>(std::move(socket), render_, ready_, requests_served_)->start();
         accept_next();
     });
 }

@@ -73,6 +73,7 @@ std::uint16_t Server::start() {
                      config_.trace_every);
     }
     accept_next();
+    started_ = true;
     last_skip_log_ = Clock::now();
     schedule_ = TickSchedule(last_skip_log_, tick_period_);
     schedule_tick();
@@ -403,6 +404,19 @@ void Server::on_closed(Session& session) {
     // a job may be using them now.
     pending_leaves_.push_back(id);
     asio::post(io_, [this] { apply_leaves(); }); // not from inside the session's handler
+}
+
+Readiness Server::readiness() const {
+    if (shutting_down_) {
+        return {false, "shutting down"};
+    }
+    if (!started_) {
+        return {false, "not started"};
+    }
+    if (stats_.ticks == 0) {
+        return {false, "waiting for the first tick"};
+    }
+    return {true, {}};
 }
 
 void Server::shutdown(std::function<void()> on_done) {

@@ -97,6 +97,8 @@ std::vector<std::string> validate(const ServerConfig& c) {
           "log_level",
           "must be one of trace, debug, info, warn, error, critical, off; got '" + c.log_level +
               "'");
+    check(p, c.log_format == "text" || c.log_format == "json", "log_format",
+          "must be text or json; got '" + c.log_format + "'");
     check(p, c.seed <= static_cast<std::uint64_t>(INT64_MAX), "seed",
           "must be at most 2^63-1 (a TOML integer)");
     check(p, std::isfinite(c.max_speed) && c.max_speed > 0.0f, "max_speed",

@@ -13,6 +13,7 @@
 // The output is deterministic for a seed except the times (entity updates and
 // bytes are a checksum of the run).
 
+#include "dsoc/cli/program.hpp"
 #include "dsoc/interest/game_world.hpp"
 #include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/maps/map_source.hpp"
@@ -86,6 +87,7 @@ int main(int argc, char** argv) {
     int ticks = 90;
     int warm_up = 30;
     CLI::App app{"dsoc-tick-bench: CPU per server tick for N players, by phase, no sockets"};
+    cli::set_up(app, "dsoc-tick-bench");
     server::add_world_options(app, config);
     server::add_policy_options(app, config);
     app.add_option("--players", players, "Connected players (viewers)")
@@ -97,18 +99,21 @@ int main(int argc, char** argv) {
     app.add_option("--warm-up", warm_up, "Ticks run before measuring (players join over them)")
         ->capture_default_str()
         ->check(CLI::Range(1, 1000000));
-    CLI11_PARSE(app, argc, argv);
+    if (const auto stop = cli::parse(app, argc, argv)) {
+        return *stop;
+    }
     config.insecure = true; // no connections here: the token settings do not matter
     if (const auto problems = server::validate(config); !problems.empty()) {
         for (const auto& p : problems) {
             fmt::print(stderr, "invalid setting: {}\n", p);
         }
-        return 2;
+        return cli::exit_usage;
     }
     auto loaded = maps::load_map(config.map, maps::MapSearch::from_environment());
     if (!loaded) {
-        fmt::print(stderr, "cannot load map '{}': {}\n", config.map, loaded.error().message());
-        return 2;
+        fmt::print(stderr, "dsoc-tick-bench: {}\n",
+                   cli::map_load_failure("--map", config.map, loaded.error().message()));
+        return cli::exit_usage;
     }
     const auto map = std::make_shared<const maps::Map>(std::move(loaded).value());
     interest::GameWorld world(server::world_settings(config), map);
@@ -211,5 +216,5 @@ int main(int argc, char** argv) {
                total.decode / n, 1000.0 * total.decode / client_tick);
     fmt::print("  checksum             {} entity updates, {} bytes, {} decode problems\n", updates,
                bytes, decode_problems);
-    return decode_problems == 0 ? 0 : 1;
+    return decode_problems == 0 ? cli::exit_ok : cli::exit_failure;
 }

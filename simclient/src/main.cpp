@@ -1,5 +1,6 @@
 // dsoc-simclient: headless simulated clients; a load generator and protocol checker.
 
+#include "dsoc/cli/program.hpp"
 #include "dsoc/simclient/load_run.hpp"
 
 #include <CLI/CLI.hpp>
@@ -18,6 +19,7 @@ int main(int argc, char** argv) {
     CLI::App app{
         "dsoc-simclient: simulated clients that load a dsoc server and check the protocol.\n"
         "Exits 1 when a client failed to connect, saw a protocol error or was dropped."};
+    dsoc::cli::set_up(app, "dsoc-simclient");
     app.add_option("--server", server, "Server address HOST:PORT")->capture_default_str();
     app.add_option("--clients", config.clients, "Simulated clients")
         ->capture_default_str()
@@ -45,7 +47,9 @@ int main(int argc, char** argv) {
     app.add_option("--token", token_hex,
                    "Connect token (hex, from dsoc-token mint) sent by every client")
         ->excludes("--token-key-file");
-    CLI11_PARSE(app, argc, argv);
+    if (const auto stop = dsoc::cli::parse(app, argc, argv)) {
+        return *stop;
+    }
     if (!token_key_file.empty()) {
         dsoc::protocol::TokenKey key;
         std::string error;

@@ -75,6 +75,35 @@ TEST(ConfigFile, PrintedConfigReadsBackToTheSameValues) {
     EXPECT_EQ(compared, aggregate_field_count<ServerConfig>());
 }
 
+// `dsoc-server --print-config > server.toml` is the documented first step: the defaults
+// must print, read back, and start the server after one edit, the token key file.
+TEST(ConfigFile, TheDefaultsNeedOneEditTheTokenKeyFile) {
+    const ServerConfig defaults;
+    const auto problems = validate(defaults);
+    ASSERT_EQ(problems.size(), 1u)
+        << "a default that does not start the server: " << problems.back();
+    EXPECT_EQ(problems[0].rfind("token_key_file: required unless insecure = true", 0), 0u)
+        << problems[0];
+    std::string text = format_config_toml(defaults, problems);
+    // Listed at the top, as comments.
+    EXPECT_NE(text.find("\n# The server refuses to start with these settings until this is "
+                        "fixed:\n#   token_key_file: required"),
+              std::string::npos)
+        << text;
+    ServerConfig read;
+    ASSERT_TRUE(apply_config_toml(text, "server.toml", read).empty()) << text;
+    EXPECT_EQ(validate(read), problems);
+
+    const std::string unset = "\ntoken_key_file = ''\n";
+    const auto at = text.find(unset);
+    ASSERT_NE(at, std::string::npos) << text;
+    text.replace(at, unset.size(), "\ntoken_key_file = '/etc/dsoc/token.key'\n");
+    ServerConfig edited;
+    ASSERT_TRUE(apply_config_toml(text, "server.toml", edited).empty()) << text;
+    EXPECT_TRUE(validate(edited).empty()) << validate(edited).front();
+    EXPECT_EQ(format_config_toml(edited).find("# The server refuses"), std::string::npos);
+}
+
 TEST(ConfigFile, KeysAbsentFromTheFileKeepTheirValues) {
     ServerConfig c;
     c.bots = 7;

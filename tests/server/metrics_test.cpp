@@ -1,17 +1,26 @@
 #include "dsoc/server/metrics.hpp"
 #include "dsoc/server/metrics_endpoint.hpp"
+#include "dsoc/server/process_metrics.hpp"
 
-#include <boost/asio/connect.hpp>
+#include "support/http_client.hpp"
+#include "support/io_thread.hpp"
+
 #include <boost/asio/io_context.hpp>
-#include <boost/asio/ip/tcp.hpp>
-#include <boost/asio/read.hpp>
-#include <boost/asio/write.hpp>
+#include <boost/asio/post.hpp>
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <cstdio>
 #include <thread>
 
 namespace dsoc::server {
 namespace {
+
+using dsoc::testing::http_body;
+using dsoc::testing::http_exchange;
+using dsoc::testing::http_get;
+using dsoc::testing::http_status;
+using dsoc::testing::run_on_io_thread;
 
 TEST(DurationHistogram, BucketsAreCumulativeAndUpperInclusive) {
     DurationHistogram h;
@@ -59,18 +68,6 @@ TEST(PrometheusText, WritesTheExpositionFormat) {
     EXPECT_EQ(t.back(), '\n');
 }
 
-/// Sends `request` to 127.0.0.1:port and returns the whole response.
-std::string http_exchange(std::uint16_t port, const std::string& request) {
-    boost::asio::io_context io;
-    boost::asio::ip::tcp::socket socket(io);
-    socket.connect({boost::asio::ip::make_address("127.0.0.1"), port});
-    boost::asio::write(socket, boost::asio::buffer(request));
-    std::string response;
-    boost::system::error_code ec;
-    boost::asio::read(socket, boost::asio::dynamic_buffer(response), ec);
-    return response;
-}
-
 TEST(MetricsEndpoint, ServesMetricsAndNothingElse) {
     boost::asio::io_context io;
     int renders = 0;
@@ -97,6 +94,86 @@ TEST(MetricsEndpoint, ServesMetricsAndNothingElse) {
     EXPECT_TRUE(garbage.empty()) << garbage; // not HTTP: the connection is just closed
     EXPECT_EQ(renders, 1);
     EXPECT_EQ(endpoint.requests_served(), 1u);
+}
+
+TEST(MetricsEndpoint, AnswersLivenessAndReadiness) {
+    boost::asio::io_context io;
+    Readiness readiness{false, "loading map 'oa_dm4'"};
+    MetricsEndpoint endpoint(
+        io, [] { return std::string("dsoc_up 1\n"); }, [&] { return readiness; });
+    const std::uint16_t port = endpoint.start("127.0.0.1", 0);
+    std::thread thread([&] { io.run(); });
+
+    const auto alive = http_get(port, "/healthz");
+    const auto loading = http_get(port, "/readyz");
+    run_on_io_thread(io, [&] { readiness = {true, {}}; });
+    const auto ready = http_get(port, "/readyz");
+    run_on_io_thread(io, [&] { readiness = {false, "shutting down"}; });
+    const auto stopping = http_get(port, "/readyz");
+    const auto alive_while_stopping = http_get(port, "/healthz");
+    const auto post =
+        http_exchange(port, "POST /readyz HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n\r\n");
+    const auto missing = http_get(port, "/health");
+
+    boost::asio::post(io, [&] { endpoint.stop(); });
+    thread.join();
+    EXPECT_EQ(http_status(alive), 200) << alive;
+    EXPECT_EQ(http_body(alive), "ok\n");
+    EXPECT_EQ(http_status(loading), 503) << loading;
+    EXPECT_EQ(http_body(loading), "not ready: loading map 'oa_dm4'\n");
+    EXPECT_EQ(http_status(ready), 200) << ready;
+    EXPECT_EQ(http_body(ready), "ready\n");
+    EXPECT_EQ(http_status(stopping), 503) << stopping;
+    EXPECT_EQ(http_body(stopping), "not ready: shutting down\n");
+    EXPECT_EQ(http_status(alive_while_stopping), 200);
+    EXPECT_EQ(http_status(post), 405) << post;
+    EXPECT_EQ(http_status(missing), 404) << missing;
+    EXPECT_EQ(endpoint.requests_served(), 0u); // probes are not scrapes
+}
+
+TEST(ProcessMetrics, ReadsThisProcess) {
+    const ProcessSample before = read_process_sample();
+    std::FILE* file = std::tmpfile();
+    ASSERT_NE(file, nullptr);
+    const ProcessSample with_file = read_process_sample();
+    std::fclose(file);
+    const double now =
+        std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+
+    EXPECT_GT(before.resident_bytes, 1024.0 * 1024.0);
+    EXPECT_GE(before.virtual_bytes, before.resident_bytes);
+    EXPECT_GE(before.cpu_seconds, 0.0);
+    EXPECT_GE(before.open_fds, 3.0); // stdin, stdout, stderr at least
+    EXPECT_EQ(with_file.open_fds, before.open_fds + 1.0);
+    EXPECT_GE(before.max_fds, before.open_fds);
+    // This test's process started moments ago (ctest runs each test in its own).
+    EXPECT_LE(before.start_time_seconds, now + 1.0);
+    EXPECT_GT(before.start_time_seconds, now - 600.0);
+}
+
+TEST(ProcessMetrics, WritesTheStandardNamesAndBuildInfo) {
+    ProcessSample sample;
+    sample.cpu_seconds = 1.5;
+    sample.resident_bytes = 4096;
+    sample.open_fds = 7;
+    sample.start_time_seconds = 1700000000;
+    PrometheusText out;
+    write_process_metrics(out, sample);
+    write_build_info(out, "0.1.0", "0123456789ab");
+    const std::string& t = out.text();
+    EXPECT_NE(t.find("# TYPE process_cpu_seconds_total counter\nprocess_cpu_seconds_total 1.5\n"),
+              std::string::npos)
+        << t;
+    EXPECT_NE(t.find("process_resident_memory_bytes 4096\n"), std::string::npos) << t;
+    EXPECT_NE(t.find("process_open_fds 7\n"), std::string::npos) << t;
+    EXPECT_NE(t.find("process_start_time_seconds 1700000000\n"), std::string::npos) << t;
+    // Fields that were not read are left out, not written as -1.
+    EXPECT_EQ(t.find("process_virtual_memory_bytes"), std::string::npos) << t;
+    EXPECT_EQ(t.find("process_max_fds"), std::string::npos) << t;
+    EXPECT_NE(t.find("# TYPE dsoc_build_info gauge\n"
+                     "dsoc_build_info{version=\"0.1.0\",commit=\"0123456789ab\"} 1\n"),
+              std::string::npos)
+        << t;
 }
 
 } // namespace

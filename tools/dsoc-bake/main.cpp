@@ -1,9 +1,10 @@
 // dsoc-bake: bakes the cell visibility table of each map into the cache directory (or
 // loads it when a good one is there) and prints what it holds. Progress with an ETA
 // goes to stderr.
-// Exit status: 0 every map baked or loaded, 1 some map failed (message on stderr),
-// 2 bad usage.
+// Exit status (dsoc/cli/program.hpp): 0 every map baked or loaded, 1 some map failed
+// (message on stderr), 2 bad usage.
 
+#include "dsoc/cli/program.hpp"
 #include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/maps/map_source.hpp"
 
@@ -29,6 +30,7 @@ void print_progress(const std::string& name, double fraction, double elapsed) {
 int main(int argc, char** argv) {
     CLI::App app{
         "Bakes the cell visibility table of each map (cached; see docs/baked-visibility.md)"};
+    dsoc::cli::set_up(app, "dsoc-bake");
     std::vector<std::string> specs;
     dsoc::maps::BakeRequest request;
     std::string dir;
@@ -63,10 +65,12 @@ int main(int argc, char** argv) {
                    "$XDG_CACHE_HOME/dsoc/bakes or ~/.cache/dsoc/bakes)");
     app.add_flag("--force", request.force, "bake again even when the cache holds a good table");
     app.add_flag("--json", json, "one JSON object per map on stdout");
-    CLI11_PARSE(app, argc, argv);
+    if (const auto stop = dsoc::cli::parse(app, argc, argv)) {
+        return *stop;
+    }
     if (const auto problems = dsoc::visibility::validate(request.config); !problems.empty()) {
         std::cerr << "dsoc-bake: " << problems.front() << "\n";
-        return 2;
+        return dsoc::cli::exit_usage;
     }
     request.dir = dir;
     request.max_table_bytes = max_mib << 20;
@@ -76,7 +80,8 @@ int main(int argc, char** argv) {
     for (const std::string& spec : specs) {
         auto map = dsoc::maps::load_map(spec, search);
         if (!map) {
-            std::cerr << "dsoc-bake: " << map.error().message() << "\n";
+            std::cerr << "dsoc-bake: "
+                      << dsoc::cli::map_load_failure("maps", spec, map.error().message()) << "\n";
             ++failures;
             continue;
         }
@@ -150,5 +155,5 @@ int main(int argc, char** argv) {
             std::fflush(stdout);
         }
     }
-    return failures == 0 ? 0 : 1;
+    return failures == 0 ? dsoc::cli::exit_ok : dsoc::cli::exit_failure;
 }

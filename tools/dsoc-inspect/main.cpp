@@ -9,8 +9,10 @@
 //                                 into an animation with any tool; docs/pictures.md)
 //   frames/sheet.png              all frames in one picture, --sheet-columns per row
 //   view.json                     the counts behind plan.png
-// Exit status: 0 written, 1 a map, trace or file failed (message on stderr), 2 bad usage.
+// Exit status (dsoc/cli/program.hpp): 0 written, 1 a trace or file failed (message on
+// stderr), 2 bad usage or a --map that does not load.
 
+#include "dsoc/cli/program.hpp"
 #include "dsoc/inspect/depth_view.hpp"
 #include "dsoc/inspect/live_source.hpp"
 #include "dsoc/inspect/plan_view.hpp"
@@ -263,7 +265,9 @@ int run(const Options& o) {
     } else {
         auto map = maps::load_map(o.map, maps::MapSearch::from_environment());
         if (!map) {
-            throw Failure{map.error().message()};
+            std::cerr << "dsoc-inspect: "
+                      << cli::map_load_failure("--map", o.map, map.error().message()) << '\n';
+            return cli::exit_usage;
         }
         auto shared = std::make_shared<const maps::Map>(std::move(map).value());
         inspect::LiveOptions live = o.live;
@@ -301,8 +305,8 @@ int main(int argc, char** argv) {
                  "shaded by height, the eye and its reachable region, entities coloured by "
                  "state, TBV boxes), the z-pyramid's six cube faces, and frame sequences. "
                  "Input: a live in-process run of the server's world and policy on --map, or "
-                 "a replication trace (--trace). See docs/pictures.md.",
-                 "dsoc-inspect"};
+                 "a replication trace (--trace). See docs/pictures.md."};
+    dsoc::cli::set_up(app, "dsoc-inspect");
     Options o;
     app.add_option("--map", o.map, "map name, file path or gen:city / gen:rooms (live mode)");
     app.add_option("--trace", o.trace, "replication trace to draw instead of a live run");
@@ -359,7 +363,9 @@ int main(int argc, char** argv) {
     app.add_option("--face-pixels", o.depth.face_pixels, "pixels per face side in the images")
         ->capture_default_str()
         ->check(CLI::Range(8, 4096));
-    CLI11_PARSE(app, argc, argv);
+    if (const auto stop = dsoc::cli::parse(app, argc, argv)) {
+        return *stop;
+    }
 
     if (o.map.empty() && o.trace.empty()) {
         std::cerr << "dsoc-inspect: give --map (live run) or --trace FILE (see --help)\n";

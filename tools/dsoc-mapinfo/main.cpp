@@ -2,9 +2,10 @@
 // brushes, occluders, degenerate brushes skipped, spawn points, bounds, load time,
 // and the sanity checks' findings (dsoc/maps/map_checks.hpp), which dsoc-server logs
 // at start (and refuses to run a map with an "unusable" one).
-// Exit status: 0 loaded (findings or not), 1 the map failed to load (message on
-// stderr), 2 bad usage.
+// Exit status (dsoc/cli/program.hpp): 0 loaded (findings or not), 1 the map failed to
+// load (message on stderr), 2 bad usage.
 
+#include "dsoc/cli/program.hpp"
 #include "dsoc/maps/map_checks.hpp"
 #include "dsoc/maps/map_source.hpp"
 
@@ -101,8 +102,8 @@ int main(int argc, char** argv) {
     CLI::App app{"Loads a map and prints its brushes, occluders, spawn points and bounds.\n"
                  "MAP is a map name (looked up as maps/MAP.bsp in .pk3 archives: --pak, then\n"
                  "$DSOC_MAP_PATH, then /usr/share/games/openarena/baseoa), a path to a .bsp\n"
-                 "or dsoc text map, or gen:city[:seed] / gen:rooms[:seed].",
-                 "dsoc-mapinfo"};
+                 "or dsoc text map, or gen:city[:seed] / gen:rooms[:seed]."};
+    dsoc::cli::set_up(app, "dsoc-mapinfo");
     std::string map_spec;
     bool json = false;
     std::vector<std::string> paks;
@@ -114,7 +115,9 @@ int main(int argc, char** argv) {
     app.add_option("--pak", paks, "a .pk3 archive or a directory of them, searched first")
         ->allow_extra_args(false);
     app.add_flag("--list", list, "list the map names found and exit");
-    CLI11_PARSE(app, argc, argv);
+    if (const auto stop = dsoc::cli::parse(app, argc, argv)) {
+        return *stop;
+    }
 
     dsoc::maps::MapSearch search = dsoc::maps::MapSearch::from_environment();
     search.locations.insert(search.locations.begin(), paks.begin(), paks.end());
@@ -122,19 +125,20 @@ int main(int argc, char** argv) {
         for (const std::string& name : dsoc::maps::list_maps(search)) {
             std::cout << name << '\n';
         }
-        return 0;
+        return dsoc::cli::exit_ok;
     }
     if (map_spec.empty()) {
         std::cerr << "dsoc-mapinfo: MAP is required (see --help)\n";
-        return 2;
+        return dsoc::cli::exit_usage;
     }
     const auto start = std::chrono::steady_clock::now();
     auto map = dsoc::maps::load_map(map_spec, search);
     const double load_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     if (!map) {
-        std::cerr << "dsoc-mapinfo: " << map.error().message() << '\n';
-        return 1;
+        std::cerr << "dsoc-mapinfo: "
+                  << dsoc::cli::map_load_failure("MAP", map_spec, map.error().message()) << '\n';
+        return dsoc::cli::exit_failure;
     }
     const auto findings = dsoc::maps::check_map(map.value());
     if (json) {
@@ -142,5 +146,5 @@ int main(int argc, char** argv) {
     } else {
         print_text(map.value(), findings, load_ms);
     }
-    return 0;
+    return dsoc::cli::exit_ok;
 }

@@ -6,7 +6,10 @@
 //
 // Tokens are printed as hex: a game backend hands them to its clients, which put the
 // bytes in ClientHello.connect_token (dsoc-simclient --token / --token-key-file).
+// Exit status (dsoc/cli/program.hpp): 0 done (check: the token is valid), 1 check found
+// the token invalid or the key could not be written, 2 bad usage or an unreadable key.
 
+#include "dsoc/cli/program.hpp"
 #include "dsoc/protocol/connect_token.hpp"
 
 #include <CLI/CLI.hpp>
@@ -20,12 +23,15 @@
 namespace {
 
 using namespace dsoc::protocol;
+using dsoc::cli::exit_failure;
+using dsoc::cli::exit_ok;
+using dsoc::cli::exit_usage;
 
 int keygen(const std::string& out_path) {
     const std::string text = format_token_key(generate_token_key()) + "\n";
     if (out_path.empty()) {
         std::cout << text;
-        return 0;
+        return exit_ok;
     }
     const mode_t old_mask = ::umask(077); // the key is a secret: owner-only from the start
     std::ofstream out(out_path, std::ios::trunc);
@@ -34,9 +40,9 @@ int keygen(const std::string& out_path) {
     ::umask(old_mask);
     if (!out) {
         std::cerr << "dsoc-token: cannot write " << out_path << "\n";
-        return 1;
+        return exit_failure;
     }
-    return 0;
+    return exit_ok;
 }
 
 int mint(const std::string& key_file, std::uint64_t client_id, std::int64_t ttl_s) {
@@ -44,11 +50,11 @@ int mint(const std::string& key_file, std::uint64_t client_id, std::int64_t ttl_
     std::string error;
     if (!load_token_key(key_file, key, error)) {
         std::cerr << "dsoc-token: " << error << "\n";
-        return 2;
+        return exit_usage;
     }
     const ConnectToken token{client_id, unix_now_s() + static_cast<std::uint64_t>(ttl_s)};
     std::cout << to_hex(mint_connect_token(key, token)) << "\n";
-    return 0;
+    return exit_ok;
 }
 
 int check(const std::string& key_file, const std::string& hex) {
@@ -56,29 +62,30 @@ int check(const std::string& key_file, const std::string& hex) {
     std::string error;
     if (!load_token_key(key_file, key, error)) {
         std::cerr << "dsoc-token: " << error << "\n";
-        return 2;
+        return exit_usage;
     }
     std::vector<std::uint8_t> bytes;
     if (!from_hex(hex, bytes)) {
         std::cerr << "dsoc-token: the token is not hex\n";
-        return 2;
+        return exit_usage;
     }
     const std::uint64_t now = unix_now_s();
     const TokenCheck result = verify_connect_token(key, bytes, now);
     if (result.status != TokenStatus::valid) {
         std::cout << "invalid: " << result.why << "\n";
-        return 1;
+        return exit_failure;
     }
     std::cout << "valid: client " << result.token.client_id << ", expires in "
               << (result.token.expires_unix_s - now) << " s (unix " << result.token.expires_unix_s
               << ")\n";
-    return 0;
+    return exit_ok;
 }
 
 } // namespace
 
 int main(int argc, char** argv) {
     CLI::App app{"dsoc-token: token keys and connect tokens for dsoc-server"};
+    dsoc::cli::set_up(app, "dsoc-token");
     app.require_subcommand(1);
 
     std::string out_path;
@@ -102,7 +109,9 @@ int main(int argc, char** argv) {
     check_cmd->add_option("--key-file", key_file, "The server's token key file")->required();
     check_cmd->add_option("token", token_hex, "The token in hex")->required();
 
-    CLI11_PARSE(app, argc, argv);
+    if (const auto stop = dsoc::cli::parse(app, argc, argv)) {
+        return *stop;
+    }
     if (keygen_cmd->parsed()) {
         return keygen(out_path);
     }

@@ -49,6 +49,7 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("metrics_port", config.metrics_port);
     visit("metrics_bind_address", config.metrics_bind_address);
     visit("log_level", config.log_level);
+    visit("log_format", config.log_format);
     visit("max_speed", config.max_speed);
     visit("seed", config.seed);
     visit("duration_s", config.duration_s);

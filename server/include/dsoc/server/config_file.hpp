@@ -36,7 +36,9 @@ apply_config_toml(std::string_view text, std::string_view source, ServerConfig& 
                                                          ServerConfig& config);
 
 /// Every field of `config` as TOML, one line each in declaration order; apply_config_toml() reads
-/// it back to an equal config.
-[[nodiscard]] std::string format_config_toml(const ServerConfig& config);
+/// it back to an equal config. `problems` (validate()'s, say) are listed in comments at the
+/// top: what must change before the server starts with these settings.
+[[nodiscard]] std::string format_config_toml(const ServerConfig& config,
+                                             const std::vector<std::string>& problems = {});
 
 } // namespace dsoc::server

@@ -1,7 +1,7 @@
 #pragma once
-// Prometheus text exposition format 0.0.4 (what /metrics serves), written by hand:
-// Debian 12 ships no prometheus-cpp. Only what the server needs: counters, gauges
-// and fixed-bucket histograms, with optional labels.
+// Prometheus text exposition format 0.0.4 (what /metrics serves), written here rather
+// than with prometheus-cpp (docs/operations.md, "Metrics", says why). Only what the
+// server needs: counters, gauges and fixed-bucket histograms, with optional labels.
 
 #include <array>
 #include <cstdint>
@@ -44,6 +44,9 @@ class PrometheusText {
 public:
     void counter(std::string_view name, std::string_view help, double value);
     void gauge(std::string_view name, std::string_view help, double value);
+    /// A gauge with one labelled sample, e.g. dsoc_build_info{version="0.1.0"} 1.
+    void gauge(std::string_view name, std::string_view help, const MetricLabels& labels,
+               double value);
     /// One counter family with a sample per label set (e.g. disconnects by reason).
     void counter_family(std::string_view name, std::string_view help,
                         const std::vector<std::pair<MetricLabels, double>>& samples);

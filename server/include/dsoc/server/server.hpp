@@ -33,6 +33,7 @@
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/server/client_tick.hpp"
 #include "dsoc/server/metrics.hpp"
+#include "dsoc/server/metrics_endpoint.hpp"
 #include "dsoc/server/replication_state.hpp"
 #include "dsoc/server/server_config.hpp"
 #include "dsoc/server/session.hpp"
@@ -114,6 +115,10 @@ public:
     [[nodiscard]] const ServerConfig& config() const { return config_; }
     [[nodiscard]] std::size_t session_count() const { return sessions_.size(); }
     [[nodiscard]] std::uint64_t tick() const { return tick_; }
+    /// Whether the server takes players, for /readyz: from the end of its first tick
+    /// (start() ran, the tick loop runs) until shutdown() begins. Call on the io_context
+    /// thread.
+    [[nodiscard]] Readiness readiness() const;
     /// Everything an operator watches, in the Prometheus text format (what /metrics
     /// serves; the names are listed in docs/operations.md). Totals include the live
     /// connections. Call on the io_context thread.
@@ -163,6 +168,7 @@ private:
     std::uint32_t next_client_id_ = 1;
     std::unique_ptr<protocol::TokenKey> token_key_;        // null when insecure
     std::map<std::uint64_t, std::uint32_t> token_clients_; // token client id -> connection
+    bool started_ = false;                                 // start() succeeded
     bool shutting_down_ = false;
     std::function<void()> on_shutdown_done_;
     ServerStats stats_;

@@ -138,6 +138,9 @@ struct ServerConfig {
     std::string metrics_bind_address = "127.0.0.1";
     /// Log level: trace, debug, info, warn, error, critical or off.
     std::string log_level = "info";
+    /// Log format on stderr: "text" for people, "json" for log collectors (one object a
+    /// line: time, level, logger, msg; see logging.hpp).
+    std::string log_format = "text";
     /// Horizontal speed bound of every entity, enforced by the server. [Units: units/s] [Limit: >
     /// 0]
     float max_speed = interest::WorldSettings{}.max_speed;
