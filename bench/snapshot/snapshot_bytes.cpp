@@ -11,6 +11,7 @@
 //                           state every tick (4-byte header + 9-byte tick + 24 each)
 // Deterministic: the same scenario and seed give the same bytes.
 
+#include "dsoc/cli/program.hpp"
 #include "dsoc/eval/parallel.hpp"
 #include "dsoc/eval/policies.hpp"
 #include "dsoc/eval/replication.hpp"
@@ -52,6 +53,7 @@ int main(int argc, char** argv) {
     double seconds = 20.0;
     int threads = 2;
     CLI::App app{"dsoc-snapshot-bytes: compact snapshot size per policy on an eval scenario"};
+    dsoc::cli::set_up(app, "dsoc-snapshot-bytes");
     app.add_option("--scenario", scenario_name, "Scenario name")->capture_default_str();
     app.add_option("--scenarios", scenarios_path, "Scenarios file")->capture_default_str();
     app.add_option("--policies", policy_names, "Policies to run")->capture_default_str();
@@ -59,7 +61,9 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--threads", threads, "Threads over clients (results do not depend on it)")
         ->capture_default_str();
-    CLI11_PARSE(app, argc, argv);
+    if (const auto stop = dsoc::cli::parse(app, argc, argv)) {
+        return *stop;
+    }
 
     std::vector<eval::Scenario> scenarios;
     std::string error;

@@ -2,6 +2,7 @@
 // and whether it ever hides an entity a player should see, against an Embree ray
 // oracle. Deterministic for a seed; no sockets. docs/evaluation.md.
 
+#include "dsoc/cli/program.hpp"
 #include "dsoc/eval/evaluation.hpp"
 #include "dsoc/eval/policies.hpp"
 #include "dsoc/eval/report.hpp"
@@ -18,6 +19,7 @@ int main(int argc, char** argv) {
     CLI::App app{"dsoc-eval: deterministic in-process comparison of interest policies "
                  "(traffic, server CPU, pop-in violations, exposure) against an Embree "
                  "ray-cast oracle. Prints a Markdown table on stdout."};
+    dsoc::cli::set_up(app, "dsoc-eval");
     std::string scenarios_path = default_scenarios_path();
     std::string scenario_name = "arena-64";
     std::string map;
@@ -98,7 +100,9 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--json", json_path, "write every figure as JSON to this file");
     app.add_flag("--quiet", quiet, "no progress line on stderr");
-    CLI11_PARSE(app, argc, argv);
+    if (const auto stop = dsoc::cli::parse(app, argc, argv)) {
+        return *stop;
+    }
 
     std::vector<Scenario> scenarios;
     std::string error;
