@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -92,9 +93,26 @@ int main(int argc, char** argv) {
         return 2;
     }
 
-    const maps::Map map = eval::load_scenario_map(sc);
+    // The scenario's map is an input the run was told to use: one that does not load
+    // (or has no spawn points) is a usage error, named with the scenario.
+    std::optional<maps::Map> loaded;
+    try {
+        loaded.emplace(eval::load_scenario_map(sc));
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "dsoc-snapshot-bytes: scenario %s: %s\n", sc.name.c_str(),
+                     cli::map_load_failure("a scenario's \"map\"", sc.map, e.what()).c_str());
+        return cli::exit_usage;
+    }
+    const maps::Map& map = *loaded;
     const int lookahead = sc.lookahead_ticks();
-    eval::WorldSim world(map, sc, lookahead);
+    std::optional<eval::WorldSim> simulated;
+    try {
+        simulated.emplace(map, sc, lookahead);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "dsoc-snapshot-bytes: scenario %s: %s\n", sc.name.c_str(), e.what());
+        return cli::exit_usage;
+    }
+    eval::WorldSim& world = *simulated;
     const std::size_t viewers = world.viewer_count();
     eval::PolicyEnv env;
     env.map = &map;

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <regex>
 
 namespace dsoc::testing {
@@ -144,6 +145,23 @@ TEST(ExitStatus, AMapToRunOnThatDoesNotLoadIsAUsageErrorWithTheHint) {
             << run.err;
     }
     std::filesystem::remove_all(out);
+}
+
+TEST(ExitStatus, AScenarioMapThatDoesNotLoadIsAUsageErrorNamingTheScenario) {
+    const auto scenarios =
+        std::filesystem::temp_directory_path() / "dsoc-programs-bad-scenario.json";
+    {
+        std::ofstream out(scenarios);
+        out << R"({"version": 1, "scenarios": [{"name": "nowhere", "map": "no_such_map_dsoc",
+                   "viewers": 2, "bots": 2, "duration_s": 1, "tick_rate": 30}]})";
+    }
+    const ProgramRun run = run_program({program("dsoc-snapshot-bytes"), "--scenarios",
+                                        scenarios.string(), "--scenario", "nowhere"});
+    EXPECT_EQ(run.status, 2) << run.err;
+    EXPECT_NE(run.err.find("scenario nowhere: cannot load map 'no_such_map_dsoc'"),
+              std::string::npos)
+        << run.err;
+    std::filesystem::remove(scenarios);
 }
 
 } // namespace
