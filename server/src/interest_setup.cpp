@@ -1,5 +1,6 @@
 #include "dsoc/server/interest_setup.hpp"
 
+#include "dsoc/cli/progress.hpp"
 #include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/server/dsoc_settings.hpp"
 
@@ -40,14 +41,9 @@ baked_table(const ServerConfig& config, const interest::GameWorld& world,
     request.config.cell_size = config.bake_cell_size;
     request.dir = config.bake_dir;
     const std::string& name = world.map().name;
-    auto baked = maps::load_or_bake(world.map(), scene, request, [&](double f, double seconds) {
-        const double eta = f > 0.0 ? seconds * (1.0 - f) / f : 0.0;
-        std::fprintf(stderr, "\rbaking the cell visibility of %s: %5.1f%%, %.0f s, ETA %.0f s ",
-                     name.c_str(), 100.0 * f, seconds, eta);
-        if (f >= 1.0) {
-            std::fprintf(stderr, "\n");
-        }
-    });
+    cli::ProgressLine progress("baking the cell visibility of " + name);
+    auto baked = maps::load_or_bake(world.map(), scene, request,
+                                    [&](double f, double seconds) { progress(f, seconds); });
     if (!baked) {
         throw std::runtime_error("baked stage: " + baked.error().message());
     }

@@ -5,6 +5,7 @@
 // (message on stderr), 2 bad usage.
 
 #include "dsoc/cli/program.hpp"
+#include "dsoc/cli/progress.hpp"
 #include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/maps/map_source.hpp"
 
@@ -13,19 +14,6 @@
 
 #include <cstdio>
 #include <iostream>
-
-namespace {
-
-void print_progress(const std::string& name, double fraction, double elapsed) {
-    const double eta = fraction > 0.0 ? elapsed * (1.0 - fraction) / fraction : 0.0;
-    std::fprintf(stderr, "\r%s: %5.1f%%  %6.1f s elapsed, ETA %6.1f s ", name.c_str(),
-                 100.0 * fraction, elapsed, eta);
-    if (fraction >= 1.0) {
-        std::fprintf(stderr, "\n");
-    }
-}
-
-} // namespace
 
 int main(int argc, char** argv) {
     CLI::App app{
@@ -86,9 +74,9 @@ int main(int argc, char** argv) {
             continue;
         }
         const auto scene = dsoc::visibility::OccluderScene::build(map->occluders);
-        auto baked =
-            dsoc::maps::load_or_bake(map.value(), *scene, request,
-                                     [&](double f, double s) { print_progress(map->name, f, s); });
+        dsoc::cli::ProgressLine progress(map->name);
+        auto baked = dsoc::maps::load_or_bake(map.value(), *scene, request,
+                                              [&](double f, double s) { progress(f, s); });
         if (!baked) {
             std::cerr << "dsoc-bake: " << baked.error().message() << "\n";
             ++failures;
