@@ -135,6 +135,7 @@ TEST(ExitStatus, AMapToRunOnThatDoesNotLoadIsAUsageErrorWithTheHint) {
     const std::vector<std::vector<std::string>> commands = {
         {program("dsoc-tick-bench"), "--map", "no_such_map_dsoc", "--players", "1"},
         {program("dsoc-inspect"), "--map", "no_such_map_dsoc", "--out", out},
+        {program("dsoc-eval"), "--map", "no_such_map_dsoc", "--duration", "1", "--quiet"},
     };
     for (const auto& command : commands) {
         const ProgramRun run = run_program(command);

@@ -112,7 +112,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
     const auto start = std::chrono::steady_clock::now();
     const Scenario& sc = options.scenario;
     if (const auto problems = validate(sc); !problems.empty()) {
-        throw std::runtime_error("scenario " + sc.name + ": " + problems.front());
+        throw EvalInputError("scenario " + sc.name + ": " + problems.front());
     }
     EvalResult result;
     result.scenario = sc;
@@ -123,7 +123,13 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
     const int total_ticks = sc.total_ticks();
     result.ticks = total_ticks;
 
-    const maps::Map map = load_scenario_map(sc);
+    const maps::Map map = [&sc] {
+        try {
+            return load_scenario_map(sc);
+        } catch (const std::runtime_error& e) {
+            throw EvalInputError(e.what(), sc.map);
+        }
+    }();
     result.map_source = map.source;
     result.occluders = map.occluders.size();
     const RayOracle rays(map.occluders);
@@ -164,7 +170,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
         PolicyRun run;
         run.policy = make_policy(name, env);
         if (!run.policy) {
-            throw std::runtime_error("unknown policy '" + name + "'");
+            throw EvalInputError("unknown policy '" + name + "'");
         }
         run.replication.assign(viewers, ClientReplication(viewers));
         run.sets.resize(viewers);
@@ -189,8 +195,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
         }
         if (trace_run == runs.size()) {
             if (!options.trace_policy.empty()) {
-                throw std::runtime_error("--trace-policy " + wanted +
-                                         " is not among the policies run");
+                throw EvalInputError("--trace-policy " + wanted + " is not among the policies run");
             }
             trace_run = 0;
         }

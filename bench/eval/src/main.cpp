@@ -184,9 +184,16 @@ int main(int argc, char** argv) {
     EvalResult result;
     try {
         result = run_evaluation(options, quiet ? nullptr : &std::cerr);
+    } catch (const EvalInputError& e) {
+        std::cerr << "dsoc-eval: "
+                  << (e.map_spec.empty()
+                          ? std::string(e.what())
+                          : dsoc::cli::map_load_failure("--map", e.map_spec, e.what()))
+                  << "\n";
+        return dsoc::cli::exit_usage;
     } catch (const std::exception& e) {
         std::cerr << "dsoc-eval: " << e.what() << "\n";
-        return 1;
+        return dsoc::cli::exit_failure;
     }
     write_markdown(result, command, std::cout);
     if (!json_path.empty()) {

@@ -10,7 +10,9 @@
 
 #include <cstdint>
 #include <iosfwd>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace dsoc::eval {
@@ -93,8 +95,18 @@ struct EvalResult {
     std::vector<double> policy_seconds; ///< wall time per policy (decisions + encoding)
 };
 
+/// What the evaluation was told to use is wrong (the scenario's settings, a map that
+/// does not load, an unknown policy name): the run did not start.
+struct EvalInputError : std::runtime_error {
+    /// `map` is the map spec when the map is what did not load, else empty.
+    EvalInputError(const std::string& what, std::string map = {})
+        : std::runtime_error(what), map_spec(std::move(map)) {}
+    std::string map_spec;
+};
+
 /// Runs the evaluation; `progress` (may be null) gets a status line about once a
-/// second. Throws std::runtime_error on a bad map, policy name or trace path.
+/// second. Throws EvalInputError on a bad scenario, map or policy name, and
+/// std::runtime_error when the run fails (a bake, the trace file).
 [[nodiscard]] EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress);
 
 } // namespace dsoc::eval
