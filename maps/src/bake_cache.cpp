@@ -41,24 +41,34 @@ static std::unique_ptr<PvsBakePruner> pvs_pruner(const Map& map) {
     return nullptr;
 }
 
+/// The grids a bake may use, finest first: cells grow by 1.25x from `cell_size`;
+/// grids of too many cells to even look at are skipped; the first past 1024 units is
+/// the last. Calls `take(grid, last)` until it returns true; returns that grid.
+template <class Take>
+visibility::CellGrid first_grid(const Map& map, float cell_size, Take take) {
+    for (;; cell_size *= 1.25f) {
+        const auto grid = visibility::CellGrid::covering(map.bounds, cell_size);
+        const bool last = cell_size > 1024.0f;
+        if (grid.cell_count() > kMaxBakeGridCells && !last) {
+            continue;
+        }
+        if (take(grid, last)) {
+            return grid;
+        }
+    }
+}
+
 visibility::CellGrid bake_grid(const Map& map, const visibility::OccluderScene& scene,
                                float cell_size, std::uint64_t max_table_bytes) {
     const auto pruner = pvs_pruner(map);
-    // Cells grow (by 1.25x) until the grid is one the reader accepts and the dense
-    // table of its open cells fits the budget; past 1024 units the last grid is kept.
-    for (;; cell_size *= 1.25f) {
-        const auto grid = visibility::CellGrid::covering(map.bounds, cell_size);
-        if (grid.cell_count() > kMaxBakeGridCells && cell_size <= 1024.0f) {
-            continue; // too many cells to even look at
-        }
+    // The first grid the reader accepts whose dense table of open cells fits the budget.
+    return first_grid(map, cell_size, [&](const visibility::CellGrid& grid, bool last) {
         const auto open =
             static_cast<std::uint64_t>(visibility::open_cells_of(scene, grid, pruner.get()).size());
         const bool readable =
             grid.cell_count() <= kMaxBakeCellsPerOpenCell * std::max<std::uint64_t>(open, 64);
-        if ((readable && open * ((open + 63) / 64) * 8 <= max_table_bytes) || cell_size > 1024.0f) {
-            return grid;
-        }
-    }
+        return (readable && open * ((open + 63) / 64) * 8 <= max_table_bytes) || last;
+    });
 }
 
 Result<BakedTable> load_or_bake(const Map& map, const visibility::OccluderScene& scene,
@@ -71,13 +81,45 @@ Result<BakedTable> load_or_bake(const Map& map, const visibility::OccluderScene&
         return LoadError{map.name, "bake settings", problems.front()};
     }
     BakedTable out;
-    const auto grid = bake_grid(map, scene, request.config.cell_size, request.max_table_bytes);
-    out.key = bake_key(map, grid, request.config);
-    char key_hex[17];
-    std::snprintf(key_hex, sizeof key_hex, "%016llx", static_cast<unsigned long long>(out.key));
     const auto dir = request.dir.empty() ? default_bake_dir() : request.dir;
-    out.file = dir / (file_stem(map.name) + "-" + key_hex + ".dsocbake");
+    const auto file_of = [&](std::uint64_t key) {
+        char key_hex[17];
+        std::snprintf(key_hex, sizeof key_hex, "%016llx", static_cast<unsigned long long>(key));
+        return dir / (file_stem(map.name) + "-" + key_hex + ".dsocbake");
+    };
+    const std::uint64_t key_of_map = bake_key_of_map(map);
     std::error_code ec;
+    if (!request.force) {
+        // A good table already baked for one of the grids a bake may use (the finest
+        // first) is taken without deciding which grid a bake would pick now: that
+        // counts the open cells of every finer grid, seconds on a large map.
+        bool found = false;
+        (void)first_grid(map, request.config.cell_size,
+                         [&](const visibility::CellGrid& grid, bool last) {
+                             const std::uint64_t key = bake_key(key_of_map, grid, request.config);
+                             const auto file = file_of(key);
+                             if (!std::filesystem::exists(file, ec)) {
+                                 return last;
+                             }
+                             auto cached = read_bake_file(file, key);
+                             if (!cached) {
+                                 return last; // reported below if it is the grid a bake picks
+                             }
+                             out.key = key;
+                             out.file = file;
+                             out.table = std::make_shared<const visibility::CellVisibilityTable>(
+                                 std::move(cached).value());
+                             out.from_cache = true;
+                             found = true;
+                             return true;
+                         });
+        if (found) {
+            return out;
+        }
+    }
+    const auto grid = bake_grid(map, scene, request.config.cell_size, request.max_table_bytes);
+    out.key = bake_key(key_of_map, grid, request.config);
+    out.file = file_of(out.key);
     if (!request.force && std::filesystem::exists(out.file, ec)) {
         auto cached = read_bake_file(out.file, out.key);
         if (cached) {

@@ -78,8 +78,7 @@ std::uint64_t bake_checksum(std::span<const std::byte> bytes, std::uint64_t seed
     return h;
 }
 
-std::uint64_t bake_key(const Map& map, const visibility::CellGrid& grid,
-                       const visibility::CellBakeConfig& config) {
+std::uint64_t bake_key_of_map(const Map& map) {
     Hasher k;
     k.word(kBakeFormatVersion);
     k.word(kBakeAlgorithmVersion);
@@ -107,6 +106,13 @@ std::uint64_t bake_key(const Map& map, const visibility::CellGrid& grid,
         }
         k.word(bits);
     }
+    return k.h;
+}
+
+std::uint64_t bake_key(std::uint64_t key_of_map, const visibility::CellGrid& grid,
+                       const visibility::CellBakeConfig& config) {
+    Hasher k;
+    k.h = key_of_map;
     k.f32(grid.origin.x);
     k.f32(grid.origin.y);
     k.f32(grid.origin.z);
@@ -121,6 +127,11 @@ std::uint64_t bake_key(const Map& map, const visibility::CellGrid& grid,
     k.i64(config.witness_segments);
     k.i64(config.both_directions ? 1 : 0);
     return k.h;
+}
+
+std::uint64_t bake_key(const Map& map, const visibility::CellGrid& grid,
+                       const visibility::CellBakeConfig& config) {
+    return bake_key(bake_key_of_map(map), grid, config);
 }
 
 std::vector<std::byte> encode_bake(const visibility::CellVisibilityTable& table,

@@ -213,6 +213,43 @@ TEST(BakeFile, ATableWithNoOpenCellsSurvivesTheRoundTrip) {
     EXPECT_EQ(decoded->grid().dims, grid.dims);
 }
 
+TEST_F(BakeFileTest, AFinerTableInTheCacheIsTakenWithoutBakingAgain) {
+    // Baked under a budget that keeps the asked-for cells; then asked for with a budget
+    // that would make a bake grow them: the finer table on disk is served as it is.
+    auto roomy = small_request(dir_);
+    const auto baked = load_or_bake(rooms().map, *rooms().scene, roomy);
+    ASSERT_TRUE(baked.ok()) << baked.error().message();
+    ASSERT_FALSE(baked->from_cache);
+    auto tight = small_request(dir_);
+    tight.max_table_bytes = 8; // a bake now would grow the cells to the last grid
+    const auto coarse =
+        bake_grid(rooms().map, *rooms().scene, tight.config.cell_size, tight.max_table_bytes);
+    ASSERT_GT(coarse.cell_size, baked->table->grid().cell_size);
+    const auto again = load_or_bake(rooms().map, *rooms().scene, tight);
+    ASSERT_TRUE(again.ok());
+    EXPECT_TRUE(again->from_cache);
+    EXPECT_EQ(again->file, baked->file);
+    EXPECT_TRUE(*again->table == *baked->table);
+    // With the file gone, the tight budget bakes its own (coarser) grid.
+    fs::remove(baked->file);
+    const auto rebaked = load_or_bake(rooms().map, *rooms().scene, tight);
+    ASSERT_TRUE(rebaked.ok());
+    EXPECT_FALSE(rebaked->from_cache);
+    EXPECT_EQ(rebaked->table->grid().cell_size, coarse.cell_size);
+}
+
+TEST(BakeKey, TheMapsPartOnceGivesTheSameKeys) {
+    const Map& map = rooms().map;
+    visibility::CellBakeConfig config;
+    const std::uint64_t of_map = bake_key_of_map(map);
+    for (const float size : {32.0f, 40.0f, 128.0f}) {
+        const auto grid = visibility::CellGrid::covering(map.bounds, size);
+        EXPECT_EQ(bake_key(of_map, grid, config), bake_key(map, grid, config));
+    }
+    EXPECT_NE(bake_key(of_map, visibility::CellGrid::covering(map.bounds, 32.0f), config),
+              bake_key(of_map, visibility::CellGrid::covering(map.bounds, 40.0f), config));
+}
+
 TEST(BakeKey, DependsOnTheSettingsThatChangeTheTableOnly) {
     const Map& map = rooms().map;
     const auto grid = visibility::CellGrid::covering(map.bounds, 128.0f);

@@ -51,8 +51,10 @@ struct BakedTable {
                                              float cell_size, std::uint64_t max_table_bytes);
 
 /// The table for `map` from the cache, or baked (and written) when there is no good
-/// file. `scene` must be built from map.occluders. An error only when the map has no
-/// bounds or the settings are invalid.
+/// file. A good file for any grid a bake may use (bake_grid()'s candidates, the finest
+/// first) is taken, even when `max_table_bytes` would now pick a coarser grid: the
+/// budget bounds a bake's memory, and the cached table is already baked. `scene` must be built from
+/// map.occluders. An error only when the map has no bounds or the settings are invalid.
 [[nodiscard]] Result<BakedTable> load_or_bake(const Map& map,
                                               const visibility::OccluderScene& scene,
                                               const BakeRequest& request,

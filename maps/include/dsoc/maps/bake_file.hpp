@@ -41,6 +41,13 @@ inline constexpr std::uint64_t kMaxBakeFileBytes = std::uint64_t{1} << 30;
 /// bit), the grid and the settings that change the result (not `threads`).
 [[nodiscard]] std::uint64_t bake_key(const Map& map, const visibility::CellGrid& grid,
                                      const visibility::CellBakeConfig& config);
+/// bake_key() in two steps, for the keys of several grids of one map: the hash state
+/// after the versions and the map (its occluders and PVS), then the grid and settings
+/// hashed on from it. bake_key(bake_key_of_map(map), grid, config) is bake_key(map,
+/// grid, config).
+[[nodiscard]] std::uint64_t bake_key_of_map(const Map& map);
+[[nodiscard]] std::uint64_t bake_key(std::uint64_t key_of_map, const visibility::CellGrid& grid,
+                                     const visibility::CellBakeConfig& config);
 
 /// The file's checksum function over `bytes` (see the spec): 64-bit words, each mixed
 /// into the state with splitmix64's finaliser.
