@@ -55,20 +55,17 @@ void InterestManager::decide(ClientSlot& c) {
     const float near_squared = config_.lod_near_distance * config_.lod_near_distance;
     const float far_squared = config_.lod_far_distance * config_.lod_far_distance;
     const Aabb region = c.region; // a local: the writes below cannot alias it
-    d.replicated.resize(entities_.size());
-    Replicated* out = d.replicated.data();
-    std::size_t kept = 0;
+    d.replicated.clear();
     bool increasing = true; // slots are reused, so ids need not follow slot order
     for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
         const EntityView& e = views_[slot];
         if (!e.alive || c.pairs[slot].state != PairState::visible) {
             continue;
         }
-        increasing = increasing && (kept == 0 || out[kept - 1].id < e.id);
-        out[kept++] = {e.id, level_of_detail(conservative_distance_squared(region, e.box),
-                                             near_squared, far_squared)};
+        increasing = increasing && (d.replicated.empty() || d.replicated.back().id < e.id);
+        d.replicated.push_back({e.id, level_of_detail(conservative_distance_squared(region, e.box),
+                                                      near_squared, far_squared)});
     }
-    d.replicated.resize(kept);
     if (!increasing) {
         std::sort(d.replicated.begin(), d.replicated.end(),
                   [](const Replicated& a, const Replicated& b) { return a.id < b.id; });
