@@ -30,7 +30,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     const std::span<const std::byte> all(bytes);
     const std::uint64_t checksum = dsoc::maps::bake_checksum(
-        all.subspan(kHeaderBytes), dsoc::maps::bake_checksum(all.first(kChecksumOffset)));
+        all.subspan(kChecksumOffset + 8), dsoc::maps::bake_checksum(all.first(kChecksumOffset)));
     std::memcpy(bytes.data() + kChecksumOffset, &checksum, sizeof checksum);
     auto table = dsoc::maps::decode_bake(bytes, "fuzz.dsocbake");
     if (!table.ok()) {

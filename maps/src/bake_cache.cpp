@@ -58,13 +58,23 @@ visibility::CellGrid first_grid(const Map& map, float cell_size, Take take) {
     }
 }
 
+/// One byte per cell of `grid`: whether `space` covers it (empty: no space, all).
+static std::vector<std::uint8_t> covered_cells(const visibility::CellGrid& grid,
+                                               const std::vector<visibility::Aabb>* space_boxes) {
+    return space_boxes != nullptr ? cells_meeting(grid, *space_boxes) : std::vector<std::uint8_t>{};
+}
+
 visibility::CellGrid bake_grid(const Map& map, const visibility::OccluderScene& scene,
-                               float cell_size, std::uint64_t max_table_bytes) {
+                               float cell_size, std::uint64_t max_table_bytes,
+                               const std::optional<PlayerSpace>& space) {
     const auto pruner = pvs_pruner(map);
+    const auto boxes = space ? player_space_boxes(map, *space) : std::vector<visibility::Aabb>{};
     // The first grid the reader accepts whose dense table of open cells fits the budget.
     return first_grid(map, cell_size, [&](const visibility::CellGrid& grid, bool last) {
-        const auto open =
-            static_cast<std::uint64_t>(visibility::open_cells_of(scene, grid, pruner.get()).size());
+        const auto covered = covered_cells(grid, space ? &boxes : nullptr);
+        const auto open = static_cast<std::uint64_t>(
+            visibility::split_covered(visibility::open_cells_of(scene, grid, pruner.get()), covered)
+                .first.size());
         const bool readable =
             grid.cell_count() <= kMaxBakeCellsPerOpenCell * std::max<std::uint64_t>(open, 64);
         return (readable && open * ((open + 63) / 64) * 8 <= max_table_bytes) || last;
@@ -79,6 +89,11 @@ Result<BakedTable> load_or_bake(const Map& map, const visibility::OccluderScene&
     }
     if (const auto problems = visibility::validate(request.config); !problems.empty()) {
         return LoadError{map.name, "bake settings", problems.front()};
+    }
+    if (request.player_space) {
+        if (const auto problems = validate(*request.player_space); !problems.empty()) {
+            return LoadError{map.name, "player space", problems.front()};
+        }
     }
     BakedTable out;
     const auto dir = request.dir.empty() ? default_bake_dir() : request.dir;
@@ -96,7 +111,8 @@ Result<BakedTable> load_or_bake(const Map& map, const visibility::OccluderScene&
         bool found = false;
         (void)first_grid(map, request.config.cell_size,
                          [&](const visibility::CellGrid& grid, bool last) {
-                             const std::uint64_t key = bake_key(key_of_map, grid, request.config);
+                             const std::uint64_t key =
+                                 bake_key(key_of_map, grid, request.config, request.player_space);
                              const auto file = file_of(key);
                              if (!std::filesystem::exists(file, ec)) {
                                  return last;
@@ -117,8 +133,9 @@ Result<BakedTable> load_or_bake(const Map& map, const visibility::OccluderScene&
             return out;
         }
     }
-    const auto grid = bake_grid(map, scene, request.config.cell_size, request.max_table_bytes);
-    out.key = bake_key(key_of_map, grid, request.config);
+    const auto grid = bake_grid(map, scene, request.config.cell_size, request.max_table_bytes,
+                                request.player_space);
+    out.key = bake_key(key_of_map, grid, request.config, request.player_space);
     out.file = file_of(out.key);
     if (!request.force && std::filesystem::exists(out.file, ec)) {
         auto cached = read_bake_file(out.file, out.key);
@@ -132,8 +149,11 @@ Result<BakedTable> load_or_bake(const Map& map, const visibility::OccluderScene&
     }
     // The compiler's PVS, where the map has one, proves far pairs apart for free.
     const auto pruner = pvs_pruner(map);
+    const auto boxes = request.player_space ? player_space_boxes(map, *request.player_space)
+                                            : std::vector<visibility::Aabb>{};
+    const auto covered = covered_cells(grid, request.player_space ? &boxes : nullptr);
     auto table = visibility::bake_cell_visibility(scene, grid, request.config, pruner.get(),
-                                                  &out.stats, progress);
+                                                  &out.stats, progress, covered);
     if (auto problem = write_bake_file(out.file, table, out.key)) {
         out.write_problem = *problem;
     }

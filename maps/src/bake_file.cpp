@@ -43,6 +43,11 @@ std::size_t open_list_bytes(std::uint64_t open) {
     return (open * 4 + 7) / 8 * 8;
 }
 
+/// The uncovered cells' bitmap: one bit per grid cell, in 64-bit words.
+std::size_t uncovered_words(std::uint64_t cells) {
+    return static_cast<std::size_t>((cells + 63) / 64);
+}
+
 struct Hasher {
     std::uint64_t h = 0xcbf29ce484222325ull;
     void word(std::uint64_t w) { h = bake_checksum(std::as_bytes(std::span(&w, 1)), h); }
@@ -110,7 +115,8 @@ std::uint64_t bake_key_of_map(const Map& map) {
 }
 
 std::uint64_t bake_key(std::uint64_t key_of_map, const visibility::CellGrid& grid,
-                       const visibility::CellBakeConfig& config) {
+                       const visibility::CellBakeConfig& config,
+                       const std::optional<PlayerSpace>& space) {
     Hasher k;
     k.h = key_of_map;
     k.f32(grid.origin.x);
@@ -126,12 +132,19 @@ std::uint64_t bake_key(std::uint64_t key_of_map, const visibility::CellGrid& gri
     k.i64(config.witness_stop_level);
     k.i64(config.witness_segments);
     k.i64(config.both_directions ? 1 : 0);
+    k.i64(space ? 1 : 0);
+    if (space) {
+        k.f32(space->min_walk_normal_z);
+        k.f32(space->height);
+        k.f32(space->margin);
+    }
     return k.h;
 }
 
 std::uint64_t bake_key(const Map& map, const visibility::CellGrid& grid,
-                       const visibility::CellBakeConfig& config) {
-    return bake_key(bake_key_of_map(map), grid, config);
+                       const visibility::CellBakeConfig& config,
+                       const std::optional<PlayerSpace>& space) {
+    return bake_key(bake_key_of_map(map), grid, config, space);
 }
 
 std::vector<std::byte> encode_bake(const visibility::CellVisibilityTable& table,
@@ -146,9 +159,14 @@ std::vector<std::byte> encode_bake(const visibility::CellVisibilityTable& table,
     const auto& grid = table.grid();
     const std::size_t open = table.open_count();
     const std::size_t list = open_list_bytes(open);
+    std::vector<std::uint64_t> uncovered(uncovered_words(grid.cell_count()), 0);
+    for (const std::uint32_t c : table.uncovered_cells()) {
+        uncovered[c >> 6] |= std::uint64_t{1} << (c & 63);
+    }
+    const std::size_t rows_at = kHeaderBytes + list + uncovered.size() * 8;
     const auto classes = rows->classes();
     const auto literals = rows->literals();
-    std::vector<std::byte> out(kHeaderBytes + list + (classes.size() + literals.size()) * 8);
+    std::vector<std::byte> out(rows_at + (classes.size() + literals.size()) * 8);
     std::memcpy(out.data(), kMagic, 8);
     put<std::uint32_t>(out, 8, kBakeFormatVersion);
     put<std::uint32_t>(out, 12, static_cast<std::uint32_t>(kHeaderBytes));
@@ -167,11 +185,12 @@ std::vector<std::byte> encode_bake(const visibility::CellVisibilityTable& table,
     if (open > 0) {
         std::memcpy(out.data() + kHeaderBytes, table.open_cells().data(), open * 4);
     }
+    std::memcpy(out.data() + kHeaderBytes + list, uncovered.data(), uncovered.size() * 8);
     if (!classes.empty()) {
-        std::memcpy(out.data() + kHeaderBytes + list, classes.data(), classes.size() * 8);
+        std::memcpy(out.data() + rows_at, classes.data(), classes.size() * 8);
     }
     if (!literals.empty()) {
-        std::memcpy(out.data() + kHeaderBytes + list + classes.size() * 8, literals.data(),
+        std::memcpy(out.data() + rows_at + classes.size() * 8, literals.data(),
                     literals.size() * 8);
     }
     put<std::uint64_t>(out, kChecksumOffset, checksum_of_file(out));
@@ -239,8 +258,9 @@ Result<visibility::CellVisibilityTable> decode_bake(std::span<const std::byte> b
     if (literal_words > kMaxBakeFileBytes / 8) {
         return fail("header", std::to_string(literal_words) + " literal words: over the limit");
     }
-    const std::uint64_t expected_size =
-        kHeaderBytes + open_list_bytes(open) + (class_words + literal_words) * 8;
+    const std::size_t uncovered_at = kHeaderBytes + open_list_bytes(open);
+    const std::size_t rows_at = uncovered_at + uncovered_words(grid.cell_count()) * 8;
+    const std::uint64_t expected_size = rows_at + (class_words + literal_words) * 8;
     if (expected_size > kMaxBakeFileBytes) {
         return fail("header", "table of " + std::to_string(expected_size) +
                                   " bytes is over the limit of " +
@@ -269,7 +289,19 @@ Result<visibility::CellVisibilityTable> decode_bake(std::span<const std::byte> b
             return fail("open cells", "entry " + std::to_string(i) + " is out of range");
         }
     }
-    visibility::CellVisibilityTable table(grid, cells, visibility::CellVisibilityTable::Rows::none);
+    std::vector<std::uint32_t> uncovered;
+    for (std::size_t w = 0; w < uncovered_words(grid.cell_count()); ++w) {
+        for (auto bits = get<std::uint64_t>(bytes, uncovered_at + w * 8); bits != 0;
+             bits &= bits - 1) {
+            const std::uint64_t c = w * 64 + static_cast<std::uint64_t>(std::countr_zero(bits));
+            if (c >= grid.cell_count()) {
+                return fail("uncovered cells", "a bit past the last grid cell");
+            }
+            uncovered.push_back(static_cast<std::uint32_t>(c));
+        }
+    }
+    visibility::CellVisibilityTable table(grid, cells, uncovered,
+                                          visibility::CellVisibilityTable::Rows::none);
     for (std::size_t i = 0; i < cells.size(); ++i) {
         if (table.open_cells()[i] != cells[i] ||
             (i > 0 && table.block_rank(cells[i]) <= table.block_rank(cells[i - 1]))) {
@@ -277,7 +309,12 @@ Result<visibility::CellVisibilityTable> decode_bake(std::span<const std::byte> b
                         "entry " + std::to_string(i) + " is repeated or not in block order");
         }
     }
-    const std::size_t rows_at = kHeaderBytes + open_list_bytes(open);
+    for (const std::uint32_t c : uncovered) {
+        if (table.open_index(c) != visibility::kUncoveredCell) {
+            return fail("uncovered cells",
+                        "grid cell " + std::to_string(c) + " is both open and uncovered");
+        }
+    }
     std::vector<std::uint64_t> classes(class_words);
     std::vector<std::uint64_t> literals(literal_words);
     if (!classes.empty()) {

@@ -1,6 +1,7 @@
 #include "dsoc/server/interest_setup.hpp"
 
 #include "dsoc/cli/progress.hpp"
+#include "dsoc/interest/bake_request.hpp"
 #include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/server/dsoc_settings.hpp"
 
@@ -37,7 +38,7 @@ interest::PolicySettings policy_settings(const ServerConfig& config) {
 std::shared_ptr<const visibility::CellVisibilityTable>
 baked_table(const ServerConfig& config, const interest::GameWorld& world,
             const visibility::OccluderScene& scene) {
-    maps::BakeRequest request;
+    maps::BakeRequest request = interest::walking_bake_request(world.move_config());
     request.config.cell_size = config.bake_cell_size;
     request.dir = config.bake_dir;
     const std::string& name = world.map().name;

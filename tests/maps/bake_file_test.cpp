@@ -222,8 +222,8 @@ TEST_F(BakeFileTest, AFinerTableInTheCacheIsTakenWithoutBakingAgain) {
     ASSERT_FALSE(baked->from_cache);
     auto tight = small_request(dir_);
     tight.max_table_bytes = 8; // a bake now would grow the cells to the last grid
-    const auto coarse =
-        bake_grid(rooms().map, *rooms().scene, tight.config.cell_size, tight.max_table_bytes);
+    const auto coarse = bake_grid(rooms().map, *rooms().scene, tight.config.cell_size,
+                                  tight.max_table_bytes, std::nullopt);
     ASSERT_GT(coarse.cell_size, baked->table->grid().cell_size);
     const auto again = load_or_bake(rooms().map, *rooms().scene, tight);
     ASSERT_TRUE(again.ok());
@@ -244,10 +244,12 @@ TEST(BakeKey, TheMapsPartOnceGivesTheSameKeys) {
     const std::uint64_t of_map = bake_key_of_map(map);
     for (const float size : {32.0f, 40.0f, 128.0f}) {
         const auto grid = visibility::CellGrid::covering(map.bounds, size);
-        EXPECT_EQ(bake_key(of_map, grid, config), bake_key(map, grid, config));
+        EXPECT_EQ(bake_key(of_map, grid, config, std::nullopt),
+                  bake_key(map, grid, config, std::nullopt));
     }
-    EXPECT_NE(bake_key(of_map, visibility::CellGrid::covering(map.bounds, 32.0f), config),
-              bake_key(of_map, visibility::CellGrid::covering(map.bounds, 40.0f), config));
+    EXPECT_NE(
+        bake_key(of_map, visibility::CellGrid::covering(map.bounds, 32.0f), config, std::nullopt),
+        bake_key(of_map, visibility::CellGrid::covering(map.bounds, 40.0f), config, std::nullopt));
 }
 
 TEST(BakeKey, DependsOnTheSettingsThatChangeTheTableOnly) {
@@ -257,9 +259,84 @@ TEST(BakeKey, DependsOnTheSettingsThatChangeTheTableOnly) {
     a.cell_size = 128.0f;
     visibility::CellBakeConfig b = a;
     b.threads = 7; // not part of the result
-    EXPECT_EQ(bake_key(map, grid, a), bake_key(map, grid, b));
+    EXPECT_EQ(bake_key(map, grid, a, std::nullopt), bake_key(map, grid, b, std::nullopt));
     b.portal_depth = 1;
-    EXPECT_NE(bake_key(map, grid, a), bake_key(map, grid, b));
+    EXPECT_NE(bake_key(map, grid, a, std::nullopt), bake_key(map, grid, b, std::nullopt));
+    // The space the table covers is part of what it says.
+    const PlayerSpace low{0.7f, 100.0f, 32.0f};
+    PlayerSpace high = low;
+    high.height = 200.0f;
+    EXPECT_NE(bake_key(map, grid, a, std::nullopt), bake_key(map, grid, a, low));
+    EXPECT_NE(bake_key(map, grid, a, low), bake_key(map, grid, a, high));
+    EXPECT_EQ(bake_key(map, grid, a, low), bake_key(map, grid, a, PlayerSpace{low}));
+}
+
+/// The corridor with a floor under the left half of it: walkers can be only above that.
+Map corridor_with_a_floor() {
+    Map map = rooms().map;
+    const visibility::Aabb& b = map.bounds;
+    const visibility::Aabb floor{b.min, {b.center().x, b.max.y, b.min.z + 8.0f}};
+    CollisionBrush brush;
+    brush.bounds = floor;
+    add_axial_bevels(brush.planes, floor);
+    map.collision_brushes.push_back(brush);
+    return map;
+}
+
+TEST_F(BakeFileTest, ATableWithUncoveredCellsSurvivesTheRoundTripAndItsDamageIsRefused) {
+    const Map map = corridor_with_a_floor();
+    auto request = small_request(dir_);
+    request.player_space = PlayerSpace{0.7f, 70.0f, 0.0f};
+    const auto baked = load_or_bake(map, *rooms().scene, request);
+    ASSERT_TRUE(baked.ok()) << baked.error().message();
+    const auto& table = *baked->table;
+    ASSERT_GT(table.uncovered_cells().size(), 0u);
+    ASSERT_GT(table.open_count(), 0u);
+    EXPECT_EQ(baked->stats.uncovered_cells, table.uncovered_cells().size());
+    // Only cells over the floor are covered.
+    for (const std::uint32_t c : table.open_cells()) {
+        const auto box = table.grid().cell_box(table.grid().coords(c));
+        EXPECT_LE(box.min.x, map.bounds.center().x + 1.0f);
+        EXPECT_LE(box.min.z, map.bounds.min.z + 8.0f + 70.0f + 1.0f);
+    }
+    const auto again = load_or_bake(map, *rooms().scene, request);
+    ASSERT_TRUE(again.ok());
+    EXPECT_TRUE(again->from_cache);
+    EXPECT_TRUE(*again->table == table);
+    // Without the space: another key, another file, no uncovered cells.
+    request.player_space.reset();
+    const auto whole = load_or_bake(map, *rooms().scene, request);
+    ASSERT_TRUE(whole.ok());
+    EXPECT_NE(whole->key, baked->key);
+    EXPECT_TRUE(whole->table->uncovered_cells().empty());
+    EXPECT_EQ(whole->table->open_count(), table.open_count() + table.uncovered_cells().size());
+
+    const auto good = read_all(baked->file);
+    const std::size_t bitmap_at = 80 + (table.open_count() * 4 + 7) / 8 * 8;
+    const auto resum = [](std::vector<std::byte>& bytes) {
+        const std::span<const std::byte> all(bytes);
+        const std::uint64_t sum = bake_checksum(all.subspan(72), bake_checksum(all.first(64)));
+        std::memcpy(bytes.data() + 64, &sum, 8);
+    };
+    const auto set_bit = [&](std::vector<std::byte>& bytes, std::uint64_t cell) {
+        bytes[bitmap_at + cell / 8] |= std::byte{static_cast<unsigned char>(1u << (cell % 8))};
+        resum(bytes);
+    };
+    auto both = good;
+    set_bit(both, table.open_cells().front());
+    const auto r1 = decode_bake(both, "t.dsocbake", baked->key);
+    ASSERT_FALSE(r1.ok());
+    EXPECT_NE(r1.error().message().find("both open and uncovered"), std::string::npos)
+        << r1.error().message();
+    const std::uint64_t cells = table.grid().cell_count();
+    if (cells % 64 != 0) {
+        auto past = good;
+        set_bit(past, cells);
+        const auto r2 = decode_bake(past, "t.dsocbake", baked->key);
+        ASSERT_FALSE(r2.ok());
+        EXPECT_NE(r2.error().message().find("past the last grid cell"), std::string::npos)
+            << r2.error().message();
+    }
 }
 
 } // namespace

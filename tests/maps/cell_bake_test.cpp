@@ -6,6 +6,7 @@
 
 #include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/maps/map_source.hpp"
+#include "dsoc/maps/player_space.hpp"
 #include "dsoc/maps/pvs_bake_pruner.hpp"
 #include "dsoc/visibility/cell_bake.hpp"
 #include "dsoc/visibility/reference_visibility.hpp"
@@ -150,6 +151,9 @@ struct BakeCase {
     float cell_size;
     int top_level;     ///< 0: no hierarchy
     double min_hidden; ///< the table must hide at least this share of cell pairs
+    /// Rows only above walkable ground (a player space like the server's): the bake's
+    /// blocks hold only covered cells.
+    bool player_space = false;
 };
 
 class CellBakeProperty : public ::testing::TestWithParam<BakeCase> {};
@@ -170,9 +174,16 @@ TEST_P(CellBakeProperty, NoHiddenPairHasAClearSegment) {
     }
     const auto grid = visibility::CellGrid::covering(l.map.bounds, c.cell_size);
     visibility::CellBakeStats stats;
+    std::vector<std::uint8_t> covered;
+    if (c.player_space) {
+        covered = cells_meeting(grid, player_space_boxes(l.map, PlayerSpace{0.7f, 160.0f, 64.0f}));
+    }
     const auto table =
-        visibility::bake_cell_visibility(*l.scene, grid, config, pruner.get(), &stats);
+        visibility::bake_cell_visibility(*l.scene, grid, config, pruner.get(), &stats, {}, covered);
     ASSERT_GT(table.open_count(), 50u);
+    if (c.player_space) {
+        ASSERT_GT(table.uncovered_cells().size(), 0u);
+    }
     // Symmetric, and every open cell sees itself.
     for (OpenCell a = 0; a < static_cast<OpenCell>(table.open_count()); a += 7) {
         EXPECT_TRUE(table.may_see(a, a));
@@ -198,11 +209,13 @@ TEST_P(CellBakeProperty, NoHiddenPairHasAClearSegment) {
 INSTANTIATE_TEST_SUITE_P(RealMaps, CellBakeProperty,
                          ::testing::Values(BakeCase{"oa_dm4", 96.0f, 2, 0.5},
                                            BakeCase{"oa_dm4", 96.0f, 0, 0.5},
+                                           BakeCase{"oa_dm4", 96.0f, 2, 0.5, true},
                                            BakeCase{"q3dm6ish", 128.0f, 2, 0.3},
                                            BakeCase{"oa_ctf2", 192.0f, 1, 0.02}),
                          [](const auto& param_info) {
                              std::string name = std::string(param_info.param.map) + "_top" +
-                                                std::to_string(param_info.param.top_level);
+                                                std::to_string(param_info.param.top_level) +
+                                                (param_info.param.player_space ? "_space" : "");
                              for (char& ch : name) {
                                  ch = std::isalnum(static_cast<unsigned char>(ch)) != 0 ? ch : '_';
                              }

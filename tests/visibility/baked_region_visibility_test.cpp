@@ -129,6 +129,99 @@ TEST(BakedRegionVisibility, WhatTheTableDoesNotCoverGoesToTheNextStage) {
     EXPECT_EQ(alone.test_box(straddling), Visibility::visible);
 }
 
+/// Whether `box` touches a cell of `table` that is uncovered (brute force over its cells).
+bool touches_uncovered(const CellVisibilityTable& table, const Aabb& box) {
+    glm::ivec3 lo;
+    glm::ivec3 hi;
+    if (!table.grid().range_of(box, lo, hi)) {
+        return false;
+    }
+    for (int z = lo.z; z <= hi.z; ++z) {
+        for (int y = lo.y; y <= hi.y; ++y) {
+            for (int x = lo.x; x <= hi.x; ++x) {
+                if (table.open_index(table.grid().index({x, y, z})) == kUncoveredCell) {
+                    return true;
+                }
+            }
+        }
+    }
+    return false;
+}
+
+TEST(BakedRegionVisibility, UncoveredCellsAreNeverAnsweredAndChangeNoOtherAnswer) {
+    // The corridor baked twice without the hierarchy (pair by pair, the slow twin):
+    // once over every open cell, once with the upper half of the layers uncovered.
+    const TestWorld w = make_corridor_world(7, 2, 2);
+    const auto scene = OccluderScene::build(w.world.occluders());
+    CellBakeConfig config;
+    config.cell_size = 64.0f;
+    config.threads = 2;
+    config.top_level = 0;
+    const auto grid = CellGrid::covering(w.world.bounds(), config.cell_size);
+    ASSERT_GE(grid.dims.z, 2);
+    std::vector<std::uint8_t> covered(grid.cell_count(), 0);
+    for (std::uint32_t i = 0; i < grid.cell_count(); ++i) {
+        covered[i] = grid.coords(i).z < grid.dims.z / 2 ? 1 : 0;
+    }
+    const CellVisibilityTable whole = bake_cell_visibility(*scene, grid, config);
+    CellBakeStats stats;
+    const auto part = std::make_shared<const CellVisibilityTable>(
+        bake_cell_visibility(*scene, grid, config, nullptr, &stats, {}, covered));
+    ASSERT_GT(part->uncovered_cells().size(), 0u);
+    ASSERT_GT(part->open_count(), 0u);
+    EXPECT_EQ(stats.uncovered_cells, part->uncovered_cells().size());
+    EXPECT_EQ(part->open_count() + part->uncovered_cells().size(), whole.open_count());
+    // Among the cells left, the same answers as the whole table.
+    for (std::size_t a = 0; a < part->open_count(); ++a) {
+        const OpenCell wa = whole.open_index(part->open_cells()[a]);
+        for (std::size_t b = 0; b < part->open_count(); ++b) {
+            const OpenCell wb = whole.open_index(part->open_cells()[b]);
+            ASSERT_EQ(part->may_see(static_cast<OpenCell>(a), static_cast<OpenCell>(b)),
+                      whole.may_see(wa, wb));
+        }
+    }
+    EXPECT_GT(part->hidden_pairs(), 0u); // something is still culled
+    // A region or a box touching an uncovered cell goes to the next stage, always.
+    int calls = 0;
+    BakedRegionVisibility stage(part,
+                                std::make_unique<CountingStage>(Visibility::occluded, &calls));
+    BakedRegionVisibility alone(part, nullptr);
+    std::mt19937 rng(11);
+    int hidden_by_table = 0;
+    int uncovered_regions = 0;
+    int uncovered_boxes = 0;
+    for (int r = 0; r < 80; ++r) {
+        const Aabb region = random_box(rng, w.play_area, 16.0f, 120.0f);
+        stage.build(region);
+        alone.build(region);
+        const bool region_out = touches_uncovered(*part, region);
+        uncovered_regions += region_out ? 1 : 0;
+        if (region_out) {
+            EXPECT_FALSE(stage.active());
+        }
+        for (int k = 0; k < 30; ++k) {
+            const Aabb box = random_box(rng, w.play_area, 16.0f, 64.0f);
+            const bool box_out = touches_uncovered(*part, box);
+            uncovered_boxes += box_out ? 1 : 0;
+            calls = 0;
+            const Visibility v = stage.test_box(box);
+            PreparedBox p;
+            alone.prepare(box, p);
+            if (region_out || box_out) {
+                EXPECT_EQ(calls, 1) << "the table answered for an uncovered cell";
+                EXPECT_EQ(alone.test_prepared(p), Visibility::visible);
+                EXPECT_EQ(alone.test_box(box), Visibility::visible);
+            } else if (calls == 0) {
+                EXPECT_EQ(v, Visibility::occluded);
+                ++hidden_by_table;
+            }
+        }
+    }
+    EXPECT_GT(uncovered_regions, 5);
+    EXPECT_GT(uncovered_boxes, 50);
+    EXPECT_GT(hidden_by_table, 20);
+}
+
 TEST(BakedRegionVisibility, PreparedWordsAnswerAsCellsAndMergedKeysHideOnlyTogether) {
     const Baked& b = corridor_table();
     const CellVisibilityTable& t = *b.table;

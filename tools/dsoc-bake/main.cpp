@@ -6,6 +6,7 @@
 
 #include "dsoc/cli/program.hpp"
 #include "dsoc/cli/progress.hpp"
+#include "dsoc/interest/bake_request.hpp"
 #include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/maps/map_source.hpp"
 
@@ -20,7 +21,9 @@ int main(int argc, char** argv) {
         "Bakes the cell visibility table of each map (cached; see docs/baked-visibility.md)"};
     dsoc::cli::set_up(app, "dsoc-bake");
     std::vector<std::string> specs;
-    dsoc::maps::BakeRequest request;
+    // The request the server and the evaluation make, so that they find this table.
+    dsoc::maps::BakeRequest request = dsoc::interest::walking_bake_request();
+    bool whole_box = false;
     std::string dir;
     bool json = false;
     std::uint64_t max_mib = dsoc::maps::BakeRequest{}.max_table_bytes >> 20;
@@ -52,6 +55,9 @@ int main(int argc, char** argv) {
                    "where tables are kept (default: $DSOC_BAKE_DIR, "
                    "$XDG_CACHE_HOME/dsoc/bakes or ~/.cache/dsoc/bakes)");
     app.add_flag("--force", request.force, "bake again even when the cache holds a good table");
+    app.add_flag("--whole-box", whole_box,
+                 "cover every open cell of the map's box, not only where walkers can be "
+                 "(a table the server does not look for)");
     app.add_flag("--json", json, "one JSON object per map on stdout");
     if (const auto stop = dsoc::cli::parse(app, argc, argv)) {
         return *stop;
@@ -62,6 +68,9 @@ int main(int argc, char** argv) {
     }
     request.dir = dir;
     request.max_table_bytes = max_mib << 20;
+    if (whole_box) {
+        request.player_space.reset();
+    }
 
     const auto search = dsoc::maps::MapSearch::from_environment();
     int failures = 0;
@@ -102,6 +111,7 @@ int main(int argc, char** argv) {
             out["cell_size"] = t.grid().cell_size;
             out["cells"] = t.grid().cell_count();
             out["open_cells"] = t.open_count();
+            out["uncovered_cells"] = t.uncovered_cells().size();
             out["hidden_pair_fraction"] = hidden;
             out["file_bytes"] = ec ? 0 : file_bytes;
             out["memory_bytes"] = t.memory_bytes();
@@ -115,10 +125,10 @@ int main(int argc, char** argv) {
         } else {
             std::printf("%s: %s %s\n", map->name.c_str(), baked->from_cache ? "loaded" : "baked",
                         baked->file.c_str());
-            std::printf("  cells %zu (%.0f-unit), open %zu, hidden pairs %.1f%%, file %.1f MiB, "
-                        "memory %.1f MiB\n",
+            std::printf("  cells %zu (%.0f-unit), open %zu (and %zu uncovered), hidden pairs "
+                        "%.1f%%, file %.1f MiB, memory %.1f MiB\n",
                         t.grid().cell_count(), static_cast<double>(t.grid().cell_size),
-                        t.open_count(), 100.0 * hidden,
+                        t.open_count(), t.uncovered_cells().size(), 100.0 * hidden,
                         ec ? 0.0 : static_cast<double>(file_bytes) / (1 << 20),
                         static_cast<double>(t.memory_bytes()) / (1 << 20));
             if (!baked->from_cache) {

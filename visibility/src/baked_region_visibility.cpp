@@ -6,6 +6,13 @@
 
 namespace dsoc::visibility {
 
+namespace {
+/// What a slab of the built range holds (bits of slab_open_).
+constexpr char kSlabSolid = 0;
+constexpr char kSlabOpen = 1;
+constexpr char kSlabUncovered = 2;
+} // namespace
+
 BakedRegionVisibility::BakedRegionVisibility(std::shared_ptr<const CellVisibilityTable> table,
                                              std::unique_ptr<RegionVisibility> next)
     : table_(std::move(table)), next_(std::move(next)) {}
@@ -59,13 +66,15 @@ void BakedRegionVisibility::build(const Aabb& region) {
         const auto k = static_cast<std::size_t>(x - lo.x);
         const std::span<std::uint64_t> slab(slabs_.data() + k * words, words);
         std::fill(slab.begin(), slab.end(), 0);
-        slab_open_[k] = 0;
+        slab_open_[k] = kSlabSolid;
         for (int z = lo.z; z <= hi.z; ++z) {
             for (int y = lo.y; y <= hi.y; ++y) {
                 const OpenCell c = table_->open_index(grid.index({x, y, z}));
-                if (c != kSolidCell) {
-                    slab_open_[k] = 1;
+                if (c >= 0) {
+                    slab_open_[k] |= kSlabOpen;
                     table_->or_row_into(c, slab);
+                } else if (c == kUncoveredCell) {
+                    slab_open_[k] |= kSlabUncovered;
                 }
             }
         }
@@ -75,7 +84,11 @@ void BakedRegionVisibility::build(const Aabb& region) {
     visible_.assign(words, 0);
     active_ = false;
     for (std::size_t k = 0; k < slabs; ++k) {
-        if (slab_open_[k] != 0) {
+        if ((slab_open_[k] & kSlabUncovered) != 0) {
+            active_ = false; // an eye may be where the table says nothing
+            return;
+        }
+        if (slab_open_[k] != kSlabSolid) {
             active_ = true;
             const std::uint64_t* slab = slabs_.data() + k * words;
             for (std::size_t w = 0; w < words; ++w) {

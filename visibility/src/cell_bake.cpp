@@ -164,7 +164,7 @@ void Baker::build_levels() {
         for (std::uint32_t i = 0; i < n; ++i) {
             const Aabb box = grid_.cell_box(grid_.coords(i));
             const OpenCell c = table_.open_index(i);
-            if (c != kSolidCell) {
+            if (c >= 0) {
                 l0.open.push_back(c);
                 l0.box[i] = box;
                 l0.rep[i] = box.center();
@@ -253,16 +253,13 @@ void Baker::for_children(Node n, F&& f) const {
 
 bool Baker::segment_clear(Worker& w, glm::vec3 p, glm::vec3 q) const {
     const OccluderWorld& world = scene_.world;
-    scene_.grid->query_segment(p, q, w.segment);
-    for (const OccluderId id : w.segment.found) {
+    // The first blocker ends the walk: most segments between hidden pairs meet one
+    // long before their end.
+    return !scene_.grid->any_along_segment(p, q, w.segment, [&](OccluderId id) {
         const Aabb& solid = world.solid_box(id);
-        const bool blocked = solid.is_empty() ? segment_blocked_by(p, q, world.solid_planes(id))
-                                              : segment_through_box(p, q, solid);
-        if (blocked) {
-            return false;
-        }
-    }
-    return true;
+        return solid.is_empty() ? segment_blocked_by(p, q, world.solid_planes(id))
+                                : segment_through_box(p, q, solid);
+    });
 }
 
 bool Baker::witness(Worker& w, Node a, Node b) const {
@@ -492,19 +489,38 @@ std::vector<std::uint32_t> open_cells_of(const OccluderScene& scene, const CellG
     return open;
 }
 
+std::pair<std::vector<std::uint32_t>, std::vector<std::uint32_t>>
+split_covered(std::vector<std::uint32_t> open, std::span<const std::uint8_t> covered) {
+    if (covered.empty()) {
+        return {std::move(open), {}};
+    }
+    std::vector<std::uint32_t> uncovered;
+    std::erase_if(open, [&](std::uint32_t c) {
+        if (c < covered.size() && covered[c] != 0) {
+            return false;
+        }
+        uncovered.push_back(c);
+        return true;
+    });
+    return {std::move(open), std::move(uncovered)};
+}
+
 CellVisibilityTable bake_cell_visibility(const OccluderScene& scene, const CellGrid& grid,
                                          const CellBakeConfig& config, const BakePruner* pruner,
-                                         CellBakeStats* stats, const BakeProgress& progress) {
+                                         CellBakeStats* stats, const BakeProgress& progress,
+                                         std::span<const std::uint8_t> covered) {
     if (const auto problems = validate(config); !problems.empty()) {
         throw std::invalid_argument("CellBakeConfig: " + problems.front());
     }
     if (scene.grid == nullptr) {
         throw std::invalid_argument("bake_cell_visibility: the scene has no occluder grid");
     }
-    CellVisibilityTable table(grid, open_cells_of(scene, grid, pruner));
+    auto [open, uncovered] = split_covered(open_cells_of(scene, grid, pruner), covered);
+    CellVisibilityTable table(grid, std::move(open), std::move(uncovered));
     CellBakeStats local;
     local.cells = grid.cell_count();
     local.open_cells = table.open_count();
+    local.uncovered_cells = table.uncovered_cells().size();
     if (table.open_count() > 0) {
         Baker baker(scene, grid, config, pruner, table);
         baker.run(local, progress);

@@ -19,11 +19,16 @@ enum WordClass : std::uint64_t { kHidden = 0, kVisible = 1, kLiteral = 2 };
 } // namespace
 
 CellVisibilityTable::CellVisibilityTable(const CellGrid& grid, std::vector<std::uint32_t> open,
-                                         Rows rows)
+                                         std::vector<std::uint32_t> uncovered, Rows rows)
     : grid_(grid), block_dims_((grid.dims + (kB - 1)) / kB), open_(std::move(open)),
-      open_of_(grid.cell_count(), kSolidCell), words_per_row_((open_.size() + 63) / 64),
+      uncovered_(std::move(uncovered)), open_of_(grid.cell_count(), kSolidCell),
+      words_per_row_((open_.size() + 63) / 64),
       bits_(rows == Rows::dense ? open_.size() * words_per_row_ : 0, 0) {
     std::ranges::sort(open_, {}, [this](std::uint32_t c) { return block_rank(c); });
+    std::ranges::sort(uncovered_);
+    for (const std::uint32_t c : uncovered_) {
+        open_of_[c] = kUncoveredCell;
+    }
     for (std::size_t i = 0; i < open_.size(); ++i) {
         open_of_[open_[i]] = static_cast<OpenCell>(i);
     }
@@ -40,7 +45,7 @@ CellVisibilityTable::CellVisibilityTable(const CellGrid& grid, std::vector<std::
                         for (int x = lo.x; x < hi.x; ++x) {
                             const std::uint32_t cell = grid.index({x, y, z});
                             open_before_[cell] = count;
-                            count += open_of_[cell] != kSolidCell ? 1 : 0;
+                            count += open_of_[cell] >= 0 ? 1 : 0;
                         }
                     }
                 }
@@ -225,15 +230,24 @@ bool CellVisibilityTable::open_runs_of(const Aabb& box, std::vector<std::int32_t
     if (!grid_.range_of(box, lo, hi)) {
         return false;
     }
+    const bool any_uncovered = !uncovered_.empty();
     // One run per row of cells within each block the box crosses.
     for (int z = lo.z; z <= hi.z; ++z) {
         for (int y = lo.y; y <= hi.y; ++y) {
+            if (any_uncovered) {
+                const OpenCell* row = open_of_.data() + grid_.index({lo.x, y, z});
+                for (int x = 0; x <= hi.x - lo.x; ++x) {
+                    if (row[x] == kUncoveredCell) {
+                        out.clear();
+                        return false;
+                    }
+                }
+            }
             for (int x0 = lo.x; x0 <= hi.x;) {
                 const int x1 = std::min(hi.x, (x0 / kB + 1) * kB - 1);
                 const std::uint32_t last = grid_.index({x1, y, z});
                 const std::int32_t first = open_before_[grid_.index({x0, y, z})];
-                const std::int32_t end =
-                    open_before_[last] + (open_of_[last] != kSolidCell ? 1 : 0);
+                const std::int32_t end = open_before_[last] + (open_of_[last] >= 0 ? 1 : 0);
                 if (first != end) {
                     out.push_back(first);
                     out.push_back(end);
@@ -328,15 +342,15 @@ std::uint64_t CellVisibilityTable::hidden_pairs() const {
 std::size_t CellVisibilityTable::memory_bytes() const {
     return (bits_.size() + classes_.size() + literal_start_.size() + literals_.size()) *
                sizeof(std::uint64_t) +
-           open_.size() * sizeof(std::uint32_t) + open_of_.size() * sizeof(OpenCell) +
-           open_before_.size() * sizeof(std::int32_t);
+           (open_.size() + uncovered_.size()) * sizeof(std::uint32_t) +
+           open_of_.size() * sizeof(OpenCell) + open_before_.size() * sizeof(std::int32_t);
 }
 
 bool operator==(const CellVisibilityTable& a, const CellVisibilityTable& b) {
     return a.grid_.dims == b.grid_.dims && a.grid_.origin == b.grid_.origin &&
-           a.grid_.cell_size == b.grid_.cell_size && a.open_ == b.open_ && a.bits_ == b.bits_ &&
-           a.classes_ == b.classes_ && a.literal_start_ == b.literal_start_ &&
-           a.literals_ == b.literals_;
+           a.grid_.cell_size == b.grid_.cell_size && a.open_ == b.open_ &&
+           a.uncovered_ == b.uncovered_ && a.bits_ == b.bits_ && a.classes_ == b.classes_ &&
+           a.literal_start_ == b.literal_start_ && a.literals_ == b.literals_;
 }
 
 } // namespace dsoc::visibility

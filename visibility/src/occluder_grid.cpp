@@ -107,8 +107,19 @@ std::span<const OccluderId> OccluderGrid::items_at(glm::vec3 p) const {
 
 void OccluderGrid::query_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch) const {
     scratch.found.clear();
+    (void)walk_segment(
+        from, to, scratch,
+        [](void* found, OccluderId id) {
+            static_cast<std::vector<OccluderId>*>(found)->push_back(id);
+            return false;
+        },
+        &scratch.found);
+}
+
+bool OccluderGrid::walk_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch, Visit visit,
+                                void* context) const {
     if (bounds_.is_empty()) {
-        return;
+        return false;
     }
     if (scratch.stamp.size() != world_->size()) {
         scratch.stamp.assign(world_->size(), 0);
@@ -125,7 +136,7 @@ void OccluderGrid::query_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch)
     for (int a = 0; a < 3; ++a) {
         if (std::abs(dir[a]) < 1e-12f) {
             if (from[a] < bounds_.min[a] || from[a] > bounds_.max[a]) {
-                return;
+                return false;
             }
             continue;
         }
@@ -137,7 +148,7 @@ void OccluderGrid::query_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch)
         t0 = std::max(t0, ta);
         t1 = std::min(t1, tb);
         if (t0 > t1) {
-            return;
+            return false;
         }
     }
     const glm::vec3 start = from + dir * t0;
@@ -172,7 +183,9 @@ void OccluderGrid::query_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch)
             const OccluderId id = cell_items_[i];
             if (scratch.stamp[id] != scratch.epoch) {
                 scratch.stamp[id] = scratch.epoch;
-                scratch.found.push_back(id);
+                if (visit(context, id)) {
+                    return true;
+                }
             }
         }
         int axis = 0;
@@ -183,14 +196,15 @@ void OccluderGrid::query_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch)
             axis = 2;
         }
         if (t_max[axis] > t1) {
-            return;
+            return false;
         }
         cell[axis] += step[axis];
         if (cell[axis] < 0 || cell[axis] >= dims_[axis]) {
-            return;
+            return false;
         }
         t_max[axis] += t_delta[axis];
     }
+    return false;
 }
 
 } // namespace dsoc::visibility

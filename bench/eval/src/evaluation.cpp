@@ -5,6 +5,7 @@
 #include "dsoc/eval/replication.hpp"
 #include "dsoc/eval/visibility_truth.hpp"
 #include "dsoc/eval/world_sim.hpp"
+#include "dsoc/interest/bake_request.hpp"
 #include "dsoc/interest/walking_interest.hpp"
 #include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/trace/trace_writer.hpp"
@@ -32,8 +33,8 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 /// The map's baked table from the cache, baked (and cached) when missing.
 std::shared_ptr<const visibility::CellVisibilityTable>
 baked_table(const maps::Map& map, const visibility::OccluderScene& scene,
-            const EvalOptions& options, std::ostream* progress) {
-    maps::BakeRequest request;
+            const sim::MoveConfig& move, const EvalOptions& options, std::ostream* progress) {
+    maps::BakeRequest request = interest::walking_bake_request(move);
     request.config.cell_size = options.bake_cell_size;
     request.dir = options.bake_dir;
     request.max_table_bytes = options.bake_max_table_mib << 20;
@@ -165,7 +166,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
             env.scene = visibility::OccluderScene::build(map.occluders);
         }
         if ((name == "dsoc-baked" || name == "dsoc-table") && !env.table) {
-            env.table = baked_table(map, *env.scene, options, progress);
+            env.table = baked_table(map, *env.scene, world.move(), options, progress);
         }
         PolicyRun run;
         run.policy = make_policy(name, env);

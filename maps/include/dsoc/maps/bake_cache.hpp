@@ -6,12 +6,14 @@
 
 #include "dsoc/maps/bake_file.hpp"
 #include "dsoc/maps/map.hpp"
+#include "dsoc/maps/player_space.hpp"
 #include "dsoc/visibility/cell_bake.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
 
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace dsoc::maps {
@@ -31,6 +33,9 @@ struct BakeRequest {
     std::uint64_t max_table_bytes = std::uint64_t{128} << 20;
     /// Bake again even when a good file exists.
     bool force = false;
+    /// Where the table must answer (its covered cells); the other open cells are left
+    /// uncovered (no row, no answer). Nothing: the whole map's box.
+    std::optional<PlayerSpace> player_space;
 };
 
 struct BakedTable {
@@ -46,9 +51,11 @@ struct BakedTable {
 };
 
 /// The grid `map` is baked over: cells of `cell_size` over the map's bounds, grown by
-/// 1.25x steps until the dense rows of its open cells fit `max_table_bytes`.
+/// 1.25x steps until the dense rows of its open covered cells (all open cells when
+/// `space` is nothing) fit `max_table_bytes`.
 [[nodiscard]] visibility::CellGrid bake_grid(const Map& map, const visibility::OccluderScene& scene,
-                                             float cell_size, std::uint64_t max_table_bytes);
+                                             float cell_size, std::uint64_t max_table_bytes,
+                                             const std::optional<PlayerSpace>& space);
 
 /// The table for `map` from the cache, or baked (and written) when there is no good
 /// file. A good file for any grid a bake may use (bake_grid()'s candidates, the finest

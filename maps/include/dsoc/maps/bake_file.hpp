@@ -7,6 +7,7 @@
 
 #include "dsoc/maps/load_error.hpp"
 #include "dsoc/maps/map.hpp"
+#include "dsoc/maps/player_space.hpp"
 #include "dsoc/visibility/cell_bake.hpp"
 #include "dsoc/visibility/cell_visibility.hpp"
 
@@ -21,7 +22,7 @@
 namespace dsoc::maps {
 
 /// Bumped on any change of the layout or of what the bits mean.
-inline constexpr std::uint32_t kBakeFormatVersion = 3;
+inline constexpr std::uint32_t kBakeFormatVersion = 4;
 /// Part of every key: bumped on any change to what the bake may prove (the bake, the
 /// exact region tests it runs, the open-cell rules, the PVS pruner), so that tables
 /// baked by older code are baked again, never trusted.
@@ -36,18 +37,20 @@ inline constexpr std::uint64_t kMaxBakeCellsPerOpenCell = 1024;
 inline constexpr std::uint64_t kMaxBakeFileBytes = std::uint64_t{1} << 30;
 
 /// The key a table is filed under: a 64-bit hash of the format and algorithm versions,
-/// the map's
-/// occluders (every solid plane), its PVS (cluster count and every cluster pair's
-/// bit), the grid and the settings that change the result (not `threads`).
+/// the map's occluders (every solid plane), its PVS (cluster count and every cluster
+/// pair's bit), the grid, the settings that change the result (not `threads`) and the
+/// player space the table covers (nothing: the whole box).
 [[nodiscard]] std::uint64_t bake_key(const Map& map, const visibility::CellGrid& grid,
-                                     const visibility::CellBakeConfig& config);
+                                     const visibility::CellBakeConfig& config,
+                                     const std::optional<PlayerSpace>& space);
 /// bake_key() in two steps, for the keys of several grids of one map: the hash state
 /// after the versions and the map (its occluders and PVS), then the grid and settings
 /// hashed on from it. bake_key(bake_key_of_map(map), grid, config) is bake_key(map,
 /// grid, config).
 [[nodiscard]] std::uint64_t bake_key_of_map(const Map& map);
 [[nodiscard]] std::uint64_t bake_key(std::uint64_t key_of_map, const visibility::CellGrid& grid,
-                                     const visibility::CellBakeConfig& config);
+                                     const visibility::CellBakeConfig& config,
+                                     const std::optional<PlayerSpace>& space);
 
 /// The file's checksum function over `bytes` (see the spec): 64-bit words, each mixed
 /// into the state with splitmix64's finaliser.

@@ -4,8 +4,8 @@
 // conservative for every eye of the region, so a box none of whose open cells is in
 // that union is hidden from all of them. A prepared box costs a few bit tests.
 //
-// A region or box the table does not cover (part of it outside the grid, or only
-// solid cells) is never answered by guess: it goes to the next stage, or is
+// A region or box the table does not cover (part of it outside the grid or in an
+// uncovered cell, or only solid cells) is never answered by guess: it goes to the next stage, or is
 // `visible` when there is none.
 
 #include "dsoc/visibility/cell_visibility.hpp"
@@ -65,7 +65,7 @@ private:
     glm::ivec3 built_hi_{0};
     std::vector<std::uint64_t> visible_; ///< union of the region's rows
     /// Per x of the built range, the union of the rows of that x's cells, and whether
-    /// it has an open cell.
+    /// it has an open cell (bit 0) and an uncovered one (bit 1).
     std::vector<std::uint64_t> slabs_;
     std::vector<char> slab_open_;
     mutable std::vector<std::int32_t> scratch_;

@@ -15,6 +15,7 @@
 #include <functional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace dsoc::visibility {
@@ -64,14 +65,15 @@ struct CellBakeConfig {
 [[nodiscard]] std::vector<std::string> validate(const CellBakeConfig& config);
 
 struct CellBakeStats {
-    std::uint64_t cells = 0;         ///< grid cells
-    std::uint64_t open_cells = 0;    ///< of those, not inside an occluder
-    std::uint64_t pair_visits = 0;   ///< pairs of blocks or cells looked at
-    std::uint64_t pruned = 0;        ///< hidden by the pruner
-    std::uint64_t witness_rays = 0;  ///< segments cast between blocks
-    std::uint64_t witness_clear = 0; ///< of those, clear (the pair is not all hidden)
-    std::uint64_t exact_tests = 0;   ///< exact region tests
-    std::uint64_t exact_hidden = 0;  ///< of those, proven hidden
+    std::uint64_t cells = 0;           ///< grid cells
+    std::uint64_t open_cells = 0;      ///< of those, not inside an occluder, and covered
+    std::uint64_t uncovered_cells = 0; ///< open but not covered: no row
+    std::uint64_t pair_visits = 0;     ///< pairs of blocks or cells looked at
+    std::uint64_t pruned = 0;          ///< hidden by the pruner
+    std::uint64_t witness_rays = 0;    ///< segments cast between blocks
+    std::uint64_t witness_clear = 0;   ///< of those, clear (the pair is not all hidden)
+    std::uint64_t exact_tests = 0;     ///< exact region tests
+    std::uint64_t exact_hidden = 0;    ///< of those, proven hidden
     /// Exact tests and proofs by the higher level of the two blocks (0: two cells).
     std::uint64_t exact_by_level[7] = {};
     std::uint64_t hidden_by_level[7] = {};
@@ -88,11 +90,19 @@ using BakeProgress = std::function<void(double fraction, double elapsed_seconds)
 [[nodiscard]] std::vector<std::uint32_t>
 open_cells_of(const OccluderScene& scene, const CellGrid& grid, const BakePruner* pruner = nullptr);
 
+/// Splits `open` (grid indexes) into the cells `covered` marks (one byte per grid
+/// cell, nonzero: covered; empty: every cell) and the rest: {covered, uncovered}.
+[[nodiscard]] std::pair<std::vector<std::uint32_t>, std::vector<std::uint32_t>>
+split_covered(std::vector<std::uint32_t> open, std::span<const std::uint8_t> covered);
+
 /// Bakes the table over `grid` (validate(config) must be empty; the scene must have
-/// its grid). `pruner` may be null. Runs on config.threads workers.
+/// its grid). `pruner` may be null. `covered` (one byte per grid cell, or empty: all)
+/// says where the table must answer: open cells it does not mark become the table's
+/// uncovered cells, which get no row and are never paired. Runs on config.threads
+/// workers.
 [[nodiscard]] CellVisibilityTable
 bake_cell_visibility(const OccluderScene& scene, const CellGrid& grid, const CellBakeConfig& config,
                      const BakePruner* pruner = nullptr, CellBakeStats* stats = nullptr,
-                     const BakeProgress& progress = {});
+                     const BakeProgress& progress = {}, std::span<const std::uint8_t> covered = {});
 
 } // namespace dsoc::visibility

@@ -7,6 +7,9 @@
 // the compiler's PVS, where the bake used it); a set bit proves nothing. Cells whose
 // box lies inside one occluder's interior are "solid": no eye and no point of an
 // entity's box that can be seen lies in them, so they have no row and no column.
+// Cells the bake was told no player can be in are "uncovered": they have no row and
+// no column either, but unlike solid cells they may hold an eye or a visible point, so
+// the table answers nothing about a region or box that touches one.
 // The table is symmetric (visibility of segments is). Rows are dense while a bake or
 // the file reader fills them, then compressed for use.
 
@@ -24,6 +27,7 @@ namespace dsoc::visibility {
 /// Index of an open cell in a CellVisibilityTable (0 .. open_count()-1).
 using OpenCell = std::int32_t;
 inline constexpr OpenCell kSolidCell = -1;
+inline constexpr OpenCell kUncoveredCell = -2;
 
 /// Open cells are numbered in block order: the grid is cut into blocks of
 /// kTableBlockCells^3 cells (blocks in grid order, x fastest), and the open cells of a
@@ -40,15 +44,18 @@ public:
 
     CellVisibilityTable() = default;
     /// A table over `grid` whose open cells are the grid indexes `open` (distinct, any
-    /// order: they are numbered in block order).
+    /// order: they are numbered in block order) and whose uncovered cells are
+    /// `uncovered` (distinct, none of them open); every other cell is solid.
     CellVisibilityTable(const CellGrid& grid, std::vector<std::uint32_t> open,
-                        Rows rows = Rows::dense);
+                        std::vector<std::uint32_t> uncovered = {}, Rows rows = Rows::dense);
 
     [[nodiscard]] const CellGrid& grid() const { return grid_; }
     [[nodiscard]] std::size_t open_count() const { return open_.size(); }
     /// Grid index of each open cell, in block order.
     [[nodiscard]] const std::vector<std::uint32_t>& open_cells() const { return open_; }
-    /// The open cell at grid index `cell`, or kSolidCell.
+    /// Grid index of each uncovered cell, increasing.
+    [[nodiscard]] const std::vector<std::uint32_t>& uncovered_cells() const { return uncovered_; }
+    /// The open cell at grid index `cell`, or kSolidCell, or kUncoveredCell.
     [[nodiscard]] OpenCell open_index(std::uint32_t cell) const { return open_of_[cell]; }
     /// Position of grid cell `cell` in block order (open cells are numbered by it).
     [[nodiscard]] std::uint64_t block_rank(std::uint32_t cell) const;
@@ -95,8 +102,8 @@ public:
     /// The open cells a closed box touches, as runs of open-cell indexes: pairs
     /// (first, end) appended to `out` (cleared first), sorted, touching runs joined
     /// (the open cells of one row of a block are consecutive). False when the grid
-    /// does not cover the whole box, or when every cell it touches is solid: then the
-    /// table must not answer for it.
+    /// does not cover the whole box, when it touches an uncovered cell, or when every
+    /// cell it touches is solid: then the table must not answer for it.
     bool open_runs_of(const Aabb& box, std::vector<std::int32_t>& out) const;
     /// The same cells as row words: triples (word, low 32 bits, high 32 bits) appended
     /// to `out` (cleared first), one per 64-bit word of a row that holds any of them,
@@ -111,7 +118,8 @@ public:
     /// Bytes of the rows and indexes held in memory.
     [[nodiscard]] std::size_t memory_bytes() const;
 
-    /// Same grid, same open cells, same answers (both dense or both compressed).
+    /// Same grid, same open and uncovered cells, same answers (both dense or both
+    /// compressed).
     friend bool operator==(const CellVisibilityTable& a, const CellVisibilityTable& b);
 
 private:
@@ -121,6 +129,7 @@ private:
     CellGrid grid_;
     glm::ivec3 block_dims_{0};
     std::vector<std::uint32_t> open_;
+    std::vector<std::uint32_t> uncovered_;
     std::vector<OpenCell> open_of_;
     /// Per grid cell: the open cells before it in block order.
     std::vector<std::int32_t> open_before_;

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 namespace dsoc::visibility {
@@ -37,7 +38,27 @@ public:
     /// among them (up to float rounding at cell borders, which can only drop one).
     void query_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch) const;
 
+    /// The occluders query_segment() finds, each offered once to `stop` (a callable
+    /// bool(OccluderId)) cell by cell from `from` towards `to`, so nearer ones mostly
+    /// first; true as soon as `stop` returns true (the rest of the walk is skipped),
+    /// false when every one was offered. scratch.found is not touched.
+    template <class Stop>
+    bool any_along_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch, Stop&& stop) const {
+        return walk_segment(
+            from, to, scratch,
+            [](void* s, OccluderId id) {
+                return (*static_cast<std::remove_reference_t<Stop>*>(s))(id);
+            },
+            &stop);
+    }
+
 private:
+    using Visit = bool (*)(void* context, OccluderId id);
+    /// The walk behind query_segment() and any_along_segment(): `visit` gets each
+    /// occluder once; true from it ends the walk (and is returned).
+    bool walk_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch, Visit visit,
+                      void* context) const;
+
     const OccluderWorld* world_;
     Aabb bounds_;
     float cell_size_;
