@@ -3,6 +3,8 @@
 #include "dsoc/simclient/sim_client.hpp"
 
 #include <algorithm>
+#include <set>
+#include <utility>
 
 namespace dsoc::simclient {
 
@@ -20,11 +22,14 @@ LoadReport summarize_sessions(const std::vector<std::shared_ptr<SimClient>>& ses
     double down_rate_sum = 0.0;
     double up_rate_sum = 0.0;
     double update_rate_sum = 0.0;
+    std::set<std::pair<std::string, int>> clients; // (group, index)
     for (const auto& c : sessions) {
         const ClientStats& s = c->stats();
         ++r.clients;
-        GroupCounts& group =
-            r.groups[c->setup().group != nullptr ? c->setup().group->name : "clients"];
+        const std::string group_name =
+            c->setup().group != nullptr ? c->setup().group->name : "clients";
+        GroupCounts& group = r.groups[group_name];
+        group.clients += clients.emplace(group_name, c->setup().index).second ? 1 : 0;
         ++group.sessions;
         group.connected += s.hello_received ? 1 : 0;
         group.failures += s.failure.empty() ? 0 : 1;

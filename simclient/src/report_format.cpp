@@ -89,8 +89,8 @@ std::string format_summary(const LoadReport& r) {
     if (!r.groups.empty()) {
         out += "  groups                ";
         for (const auto& [name, g] : r.groups) {
-            out += fmt::format(" {}: {} sessions, {} connected, {} failed;", name, g.sessions,
-                               g.connected, g.failures);
+            out += fmt::format(" {}: {} clients, {} sessions, {} connected, {} failed;", name,
+                               g.clients, g.sessions, g.connected, g.failures);
         }
         out.back() = '\n';
     }
@@ -160,8 +160,10 @@ std::string format_json(const LoadReport& r) {
     j["connect_ms"] = summary_json(r.connect_ms);
     j["groups"] = nlohmann::json::object();
     for (const auto& [name, g] : r.groups) {
-        j["groups"][name] = {
-            {"sessions", g.sessions}, {"connected", g.connected}, {"failures", g.failures}};
+        j["groups"][name] = {{"clients", g.clients},
+                             {"sessions", g.sessions},
+                             {"connected", g.connected},
+                             {"failures", g.failures}};
     }
     j["thresholds"] = nlohmann::json::array();
     for (const auto& t : r.thresholds) {

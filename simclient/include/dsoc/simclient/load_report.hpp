@@ -15,6 +15,7 @@ namespace dsoc::simclient {
 
 /// Sessions of one client group.
 struct GroupCounts {
+    int clients = 0; ///< distinct clients (a respawner's sessions are one client)
     int sessions = 0;
     int connected = 0;
     std::uint64_t failures = 0;
