@@ -16,14 +16,6 @@ namespace {
 constexpr auto kControlPeriod = std::chrono::milliseconds(20);
 /// Sessions that must all fail, none having connected, before the run gives up.
 constexpr int kFailuresBeforeGivingUp = 3;
-
-std::string join_counts(const std::map<std::string, std::uint64_t>& counts) {
-    std::string out;
-    for (const auto& [k, v] : counts) {
-        out += fmt::format("{}{}={}", out.empty() ? "" : " ", k, v);
-    }
-    return out;
-}
 } // namespace
 
 LoadRun::LoadRun(asio::io_context& io, LoadConfig config)

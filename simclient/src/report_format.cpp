@@ -1,4 +1,5 @@
 #include "dsoc/simclient/load_report.hpp"
+#include "dsoc/simclient/timeseries.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -12,15 +13,9 @@ nlohmann::json summary_json(const common::Summary& s) {
             {"p95", s.p95},     {"p99", s.p99},   {"max", s.max}};
 }
 
-std::string join_counts(const std::map<std::string, std::uint64_t>& counts) {
-    if (counts.empty()) {
-        return "none";
-    }
-    std::string out;
-    for (const auto& [k, v] : counts) {
-        out += fmt::format("{}{}={}", out.empty() ? "" : " ", k, v);
-    }
-    return out;
+/// join_counts(), or "none".
+std::string counts_or_none(const std::map<std::string, std::uint64_t>& counts) {
+    return counts.empty() ? "none" : join_counts(counts);
 }
 
 /// Why the run failed, one phrase per cause; empty when it passed.
@@ -34,7 +29,7 @@ std::vector<std::string> fail_causes(const LoadReport& r) {
     }
     if (r.failures > 0) {
         causes.push_back(fmt::format("{} session(s) failed ({})", r.failures,
-                                     join_counts(r.failures_by_reason)));
+                                     counts_or_none(r.failures_by_reason)));
     }
     if (r.protocol_errors > 0) {
         causes.push_back(fmt::format("{} protocol error(s)", r.protocol_errors));
@@ -81,8 +76,8 @@ std::string format_summary(const LoadReport& r) {
         r.snapshots, r.entities_known.mean, r.entities_known.p95, r.snapshot_interarrival_ms.p50,
         r.snapshot_interarrival_ms.p95, r.snapshot_interarrival_ms.p99, r.rtt_ms.p50, r.rtt_ms.p99,
         r.audited_poses, r.max_audit_error, r.protocol_errors,
-        join_counts(r.protocol_errors_by_kind), r.unexpected_disconnects, r.missing_own_entity,
-        join_counts(r.disconnect_reasons), r.failures, join_counts(r.failures_by_reason));
+        counts_or_none(r.protocol_errors_by_kind), r.unexpected_disconnects, r.missing_own_entity,
+        counts_or_none(r.disconnect_reasons), r.failures, counts_or_none(r.failures_by_reason));
     for (const auto& [reason, example] : r.failure_examples) {
         out += fmt::format("    {:<20} first: {}\n", reason, example);
     }

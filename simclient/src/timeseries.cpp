@@ -16,6 +16,7 @@ double per_s(std::uint64_t n, double seconds) {
 double tenth(double value) {
     return std::round(value * 10.0) / 10.0;
 }
+} // namespace
 
 std::string join_counts(const std::map<std::string, std::uint64_t>& counts) {
     std::string out;
@@ -24,7 +25,6 @@ std::string join_counts(const std::map<std::string, std::uint64_t>& counts) {
     }
     return out;
 }
-} // namespace
 
 std::string format_timeseries_line(const SecondSample& s) {
     nlohmann::ordered_json j;

@@ -27,6 +27,9 @@ struct SecondSample {
     std::uint64_t protocol_errors_total = 0;       ///< since the start
 };
 
+/// "refused=2 timeout=1": counts by name, in name order; "" when empty.
+[[nodiscard]] std::string join_counts(const std::map<std::string, std::uint64_t>& counts);
+
 /// The sample as one line of JSON (no newline): t_s, target, connected, connecting,
 /// snapshots_per_s, bytes_down_per_s, bytes_up_per_s, interarrival_p50_ms,
 /// interarrival_p99_ms (null without samples), failures {reason: count},
