@@ -1,163 +1,307 @@
 #include "dsoc/simclient/load_run.hpp"
 
+#include "dsoc/simclient/failure_reason.hpp"
+
+#include <boost/asio/post.hpp>
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cstdio>
 
 namespace dsoc::simclient {
 
 namespace asio = boost::asio;
-using Clock = std::chrono::steady_clock;
+
+namespace {
+constexpr auto kControlPeriod = std::chrono::milliseconds(20);
+/// Sessions that must all fail, none having connected, before the run gives up.
+constexpr int kFailuresBeforeGivingUp = 3;
+} // namespace
 
 LoadRun::LoadRun(asio::io_context& io, LoadConfig config)
-    : io_(io), config_(std::move(config)), ramp_timer_(io), progress_timer_(io), end_timer_(io) {
-    clients_.reserve(static_cast<std::size_t>(config_.clients));
-    for (int i = 0; i < config_.clients; ++i) {
-        clients_.push_back(std::make_shared<SimClient>(io_, config_, i));
+    : io_(io), config_(std::move(config)),
+      scenario_(config_.scenario
+                    ? *config_.scenario
+                    : implicit_scenario(config_.clients, config_.duration_s, config_.ramp_up_s)),
+      groups_(scenario_.groups.size()), control_timer_(io), second_timer_(io), rng_(config_.seed) {
+    if (config_.connect_timeout_s) {
+        scenario_.connect_timeout_s = *config_.connect_timeout_s;
     }
+    scenario_.thresholds.insert(scenario_.thresholds.end(), config_.thresholds.begin(),
+                                config_.thresholds.end());
+}
+
+void LoadRun::on_second(std::function<void(const SecondSample&)> callback) {
+    on_second_ = std::move(callback);
+}
+
+void LoadRun::on_finished(std::function<void()> callback) {
+    on_finished_ = std::move(callback);
+}
+
+double LoadRun::elapsed_s() const {
+    return std::chrono::duration<double>(Clock::now() - started_).count();
 }
 
 void LoadRun::start() {
     started_ = Clock::now();
-    connect_next();
-    end_timer_.expires_after(
-        std::chrono::milliseconds(static_cast<long>(config_.duration_s * 1000)));
-    end_timer_.async_wait([this](const boost::system::error_code& ec) {
+    last_control_ = started_;
+    started_once_ = true;
+    control();
+    second_timer_.expires_at(started_ + std::chrono::seconds(1));
+    second_timer_.async_wait([this](const boost::system::error_code& ec) {
         if (!ec) {
-            stop();
+            sample_second();
         }
     });
-    if (config_.progress) {
-        progress_timer_.expires_after(std::chrono::seconds(1));
-        progress_timer_.async_wait([this](const boost::system::error_code& ec) {
-            if (!ec) {
-                print_progress();
+}
+
+void LoadRun::control() {
+    if (stopping_) {
+        return;
+    }
+    const auto now = Clock::now();
+    const double t = std::chrono::duration<double>(now - started_).count();
+    if (t >= scenario_.length_s()) {
+        stop();
+        return;
+    }
+    const double dt = std::chrono::duration<double>(now - last_control_).count();
+    last_control_ = now;
+    target_ = target_at(scenario_.stages, t);
+    const std::vector<int> shares = split_by_weight(target_, scenario_.groups);
+    int connected = 0;
+    for (std::size_t g = 0; g < groups_.size(); ++g) {
+        follow(g, shares[g], now, dt);
+        for (const Slot& s : groups_[g].slots) {
+            connected += s.client->connected() ? 1 : 0;
+        }
+    }
+    peak_connected_ = std::max(peak_connected_, connected);
+    ever_connected_ = std::max(ever_connected_, connected);
+    control_timer_.expires_at(now + kControlPeriod);
+    control_timer_.async_wait([this](const boost::system::error_code& ec) {
+        if (!ec) {
+            control();
+        }
+    });
+}
+
+void LoadRun::follow(std::size_t g, int share, Clock::time_point now, double dt_s) {
+    GroupState& gs = groups_[g];
+    const ClientGroup& group = scenario_.groups[g];
+    // Respawners whose time has come leave, to come back as themselves once closed.
+    if (group.behaviour == Behaviour::respawner) {
+        for (Slot& s : gs.slots) {
+            if (!s.respawning && s.client->connected() && now >= s.leave_at) {
+                s.respawning = true;
+                s.client->stop();
             }
-        });
-    }
-}
-
-void LoadRun::connect_next() {
-    if (stopping_ || next_to_connect_ >= clients_.size()) {
-        return;
-    }
-    clients_[next_to_connect_++]->start();
-    if (next_to_connect_ >= clients_.size()) {
-        return;
-    }
-    // Spread the connects evenly over the ramp-up.
-    const double step_s = config_.ramp_up_s / static_cast<double>(clients_.size());
-    const auto due = started_ + std::chrono::microseconds(static_cast<long>(
-                                    step_s * 1e6 * static_cast<double>(next_to_connect_)));
-    ramp_timer_.expires_at(due);
-    ramp_timer_.async_wait([this](const boost::system::error_code& ec) {
-        if (!ec) {
-            connect_next();
         }
-    });
+    }
+    // Churn: a connected session leaves for good; a new client takes its place below.
+    gs.churn_owed += group.churn_per_s * dt_s;
+    while (gs.churn_owed >= 1.0) {
+        std::vector<std::size_t> candidates;
+        for (std::size_t i = 0; i < gs.slots.size(); ++i) {
+            if (gs.slots[i].client->connected() && !gs.slots[i].respawning) {
+                candidates.push_back(i);
+            }
+        }
+        if (candidates.empty()) {
+            gs.churn_owed = std::min(gs.churn_owed, 1.0);
+            break;
+        }
+        gs.churn_owed -= 1.0;
+        std::uniform_int_distribution<std::size_t> pick(0, candidates.size() - 1);
+        const std::size_t i = candidates[pick(rng_)];
+        gs.slots[i].client->stop();
+        gs.slots.erase(gs.slots.begin() + static_cast<long>(i));
+    }
+    // Follow the share: the newest sessions leave first (as k6 ramps down).
+    while (static_cast<int>(gs.slots.size()) > share) {
+        gs.slots.back().client->stop();
+        gs.slots.pop_back();
+    }
+    while (static_cast<int>(gs.slots.size()) < share) {
+        int index = next_index_;
+        if (!gs.respawning_indexes.empty()) {
+            index = gs.respawning_indexes.back();
+            gs.respawning_indexes.pop_back();
+        } else {
+            ++next_index_;
+        }
+        start_session(g, index);
+    }
 }
 
-void LoadRun::stop() {
+void LoadRun::start_session(std::size_t g, int index) {
+    SessionSetup setup;
+    setup.group = &scenario_.groups[g];
+    setup.index = index;
+    setup.session = clients_.size();
+    setup.connect_timeout_s = scenario_.connect_timeout_s;
+    setup.run_end =
+        started_ + std::chrono::microseconds(static_cast<long>(scenario_.length_s() * 1e6));
+    setup.on_interarrival = [this](double ms) { second_interarrival_.add(ms); };
+    setup.on_failure = [this](SimClient& c) { on_session_failure(c); };
+    setup.on_closed = [this](SimClient& c) { on_session_closed(c); };
+    auto client = std::make_shared<SimClient>(io_, config_, std::move(setup));
+    Slot slot{client, Clock::now(), false};
+    const ClientGroup& group = scenario_.groups[g];
+    if (group.behaviour == Behaviour::respawner) {
+        std::uniform_real_distribution<double> spread(0.5, 1.5);
+        slot.leave_at += std::chrono::microseconds(
+            static_cast<long>(group.respawn_every_s * spread(rng_) * 1e6));
+    }
+    clients_.push_back(client);
+    groups_[g].slots.push_back(std::move(slot));
+    client->start();
+}
+
+void LoadRun::on_session_failure(SimClient& client) {
+    const ClientStats& s = client.stats();
+    ++failures_;
+    ++failures_by_reason_[s.failure];
+    ++second_failures_[s.failure];
+    if (failures_by_reason_[s.failure] == 1 && config_.progress) {
+        std::fprintf(stderr, "[%5.1fs] %s failed: %s: %s\n", elapsed_s(), client.name().c_str(),
+                     s.failure.c_str(), s.failure_detail.c_str());
+    }
+    if (stopping_) {
+        return;
+    }
+    if (s.failure == failure::server_shutdown) {
+        stop(fmt::format("the server shut down at {:.1f} s, before the scenario's end at {:.1f} s",
+                         elapsed_s(), scenario_.length_s()));
+        return;
+    }
+    const int needed = std::min(kFailuresBeforeGivingUp, std::max(1, scenario_.peak_target()));
+    bool any_hello = ever_connected_ > 0;
+    for (const auto& c : clients_) {
+        any_hello = any_hello || c->stats().hello_received;
+    }
+    if (!any_hello && failures_ >= static_cast<std::uint64_t>(needed)) {
+        stop(fmt::format("no client could connect ({})", join_counts(failures_by_reason_)));
+    }
+}
+
+void LoadRun::on_session_closed(SimClient& client) {
+    if (!stopping_) {
+        for (GroupState& gs : groups_) {
+            for (auto it = gs.slots.begin(); it != gs.slots.end(); ++it) {
+                if (it->client.get() == &client && it->respawning) {
+                    gs.respawning_indexes.push_back(client.setup().index);
+                    gs.slots.erase(it);
+                    return;
+                }
+            }
+        }
+    }
+    maybe_finished();
+}
+
+void LoadRun::stop(const std::string& why) {
     if (stopping_) {
         return;
     }
     stopping_ = true;
     stopped_ = Clock::now();
-    ramp_timer_.cancel();
-    progress_timer_.cancel();
-    end_timer_.cancel();
+    if (!why.empty()) {
+        stopped_early_ = why;
+        if (config_.progress) {
+            std::fprintf(stderr, "[%5.1fs] stopping early: %s\n", elapsed_s(), why.c_str());
+        }
+    }
+    control_timer_.cancel();
+    second_timer_.cancel();
+    if (started_once_) {
+        const SecondSample last = take_sample();
+        if (last.interval_s > 0.05 && on_second_) {
+            on_second_(last);
+        }
+    }
     for (auto& c : clients_) {
         c->stop();
     }
+    // Posted: a stop() from a session's hook must not finish the run under it.
+    asio::post(io_, [this] { maybe_finished(); });
 }
 
-void LoadRun::print_progress() {
-    int connected = 0;
+void LoadRun::maybe_finished() {
+    if (!stopping_ || finished_) {
+        return;
+    }
+    for (const auto& c : clients_) {
+        if (!c->finished()) {
+            return;
+        }
+    }
+    finished_ = true;
+    if (on_finished_) {
+        on_finished_();
+    }
+}
+
+SecondSample LoadRun::take_sample() {
+    SecondSample s;
+    s.t_s = elapsed_s();
+    s.interval_s = s.t_s - last_sample_s_;
+    last_sample_s_ = s.t_s;
+    s.target = target_;
     std::uint64_t down = 0;
     std::uint64_t up = 0;
     std::uint64_t snapshots = 0;
-    std::uint64_t errors = 0;
     for (const auto& c : clients_) {
-        connected += c->connected() ? 1 : 0;
+        s.connected += c->connected() ? 1 : 0;
+        s.connecting += c->connecting() ? 1 : 0;
         down += c->stats().bytes_down;
         up += c->stats().bytes_up;
         snapshots += c->stats().snapshots;
         for (const auto& [kind, n] : c->stats().protocol_errors) {
-            errors += n;
+            s.protocol_errors_total += n;
         }
     }
-    const double elapsed = std::chrono::duration<double>(Clock::now() - started_).count();
-    std::fprintf(stderr,
-                 "[%5.1fs] clients %d/%d connected | snapshots/s %llu | down %.1f KiB/s | up "
-                 "%.1f KiB/s | protocol errors %llu\n",
-                 elapsed, connected, config_.clients,
-                 static_cast<unsigned long long>(snapshots - last_snapshots_),
-                 static_cast<double>(down - last_bytes_down_) / 1024.0,
-                 static_cast<double>(up - last_bytes_up_) / 1024.0,
-                 static_cast<unsigned long long>(errors));
+    s.bytes_down = down - last_bytes_down_;
+    s.bytes_up = up - last_bytes_up_;
+    s.snapshots = snapshots - last_snapshots_;
     last_bytes_down_ = down;
     last_bytes_up_ = up;
     last_snapshots_ = snapshots;
-    progress_timer_.expires_after(std::chrono::seconds(1));
-    progress_timer_.async_wait([this](const boost::system::error_code& ec) {
+    s.interarrival_ms = second_interarrival_.summary();
+    second_interarrival_ = SampleHistogram{};
+    s.failures.swap(second_failures_);
+    second_failures_.clear();
+    s.failures_total = failures_;
+    peak_connected_ = std::max(peak_connected_, s.connected);
+    return s;
+}
+
+void LoadRun::sample_second() {
+    const SecondSample s = take_sample();
+    if (config_.progress) {
+        std::fprintf(stderr, "%s\n", format_progress_line(s).c_str());
+    }
+    if (on_second_) {
+        on_second_(s);
+    }
+    second_timer_.expires_at(second_timer_.expiry() + std::chrono::seconds(1));
+    second_timer_.async_wait([this](const boost::system::error_code& ec) {
         if (!ec && !stopping_) {
-            print_progress();
+            sample_second();
         }
     });
 }
 
 LoadReport LoadRun::report() const {
-    LoadReport r;
+    LoadReport r = summarize_sessions(clients_);
     r.config = config_;
-    r.clients = config_.clients;
+    r.scenario_seconds = scenario_.length_s();
     const auto end = stopping_ ? stopped_ : Clock::now();
     r.wall_seconds = std::chrono::duration<double>(end - started_).count();
-    SampleHistogram known;
-    SampleHistogram interarrival;
-    SampleHistogram rtt;
-    double down_rate_sum = 0.0;
-    double up_rate_sum = 0.0;
-    double update_rate_sum = 0.0;
-    for (const auto& c : clients_) {
-        const ClientStats& s = c->stats();
-        if (!s.hello_received) {
-            ++r.connect_failures;
-        } else {
-            ++r.connected;
-            if (!s.saw_own_entity) {
-                ++r.missing_own_entity;
-            }
-            if (s.active_seconds > 0.0) {
-                down_rate_sum += static_cast<double>(s.bytes_down) / s.active_seconds;
-                up_rate_sum += static_cast<double>(s.bytes_up) / s.active_seconds;
-                update_rate_sum += static_cast<double>(s.entity_updates) / s.active_seconds;
-            }
-        }
-        r.unexpected_disconnects += s.unexpected_disconnect ? 1 : 0;
-        if (!s.disconnect_reason.empty()) {
-            ++r.disconnect_reasons[s.disconnect_reason];
-        }
-        for (const auto& [kind, n] : s.protocol_errors) {
-            r.protocol_errors += n;
-            r.protocol_errors_by_kind[kind] += n;
-        }
-        r.bytes_down += s.bytes_down;
-        r.bytes_up += s.bytes_up;
-        r.snapshots += s.snapshots;
-        r.entity_updates += s.entity_updates;
-        r.audited_poses += s.audited_poses;
-        r.max_audit_error = std::max(r.max_audit_error, s.max_audit_error);
-        known.merge(s.known_samples);
-        interarrival.merge(s.interarrival_ms);
-        rtt.merge(s.rtt_ms);
-    }
-    if (r.connected > 0) {
-        r.bytes_down_per_client_s = down_rate_sum / r.connected;
-        r.bytes_up_per_client_s = up_rate_sum / r.connected;
-        r.entity_updates_per_client_s = update_rate_sum / r.connected;
-    }
-    r.entities_known = known.summary();
-    r.snapshot_interarrival_ms = interarrival.summary();
-    r.rtt_ms = rtt.summary();
+    r.peak_connected = std::max(r.peak_connected, peak_connected_);
+    r.stopped_early = stopped_early_;
+    r.thresholds = evaluate_thresholds(scenario_.thresholds, r);
     return r;
 }
 

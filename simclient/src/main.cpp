@@ -2,6 +2,8 @@
 
 #include "dsoc/cli/program.hpp"
 #include "dsoc/simclient/load_run.hpp"
+#include "dsoc/simclient/report_figures.hpp"
+#include "dsoc/simclient/scenario_file.hpp"
 
 #include <CLI/CLI.hpp>
 #include <boost/asio/signal_set.hpp>
@@ -10,31 +12,105 @@
 #include <fstream>
 #include <iostream>
 
+namespace {
+
+constexpr const char* kProgram = "dsoc-simclient";
+
+/// "dsoc-simclient: <what>" on stderr; the usage exit status.
+int usage_error(const std::string& what) {
+    std::cerr << kProgram << ": " << what << "\n";
+    return dsoc::cli::exit_usage;
+}
+
+/// Splits HOST:PORT into `config`; false with `error` when malformed.
+bool parse_server(const std::string& server, dsoc::simclient::LoadConfig& config,
+                  std::string& error) {
+    const auto colon = server.rfind(':');
+    if (colon == std::string::npos) {
+        error = "--server: expected HOST:PORT, got '" + server + "'";
+        return false;
+    }
+    config.host = server.substr(0, colon);
+    try {
+        const int port = std::stoi(server.substr(colon + 1));
+        if (port <= 0 || port > 65535) {
+            throw std::out_of_range("port");
+        }
+        config.port = static_cast<std::uint16_t>(port);
+    } catch (const std::exception&) {
+        error = "--server: bad port in '" + server + "'";
+        return false;
+    }
+    return true;
+}
+
+void print_figures() {
+    for (const auto& f : dsoc::simclient::report_figures()) {
+        std::cout << f.name << "  " << f.meaning << "; " << dsoc::simclient::describe(f.dimension)
+                  << "\n";
+    }
+}
+
+} // namespace
+
 int main(int argc, char** argv) {
     dsoc::simclient::LoadConfig config;
     std::string server = "127.0.0.1:27960";
     std::string report_file;
+    std::string scenario_file;
+    std::string timeseries_file;
+    std::vector<std::string> threshold_texts;
     bool quiet = false;
+    bool list_figures = false;
 
-    CLI::App app{
-        "dsoc-simclient: simulated clients that load a dsoc server and check the protocol.\n"
-        "Exits 1 when a client failed to connect, saw a protocol error or was dropped."};
-    dsoc::cli::set_up(app, "dsoc-simclient");
+    CLI::App app{"dsoc-simclient: simulated clients that load a dsoc server and check the "
+                 "protocol.\nExits 0 when the run passed; 1 when it failed (a session failed "
+                 "for any reason, a protocol error, an unexpected server shutdown, a threshold "
+                 "not met); 2 on a bad command line or scenario file."};
+    dsoc::cli::set_up(app, kProgram);
     app.add_option("--server", server, "Server address HOST:PORT")->capture_default_str();
-    app.add_option("--clients", config.clients, "Simulated clients")
-        ->capture_default_str()
-        ->check(CLI::Range(1, 100000));
-    app.add_option("--duration", config.duration_s, "Run time, ramp-up included [s]")
-        ->capture_default_str()
-        ->check(CLI::PositiveNumber);
-    app.add_option("--ramp-up", config.ramp_up_s, "Spread the connects over this time [s]")
-        ->capture_default_str()
-        ->check(CLI::NonNegativeNumber);
+    auto* clients = app.add_option("--clients", config.clients, "Simulated clients")
+                        ->capture_default_str()
+                        ->check(CLI::Range(1, 100000));
+    auto* duration =
+        app.add_option("--duration", config.duration_s, "Run time, ramp-up included [s]")
+            ->capture_default_str()
+            ->check(CLI::PositiveNumber);
+    auto* ramp_up =
+        app.add_option("--ramp-up", config.ramp_up_s, "Spread the connects over this time [s]")
+            ->capture_default_str()
+            ->check(CLI::NonNegativeNumber);
+    app.add_option("--scenario", scenario_file,
+                   "Scenario file (TOML): stages, groups of clients, thresholds "
+                   "(docs/simclient.md)")
+        ->excludes(clients)
+        ->excludes(duration)
+        ->excludes(ramp_up);
+    app.add_option("--threshold", threshold_texts,
+                   "Fail the run unless FIGURE OP VALUE holds, e.g. 'interarrival_p99<50ms' "
+                   "(repeatable; --list-figures names the figures)")
+        ->check([](const std::string& text) {
+            dsoc::simclient::Threshold t;
+            std::string error;
+            return dsoc::simclient::parse_threshold(text, t, error) ? std::string() : error;
+        });
+    app.add_flag("--list-figures", list_figures,
+                 "List the figures a threshold may name, with their units, and exit");
     app.add_option("--report", report_file, "Write the JSON report to this file");
+    app.add_option("--timeseries", timeseries_file,
+                   "Write one JSON line per second to this file (docs/simclient.md)");
     app.add_option("--seed", config.seed, "Seed of the wandering inputs")->capture_default_str();
     app.add_option("--audit-every", config.audit_every_ticks,
                    "Check the decoded replica against the server's exact poses every N ticks "
                    "(0: never)")
+        ->capture_default_str();
+    app.add_option("--connect-timeout", config.connect_timeout_s,
+                   "Resolve, connect and get the server's hello within this time [s] (default "
+                   "5, or the scenario's connect_timeout)")
+        ->check(CLI::PositiveNumber);
+    app.add_option("--protocol-version", config.protocol_version,
+                   "Announce this protocol version in the hello (testing aid: a server refuses "
+                   "any other than its own)")
         ->capture_default_str();
     app.add_flag("--quiet", quiet, "No progress lines");
     std::string token_key_file;
@@ -50,76 +126,74 @@ int main(int argc, char** argv) {
     if (const auto stop = dsoc::cli::parse(app, argc, argv)) {
         return *stop;
     }
+    if (list_figures) {
+        print_figures();
+        return dsoc::cli::exit_ok;
+    }
+    for (const auto& text : threshold_texts) {
+        dsoc::simclient::Threshold t;
+        std::string error;
+        (void)dsoc::simclient::parse_threshold(text, t, error); // checked by CLI11 above
+        config.thresholds.push_back(std::move(t));
+    }
+    if (!scenario_file.empty()) {
+        dsoc::simclient::Scenario scenario;
+        std::string error;
+        if (!dsoc::simclient::load_scenario_file(scenario_file, scenario, error)) {
+            return usage_error("--scenario: " + error);
+        }
+        config.scenario = std::move(scenario);
+    } else if (config.ramp_up_s > config.duration_s) {
+        return usage_error("--ramp-up must not exceed --duration");
+    }
+    const double run_s = config.scenario ? config.scenario->length_s() : config.duration_s;
     if (!token_key_file.empty()) {
         dsoc::protocol::TokenKey key;
         std::string error;
         if (!dsoc::protocol::load_token_key(token_key_file, key, error)) {
-            std::cerr << "--token-key-file: " << error << "\n";
-            return 2;
+            return usage_error("--token-key-file: " + error);
         }
         config.token_key = key;
-        // Valid through the whole run: ramp-up, duration and a margin for clock skew.
-        config.token_ttl_s = static_cast<std::uint64_t>(config.duration_s) + 60;
+        // Valid through the whole run and a margin for clock skew.
+        config.token_ttl_s = static_cast<std::uint64_t>(run_s) + 60;
     }
     if (!token_hex.empty() && !dsoc::protocol::from_hex(token_hex, config.connect_token)) {
-        std::cerr << "--token: expected hex digits\n";
-        return 2;
+        return usage_error("--token: expected hex digits");
     }
-
-    const auto colon = server.rfind(':');
-    if (colon == std::string::npos) {
-        std::cerr << "--server: expected HOST:PORT, got '" << server << "'\n";
-        return 2;
-    }
-    config.host = server.substr(0, colon);
-    try {
-        const int port = std::stoi(server.substr(colon + 1));
-        if (port <= 0 || port > 65535) {
-            throw std::out_of_range("port");
-        }
-        config.port = static_cast<std::uint16_t>(port);
-    } catch (const std::exception&) {
-        std::cerr << "--server: bad port in '" << server << "'\n";
-        return 2;
+    if (std::string error; !parse_server(server, config, error)) {
+        return usage_error(error);
     }
     if (config.host == "localhost") {
         config.host = "127.0.0.1";
     }
-    if (config.ramp_up_s > config.duration_s) {
-        std::cerr << "--ramp-up must not exceed --duration\n";
-        return 2;
-    }
     config.progress = !quiet;
+
+    std::ofstream timeseries;
+    if (!timeseries_file.empty()) {
+        timeseries.open(timeseries_file);
+        if (!timeseries) {
+            std::cerr << kProgram << ": cannot write the time series to " << timeseries_file
+                      << "\n";
+            return dsoc::cli::exit_failure;
+        }
+    }
 
     boost::asio::io_context io;
     dsoc::simclient::LoadRun run(io, config);
     boost::asio::signal_set signals(io, SIGINT, SIGTERM);
-    signals.async_wait([&](const boost::system::error_code& ec, int) {
+    signals.async_wait([&](const boost::system::error_code& ec, int number) {
         if (!ec) {
-            run.stop();
+            run.stop(number == SIGINT ? "interrupted (SIGINT)" : "terminated (SIGTERM)");
         }
     });
-    run.start();
-    // Run until every client has closed; then drop the signal wait so run() returns.
-    boost::asio::steady_timer watcher(io);
-    std::function<void()> watch = [&] {
-        watcher.expires_after(std::chrono::milliseconds(50));
-        watcher.async_wait([&](const boost::system::error_code& ec) {
-            if (ec) {
-                return;
-            }
-            bool all_done = true;
-            for (const auto& c : run.clients()) {
-                all_done = all_done && c->finished();
-            }
-            if (all_done) {
-                signals.cancel();
-                return;
-            }
-            watch();
+    if (timeseries.is_open()) {
+        run.on_second([&](const dsoc::simclient::SecondSample& sample) {
+            timeseries << dsoc::simclient::format_timeseries_line(sample) << "\n" << std::flush;
         });
-    };
-    watch();
+    }
+    // Once every session has closed, drop the signal wait so that run() returns.
+    run.on_finished([&] { signals.cancel(); });
+    run.start();
     io.run();
 
     const auto report = run.report();
@@ -128,9 +202,13 @@ int main(int argc, char** argv) {
         std::ofstream out(report_file);
         out << dsoc::simclient::format_json(report) << "\n";
         if (!out) {
-            std::cerr << "cannot write report to " << report_file << "\n";
-            return 1;
+            std::cerr << kProgram << ": cannot write report to " << report_file << "\n";
+            return dsoc::cli::exit_failure;
         }
     }
-    return report.passed() ? 0 : 1;
+    if (timeseries.is_open() && !timeseries) {
+        std::cerr << kProgram << ": cannot write the time series to " << timeseries_file << "\n";
+        return dsoc::cli::exit_failure;
+    }
+    return report.passed() ? dsoc::cli::exit_ok : dsoc::cli::exit_failure;
 }

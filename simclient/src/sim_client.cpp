@@ -1,13 +1,14 @@
 #include "dsoc/simclient/sim_client.hpp"
 
 #include "dsoc/protocol/codec.hpp"
+#include "dsoc/simclient/failure_reason.hpp"
 
 #include <boost/asio/connect.hpp>
-#include <boost/asio/ip/address.hpp>
+#include <boost/asio/post.hpp>
 #include <boost/asio/write.hpp>
+#include <fmt/format.h>
 
 #include <algorithm>
-#include <cmath>
 
 namespace dsoc::simclient {
 
@@ -16,7 +17,6 @@ namespace pb = protocol::pb;
 using Clock = std::chrono::steady_clock;
 
 namespace {
-constexpr float kPi = 3.14159265358979f;
 constexpr auto kCloseGrace = std::chrono::seconds(2);
 
 double ms_between(Clock::time_point a, Clock::time_point b) {
@@ -24,31 +24,74 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
 }
 } // namespace
 
-SimClient::SimClient(asio::io_context& io, const LoadConfig& config, int index)
-    : io_(io), config_(config), index_(index), socket_(io), input_timer_(io), close_timer_(io),
-      decoder_(config.max_frame_bytes),
-      rng_(config.seed * 1'000'003ULL + static_cast<std::uint64_t>(index)) {}
+SimClient::SimClient(asio::io_context& io, const LoadConfig& config, SessionSetup setup)
+    : io_(io), config_(config), setup_(std::move(setup)), resolver_(io), socket_(io),
+      input_timer_(io), close_timer_(io), connect_timer_(io), decoder_(config.max_frame_bytes),
+      input_model_(setup_.group != nullptr ? setup_.group->behaviour : Behaviour::wanderer,
+                   config.seed * 1'000'003ULL + setup_.session) {
+    if (setup_.group != nullptr && setup_.group->network.any()) {
+        const auto& net = setup_.group->network;
+        delay_out_.emplace(io, net.latency_ms, net.jitter_ms, config.seed ^ (setup_.session << 1));
+        delay_in_.emplace(io, net.latency_ms, net.jitter_ms, config.seed ^ (setup_.session << 2));
+    }
+}
+
+std::string SimClient::name() const {
+    return config_.name_prefix + std::to_string(setup_.index);
+}
 
 void SimClient::start() {
     state_ = State::connecting;
-    boost::system::error_code ec;
-    const auto address = asio::ip::make_address(config_.host, ec);
-    if (ec) {
-        stats_.connect_failed = true;
-        error("bad_server_address");
-        state_ = State::closed;
-        return;
-    }
-    const asio::ip::tcp::endpoint endpoint(address, config_.port);
-    socket_.async_connect(endpoint,
-                          [self = shared_from_this()](const boost::system::error_code& e) {
-                              if (e) {
-                                  self->stats_.connect_failed = true;
-                                  self->state_ = State::closed;
-                                  return;
-                              }
-                              self->on_connected();
-                          });
+    started_at_ = Clock::now();
+    connect_timer_.expires_after(
+        std::chrono::microseconds(static_cast<long>(setup_.connect_timeout_s * 1e6)));
+    connect_timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+        if (ec || !self->connecting()) {
+            return;
+        }
+        self->stats_.connect_failed = true;
+        self->fail(
+            failure::timeout,
+            fmt::format("no {} within {:g} s",
+                        self->state_ == State::connecting ? "TCP connection" : "server hello",
+                        self->setup_.connect_timeout_s));
+        self->close();
+    });
+    resolver_.async_resolve(
+        config_.host, std::to_string(config_.port),
+        [self = shared_from_this()](const boost::system::error_code& ec,
+                                    const asio::ip::tcp::resolver::results_type& endpoints) {
+            if (self->state_ != State::connecting) {
+                return;
+            }
+            if (ec) {
+                self->stats_.connect_failed = true;
+                self->fail(failure::of_connect_error(ec, true),
+                           "resolve " + self->config_.host + ": " + ec.message());
+                self->close();
+                return;
+            }
+            self->on_resolved(endpoints);
+        });
+}
+
+void SimClient::on_resolved(const asio::ip::tcp::resolver::results_type& endpoints) {
+    asio::async_connect(socket_, endpoints,
+                        [self = shared_from_this()](const boost::system::error_code& ec,
+                                                    const asio::ip::tcp::endpoint&) {
+                            if (self->state_ != State::connecting) {
+                                return;
+                            }
+                            if (ec) {
+                                self->stats_.connect_failed = true;
+                                self->fail(failure::of_connect_error(ec, false),
+                                           fmt::format("connect to {}:{}: {}", self->config_.host,
+                                                       self->config_.port, ec.message()));
+                                self->close();
+                                return;
+                            }
+                            self->on_connected();
+                        });
 }
 
 void SimClient::on_connected() {
@@ -56,11 +99,11 @@ void SimClient::on_connected() {
     socket_.set_option(asio::ip::tcp::no_delay(true), ec);
     state_ = State::awaiting_hello;
     pb::Envelope hello;
-    hello.mutable_client_hello()->set_protocol_version(protocol::kProtocolVersion);
-    hello.mutable_client_hello()->set_name(config_.name_prefix + std::to_string(index_));
+    hello.mutable_client_hello()->set_protocol_version(config_.protocol_version);
+    hello.mutable_client_hello()->set_name(name());
     if (config_.token_key) {
         const protocol::ConnectToken grant{config_.client_id_base +
-                                               static_cast<std::uint64_t>(index_),
+                                               static_cast<std::uint64_t>(setup_.index),
                                            protocol::unix_now_s() + config_.token_ttl_s};
         const auto token = protocol::mint_connect_token(*config_.token_key, grant);
         hello.mutable_client_hello()->set_connect_token(token.data(), token.size());
@@ -74,71 +117,83 @@ void SimClient::on_connected() {
 }
 
 void SimClient::read_some() {
-    socket_.async_read_some(asio::buffer(read_buffer_), [self = shared_from_this()](
-                                                            const boost::system::error_code& ec,
-                                                            std::size_t n) {
-        if (self->state_ == State::closed) {
-            return;
-        }
-        if (ec) {
-            if (self->state_ != State::stopping && self->stats_.disconnect_reason.empty()) {
-                self->stats_.unexpected_disconnect = true;
-                self->stats_.disconnect_reason = "connection_lost";
-                self->stats_.disconnect_text = ec.message();
-            }
-            self->close();
-            return;
-        }
-        self->stats_.bytes_down += n;
-        self->decoder_.feed(std::span<const std::uint8_t>(self->read_buffer_.data(), n));
-        for (;;) {
-            std::span<const std::uint8_t> payload;
-            const auto status = self->decoder_.next(payload);
-            if (status == protocol::FrameDecoder::Status::need_more) {
-                break;
-            }
-            if (status == protocol::FrameDecoder::Status::too_large) {
-                self->error("frame_too_large");
-                self->close();
+    socket_.async_read_some(
+        asio::buffer(read_buffer_),
+        [self = shared_from_this()](const boost::system::error_code& ec, std::size_t n) {
+            if (self->state_ == State::closed) {
                 return;
             }
-            if (protocol::decode_payload(payload, self->incoming_) != protocol::DecodeError::none) {
-                self->error("undecodable_message");
-                continue;
+            if (!ec) {
+                self->stats_.bytes_down += n;
             }
-            self->handle(self->incoming_);
+            if (!self->delay_in_) {
+                if (ec) {
+                    self->on_read_error(ec);
+                    return;
+                }
+                self->consume(std::span<const std::uint8_t>(self->read_buffer_.data(), n));
+            } else if (ec) {
+                // The end of the stream arrives after the bytes before it.
+                self->delay_in_->push([self, ec] { self->on_read_error(ec); }, self);
+                return;
+            } else {
+                std::vector<std::uint8_t> bytes(self->read_buffer_.begin(),
+                                                self->read_buffer_.begin() + static_cast<long>(n));
+                self->delay_in_->push(
+                    [self, bytes = std::move(bytes)] {
+                        self->consume(std::span<const std::uint8_t>(bytes));
+                    },
+                    self);
+            }
+            if (self->state_ != State::closed) {
+                self->read_some();
+            }
+        });
+}
+
+void SimClient::on_read_error(const boost::system::error_code& ec) {
+    if (state_ == State::closed) {
+        return;
+    }
+    if (state_ != State::stopping && stats_.disconnect_reason.empty()) {
+        stats_.unexpected_disconnect = true;
+        stats_.connect_failed = !stats_.hello_received;
+        stats_.disconnect_reason = "connection_lost";
+        stats_.disconnect_text = ec.message();
+        fail(failure::connection_lost, "connection closed without a reason: " + ec.message());
+    }
+    close();
+}
+
+void SimClient::consume(std::span<const std::uint8_t> bytes) {
+    if (state_ == State::closed) {
+        return;
+    }
+    decoder_.feed(bytes);
+    for (;;) {
+        std::span<const std::uint8_t> payload;
+        const auto status = decoder_.next(payload);
+        if (status == protocol::FrameDecoder::Status::need_more) {
+            return;
         }
-        self->read_some();
-    });
+        if (status == protocol::FrameDecoder::Status::too_large) {
+            error("frame_too_large");
+            close();
+            return;
+        }
+        if (protocol::decode_payload(payload, incoming_) != protocol::DecodeError::none) {
+            error("undecodable_message");
+            continue;
+        }
+        handle(incoming_);
+    }
 }
 
 void SimClient::handle(const pb::Envelope& message) {
     switch (message.body_case()) {
-    case pb::Envelope::kServerHello: {
-        if (state_ == State::stopping && !stats_.hello_received) {
-            return; // the run ended before the server answered: a connect failure, not a
-                    // protocol error
-        }
-        if (state_ != State::awaiting_hello) {
-            error("duplicate_server_hello");
-            return;
-        }
-        const auto& hello = message.server_hello();
-        stats_.hello_received = true;
-        stats_.entity_id = hello.entity_id();
-        tick_rate_ = hello.tick_rate() > 0 ? static_cast<int>(hello.tick_rate()) : 30;
-        protocol::QuantizationSettings quantization;
-        std::string why;
-        if (!protocol::from_message(hello.quantization(), quantization, why)) {
-            error("bad_quantization");
-        }
-        replica_.set_settings(quantization);
-        state_ = State::active;
-        active_since_ = Clock::now();
-        next_input_at_ = active_since_;
-        schedule_input();
+    case pb::Envelope::kServerHello:
+        on_server_hello(message.server_hello());
         return;
-    }
     case pb::Envelope::kSnapshot:
         if (state_ == State::awaiting_hello) {
             error("snapshot_before_hello");
@@ -156,16 +211,58 @@ void SimClient::handle(const pb::Envelope& message) {
         return;
     }
     case pb::Envelope::kDisconnect:
-        stats_.disconnect_reason = protocol::disconnect_reason_name(message.disconnect().reason());
-        stats_.disconnect_text = message.disconnect().text();
-        if (message.disconnect().reason() != pb::DISCONNECT_REASON_SERVER_SHUTDOWN &&
-            state_ != State::stopping) {
-            stats_.unexpected_disconnect = true;
-        }
+        on_disconnect(message.disconnect());
         return;
     default:
         error("unexpected_message");
         return;
+    }
+}
+
+void SimClient::on_server_hello(const pb::ServerHello& hello) {
+    if (state_ == State::stopping && !stats_.hello_received) {
+        return; // the run ended before the server answered: cancelled, not a protocol error
+    }
+    if (state_ != State::awaiting_hello) {
+        error("duplicate_server_hello");
+        return;
+    }
+    connect_timer_.cancel();
+    stats_.hello_received = true;
+    stats_.entity_id = hello.entity_id();
+    tick_rate_ = hello.tick_rate() > 0 ? static_cast<int>(hello.tick_rate()) : 30;
+    protocol::QuantizationSettings quantization;
+    std::string why;
+    if (!protocol::from_message(hello.quantization(), quantization, why)) {
+        error("bad_quantization");
+    }
+    replica_.set_settings(quantization);
+    state_ = State::active;
+    active_since_ = Clock::now();
+    stats_.connect_ms = ms_between(started_at_, active_since_);
+    next_input_at_ = active_since_;
+    schedule_input();
+}
+
+void SimClient::on_disconnect(const pb::Disconnect& disconnect) {
+    stats_.disconnect_reason = protocol::disconnect_reason_name(disconnect.reason());
+    stats_.disconnect_text = disconnect.text();
+    const std::string_view reason = failure::of_disconnect(disconnect.reason());
+    // The server's own reason names a drop; the other failures are named by it already.
+    const std::string detail = reason == failure::dropped_by_server
+                                   ? stats_.disconnect_reason + ": " + disconnect.text()
+                                   : disconnect.text();
+    if (reason == failure::server_shutdown) {
+        // Expected once the scenario is over; before that, it ends the test early.
+        if (Clock::now() < setup_.run_end) {
+            fail(reason, detail);
+        }
+        return;
+    }
+    if (!reason.empty() && state_ != State::stopping) {
+        stats_.unexpected_disconnect = true;
+        stats_.connect_failed = !stats_.hello_received;
+        fail(reason, detail);
     }
 }
 
@@ -175,7 +272,11 @@ void SimClient::apply_snapshot(const pb::Snapshot& s) {
         if (s.server_tick() <= last_snapshot_tick_) {
             error("snapshot_tick_not_increasing");
         }
-        stats_.interarrival_ms.add(ms_between(last_snapshot_at_, now));
+        const double gap = ms_between(last_snapshot_at_, now);
+        stats_.interarrival_ms.add(gap);
+        if (setup_.on_interarrival) {
+            setup_.on_interarrival(gap);
+        }
     }
     last_snapshot_tick_ = s.server_tick();
     last_snapshot_at_ = now;
@@ -211,35 +312,43 @@ void SimClient::schedule_input() {
 }
 
 void SimClient::send_input() {
-    // Wander: hold a heading for 1-3 s, then pick another.
-    if (--ticks_until_turn_ <= 0) {
-        std::uniform_real_distribution<float> yaw(-180.0f, 180.0f);
-        std::uniform_int_distribution<int> hold(tick_rate_, 3 * tick_rate_);
-        wish_yaw_deg_ = yaw(rng_);
-        ticks_until_turn_ = hold(rng_);
-    }
     pb::Envelope message;
     auto& input = *message.mutable_client_input();
     input.set_tick(++input_seq_);
-    input.set_move_x(std::cos(wish_yaw_deg_ * kPi / 180.0f));
-    input.set_move_y(std::sin(wish_yaw_deg_ * kPi / 180.0f));
-    input.set_view_yaw(wish_yaw_deg_);
-    protocol::encode_frame(message, pending_);
+    input_model_.next(input, tick_rate_);
+    send(message);
     if (input_seq_ % static_cast<std::uint64_t>(tick_rate_) == 0) {
         pb::Envelope ping;
         ping.mutable_ping()->set_nonce(input_seq_);
         ping.mutable_ping()->set_client_time_us(static_cast<std::uint64_t>(
             std::chrono::duration_cast<std::chrono::microseconds>(Clock::now().time_since_epoch())
                 .count()));
-        protocol::encode_frame(ping, pending_); // same write as the input
+        send(ping); // same write as the input, when no write is in flight
     }
-    write_next();
 }
 
-void SimClient::send(const pb::Envelope& message) {
-    // Frames queued while a write is in flight go out together in the next write:
-    // one send() per batch, and no allocation once the two buffers have grown.
-    protocol::encode_frame(message, pending_);
+void SimClient::send(const pb::Envelope& message, bool goodbye) {
+    if (!delay_out_) {
+        // Frames queued while a write is in flight go out together in the next write:
+        // one send() per batch, and no allocation once the two buffers have grown.
+        protocol::encode_frame(message, pending_);
+        goodbye_sent_ = goodbye_sent_ || goodbye;
+        write_next();
+        return;
+    }
+    frame_.clear();
+    protocol::encode_frame(message, frame_);
+    delay_out_->push(
+        [self = shared_from_this(), frame = frame_, goodbye] { self->queue_frame(frame, goodbye); },
+        shared_from_this());
+}
+
+void SimClient::queue_frame(std::span<const std::uint8_t> frame, bool goodbye) {
+    if (state_ == State::closed) {
+        return;
+    }
+    pending_.insert(pending_.end(), frame.begin(), frame.end());
+    goodbye_sent_ = goodbye_sent_ || goodbye;
     write_next();
 }
 
@@ -271,18 +380,21 @@ void SimClient::stop() {
     if (state_ == State::closed || state_ == State::stopping) {
         return;
     }
+    if (state_ == State::idle || state_ == State::connecting) {
+        close(); // nothing said yet: nothing to say goodbye to
+        return;
+    }
     if (state_ == State::active) {
         stats_.active_seconds = ms_between(active_since_, Clock::now()) / 1000.0;
     }
-    const bool can_say_goodbye = state_ == State::active || state_ == State::awaiting_hello;
     state_ = State::stopping;
     input_timer_.cancel();
-    if (can_say_goodbye && stats_.disconnect_reason.empty()) {
+    connect_timer_.cancel();
+    if (stats_.disconnect_reason.empty()) {
         pb::Envelope bye;
         bye.mutable_disconnect()->set_reason(pb::DISCONNECT_REASON_CLIENT_QUIT);
         bye.mutable_disconnect()->set_text("load run finished");
-        goodbye_sent_ = true;
-        send(bye);
+        send(bye, /*goodbye=*/true);
     }
     close_timer_.expires_after(kCloseGrace);
     close_timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
@@ -294,6 +406,18 @@ void SimClient::stop() {
 
 void SimClient::error(const std::string& kind) {
     ++stats_.protocol_errors[kind];
+    fail(failure::protocol_error, kind);
+}
+
+void SimClient::fail(std::string_view reason, const std::string& detail) {
+    if (!stats_.failure.empty()) {
+        return;
+    }
+    stats_.failure = std::string(reason);
+    stats_.failure_detail = detail;
+    if (setup_.on_failure) {
+        asio::post(io_, [self = shared_from_this()] { self->setup_.on_failure(*self); });
+    }
 }
 
 void SimClient::close() {
@@ -306,8 +430,17 @@ void SimClient::close() {
     state_ = State::closed;
     input_timer_.cancel();
     close_timer_.cancel();
+    connect_timer_.cancel();
+    resolver_.cancel();
+    if (delay_out_) {
+        delay_out_->clear();
+        delay_in_->clear();
+    }
     boost::system::error_code ec;
     socket_.close(ec);
+    if (setup_.on_closed) {
+        asio::post(io_, [self = shared_from_this()] { self->setup_.on_closed(*self); });
+    }
 }
 
 } // namespace dsoc::simclient

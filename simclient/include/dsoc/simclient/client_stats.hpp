@@ -1,5 +1,5 @@
 #pragma once
-// What one simulated client saw, for the report.
+// What one simulated client session saw, for the report.
 
 #include "dsoc/simclient/sample_histogram.hpp"
 
@@ -10,12 +10,17 @@
 namespace dsoc::simclient {
 
 struct ClientStats {
-    bool connect_failed = false;
+    bool connect_failed = false; ///< resolving, connecting or the hello failed
     bool hello_received = false;
     bool saw_own_entity = false;
     bool unexpected_disconnect = false; ///< lost, or told to go for a reason other than shutdown
     std::string disconnect_reason;      ///< from the server's Disconnect, if any
     std::string disconnect_text;
+    /// Why the session failed (failure_reason.hpp), "" when it did not; the first
+    /// failure only. `failure_detail` says more ("connect to 127.0.0.1:1: Connection
+    /// refused").
+    std::string failure;
+    std::string failure_detail;
     std::uint32_t entity_id = 0;
     std::uint64_t bytes_down = 0; ///< frame headers included
     std::uint64_t bytes_up = 0;
@@ -26,6 +31,7 @@ struct ClientStats {
     /// (positions) or angle steps; at most 0.5 when the deltas decode right.
     double max_audit_error = 0.0;
     double active_seconds = 0.0;   ///< from server hello to stop
+    double connect_ms = 0.0;       ///< start (resolve) to server hello; 0 without a hello
     SampleHistogram known_samples; ///< entities known after each snapshot
     SampleHistogram interarrival_ms;
     SampleHistogram rtt_ms;

@@ -1,6 +1,9 @@
 #pragma once
 
 #include "dsoc/protocol/connect_token.hpp"
+#include "dsoc/protocol/messages.hpp"
+#include "dsoc/simclient/scenario.hpp"
+#include "dsoc/simclient/threshold.hpp"
 
 #include <cstdint>
 #include <optional>
@@ -9,7 +12,8 @@
 
 namespace dsoc::simclient {
 
-/// Settings of one load run.
+/// Settings of one load run. Without a scenario, `clients`, `duration_s` and
+/// `ramp_up_s` make one (implicit_scenario).
 struct LoadConfig {
     std::string host = "127.0.0.1";
     std::uint16_t port = 27960;
@@ -40,6 +44,17 @@ struct LoadConfig {
     /// [Units: s] [Limit: >= 1]
     std::uint64_t token_ttl_s = 60;
     std::vector<std::uint8_t> connect_token;
+    /// Stages, groups and thresholds; when set, `clients`, `duration_s` and `ramp_up_s`
+    /// are not used.
+    std::optional<Scenario> scenario;
+    /// More thresholds (the command line's), checked with the scenario's.
+    std::vector<Threshold> thresholds;
+    /// Resolve, TCP connect and server hello must finish within this; when set, it
+    /// overrides the scenario's connect_timeout. [Units: s] [Limit: > 0]
+    std::optional<double> connect_timeout_s;
+    /// The protocol version sent in the hello. A testing aid: a server refuses any
+    /// other than its own (version_mismatch).
+    std::uint32_t protocol_version = protocol::kProtocolVersion;
 };
 
 } // namespace dsoc::simclient

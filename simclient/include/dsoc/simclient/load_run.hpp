@@ -1,89 +1,108 @@
 #pragma once
-// A load run: N simulated clients on one io_context, ramped up, run for a fixed
-// time, stopped cleanly, then summarized.
+// A load run: sessions of simulated clients on one io_context, started and stopped to
+// follow a scenario's stages, shared among its groups by weight (with their churn and
+// respawns), sampled every second, stopped cleanly at the end, then summarized.
+//
+// The run ends at the scenario's end, or early: when the server shuts down before it
+// (the run fails), when no session could connect (the first min(3, peak target)
+// sessions all failed), or on stop(). A session that fails is not replaced: its place
+// stays taken until the stages lower the count.
 
-#include "dsoc/common/percentiles.hpp"
 #include "dsoc/simclient/load_config.hpp"
+#include "dsoc/simclient/load_report.hpp"
 #include "dsoc/simclient/sim_client.hpp"
+#include "dsoc/simclient/timeseries.hpp"
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/steady_timer.hpp>
 
+#include <functional>
 #include <map>
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
 namespace dsoc::simclient {
 
-struct LoadReport {
-    LoadConfig config;
-    double wall_seconds = 0.0;
-    int clients = 0;
-    int connected = 0;        ///< got a server hello
-    int connect_failures = 0; ///< TCP connect failed, or no hello arrived
-    int unexpected_disconnects = 0;
-    int missing_own_entity = 0; ///< connected clients that never saw their own entity
-    std::uint64_t protocol_errors = 0;
-    std::map<std::string, std::uint64_t> protocol_errors_by_kind;
-    std::map<std::string, std::uint64_t> disconnect_reasons;
-    std::uint64_t bytes_down = 0;
-    std::uint64_t bytes_up = 0;
-    std::uint64_t snapshots = 0;
-    std::uint64_t entity_updates = 0;
-    std::uint64_t audited_poses = 0;      ///< replica poses checked against the server's exact ones
-    double max_audit_error = 0.0;         ///< [Units: quanta or angle steps] <= 0.5 when correct
-    double bytes_down_per_client_s = 0.0; ///< mean over connected clients of bytes / active s
-    double bytes_up_per_client_s = 0.0;
-    double entity_updates_per_client_s = 0.0;
-    common::Summary entities_known; ///< over every snapshot of every client
-    common::Summary snapshot_interarrival_ms;
-    common::Summary rtt_ms;
-
-    /// A load test gates on this: every client connected, no protocol error, no
-    /// unexpected disconnect, every client saw its own entity.
-    [[nodiscard]] bool passed() const {
-        return connect_failures == 0 && protocol_errors == 0 && unexpected_disconnects == 0 &&
-               missing_own_entity == 0 && connected == clients;
-    }
-};
-
 class LoadRun {
 public:
+    /// `config.scenario` (or the implicit one of its plain fields) must be valid
+    /// (validate()).
     LoadRun(boost::asio::io_context& io, LoadConfig config);
+
+    /// Called with every second's sample (and the last, shorter one at the end).
+    void on_second(std::function<void(const SecondSample&)> callback);
+    /// Called once, when the run is over and every session has closed.
+    void on_finished(std::function<void()> callback);
 
     /// Schedules everything; io_context::run() returns when the run is over.
     void start();
-    /// Ends the run early (e.g. on SIGINT): stops every client now.
-    void stop();
+    /// Ends the run now (e.g. on SIGINT): stops every session. `why`, when not empty,
+    /// is reported as the reason the run stopped early.
+    void stop(const std::string& why = {});
 
     [[nodiscard]] LoadReport report() const;
+    /// Every session of the run, in the order they started.
     [[nodiscard]] const std::vector<std::shared_ptr<SimClient>>& clients() const {
         return clients_;
     }
+    [[nodiscard]] const Scenario& scenario() const { return scenario_; }
 
 private:
-    void connect_next();
-    void print_progress();
+    using Clock = std::chrono::steady_clock;
+    /// A place in a group: a session, and when a respawner leaves.
+    struct Slot {
+        std::shared_ptr<SimClient> client;
+        Clock::time_point leave_at;
+        bool respawning = false; ///< left to come back as itself once closed
+    };
+    struct GroupState {
+        std::vector<Slot> slots;             ///< oldest first
+        std::vector<int> respawning_indexes; ///< closed respawners, to reconnect
+        double churn_owed = 0.0;             ///< sessions due to churn
+    };
+
+    void control();
+    void follow(std::size_t group, int share, Clock::time_point now, double dt_s);
+    void start_session(std::size_t group, int index);
+    void on_session_failure(SimClient& client);
+    void on_session_closed(SimClient& client);
+    void sample_second();
+    [[nodiscard]] SecondSample take_sample();
+    void maybe_finished();
+    [[nodiscard]] double elapsed_s() const;
 
     boost::asio::io_context& io_;
     LoadConfig config_;
+    Scenario scenario_;
+    std::vector<GroupState> groups_;
     std::vector<std::shared_ptr<SimClient>> clients_;
-    boost::asio::steady_timer ramp_timer_;
-    boost::asio::steady_timer progress_timer_;
-    boost::asio::steady_timer end_timer_;
-    std::chrono::steady_clock::time_point started_;
-    std::chrono::steady_clock::time_point stopped_;
-    std::size_t next_to_connect_ = 0;
+    boost::asio::steady_timer control_timer_;
+    boost::asio::steady_timer second_timer_;
+    std::function<void(const SecondSample&)> on_second_;
+    std::function<void()> on_finished_;
+    std::mt19937_64 rng_;
+    Clock::time_point started_;
+    Clock::time_point stopped_;
+    Clock::time_point last_control_;
+    bool started_once_ = false;
     bool stopping_ = false;
+    bool finished_ = false;
+    std::string stopped_early_;
+    int next_index_ = 0;
+    int target_ = 0;
+    int peak_connected_ = 0;
+    int ever_connected_ = 0;
+    std::uint64_t failures_ = 0;
+    std::map<std::string, std::uint64_t> failures_by_reason_;
+    // the current second
+    double last_sample_s_ = 0.0;
     std::uint64_t last_bytes_down_ = 0;
     std::uint64_t last_bytes_up_ = 0;
     std::uint64_t last_snapshots_ = 0;
+    SampleHistogram second_interarrival_;
+    std::map<std::string, std::uint64_t> second_failures_;
 };
-
-/// Readable multi-line summary.
-std::string format_summary(const LoadReport& report);
-/// The report as JSON (see docs/simclient.md for the keys).
-std::string format_json(const LoadReport& report);
 
 } // namespace dsoc::simclient

@@ -1,38 +1,68 @@
 #pragma once
-// One headless simulated client: connects, says hello, sends a wandering input
-// every tick, decodes the compact snapshots into its own replica of the world and
-// checks the protocol's invariants - including, when it asks the server for audits,
-// that every replicated pose is within half a quantum of the server's own.
+// One headless simulated client session: resolves, connects, says hello, sends its
+// behaviour's input every tick, decodes the compact snapshots into its own replica of
+// the world and checks the protocol's invariants - including, when it asks the server
+// for audits, that every replicated pose is within half a quantum of the server's own.
+// Every way it can fail is named (ClientStats::failure, failure_reason.hpp).
 
 #include "dsoc/protocol/compact_snapshot.hpp"
 #include "dsoc/protocol/framing.hpp"
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/simclient/client_stats.hpp"
+#include "dsoc/simclient/delay_line.hpp"
+#include "dsoc/simclient/input_model.hpp"
 #include "dsoc/simclient/load_config.hpp"
+#include "dsoc/simclient/scenario.hpp"
 
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/steady_timer.hpp>
 
 #include <array>
 #include <chrono>
+#include <functional>
 #include <memory>
-#include <random>
-#include <unordered_map>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace dsoc::simclient {
 
+class SimClient;
+
+/// What a LoadRun tells one session. The hooks run from the io_context (posted, never
+/// from inside the session's own handlers).
+struct SessionSetup {
+    /// Behaviour and network conditions; nullptr: a wanderer without added latency.
+    const ClientGroup* group = nullptr;
+    int index = 0;                  ///< names the client (name_prefix + index) and its token id
+    std::uint64_t session = 0;      ///< this session's number in the run (seeds its inputs)
+    double connect_timeout_s = 5.0; ///< resolve + connect + hello
+    /// A server shutdown announced before this fails the session; after it, it is the
+    /// expected end.
+    std::chrono::steady_clock::time_point run_end = std::chrono::steady_clock::time_point::max();
+    std::function<void(double)> on_interarrival; ///< each snapshot interarrival [ms]
+    std::function<void(SimClient&)> on_failure;  ///< once, when stats().failure is set
+    std::function<void(SimClient&)> on_closed;   ///< once, when finished() became true
+};
+
 class SimClient : public std::enable_shared_from_this<SimClient> {
 public:
-    SimClient(boost::asio::io_context& io, const LoadConfig& config, int index);
+    SimClient(boost::asio::io_context& io, const LoadConfig& config, SessionSetup setup);
 
     /// Resolves and connects; the rest follows from the server's answers.
     void start();
-    /// Says goodbye (Disconnect client_quit), then reads until the server closes.
+    /// Says goodbye (Disconnect client_quit), then reads until the server closes; a
+    /// session still connecting closes at once.
     void stop();
 
     [[nodiscard]] const ClientStats& stats() const { return stats_; }
+    [[nodiscard]] const SessionSetup& setup() const { return setup_; }
+    [[nodiscard]] std::string name() const;
     [[nodiscard]] bool connected() const { return state_ == State::active; }
+    /// Resolving, connecting or awaiting the server hello.
+    [[nodiscard]] bool connecting() const {
+        return state_ == State::connecting || state_ == State::awaiting_hello;
+    }
     [[nodiscard]] bool finished() const { return state_ == State::closed; }
     /// Entities in the replica right now.
     [[nodiscard]] std::size_t known() const { return replica_.size(); }
@@ -42,42 +72,53 @@ public:
 private:
     enum class State : std::uint8_t { idle, connecting, awaiting_hello, active, stopping, closed };
 
+    void on_resolved(const boost::asio::ip::tcp::resolver::results_type& endpoints);
     void on_connected();
     void read_some();
+    void consume(std::span<const std::uint8_t> bytes);
+    void on_read_error(const boost::system::error_code& ec);
     void handle(const protocol::pb::Envelope& message);
+    void on_server_hello(const protocol::pb::ServerHello& hello);
+    void on_disconnect(const protocol::pb::Disconnect& disconnect);
     void apply_snapshot(const protocol::pb::Snapshot& snapshot);
     void schedule_input();
     void send_input();
-    void send(const protocol::pb::Envelope& message);
+    void send(const protocol::pb::Envelope& message, bool goodbye = false);
+    void queue_frame(std::span<const std::uint8_t> frame, bool goodbye);
     void write_next();
     void error(const std::string& kind);
+    void fail(std::string_view reason, const std::string& detail);
     void close();
 
     boost::asio::io_context& io_;
     const LoadConfig& config_;
-    int index_;
+    SessionSetup setup_;
     State state_ = State::idle;
+    boost::asio::ip::tcp::resolver resolver_;
     boost::asio::ip::tcp::socket socket_;
     boost::asio::steady_timer input_timer_;
     boost::asio::steady_timer close_timer_;
+    boost::asio::steady_timer connect_timer_;
+    std::optional<DelayLine> delay_out_; // the group's latency, when it has one
+    std::optional<DelayLine> delay_in_;
     protocol::FrameDecoder decoder_;
     std::array<std::uint8_t, 16 * 1024> read_buffer_{}; // a read may hold several frames
     protocol::pb::Envelope incoming_;
     std::vector<std::uint8_t> pending_;   // frames not yet handed to the socket
     std::vector<std::uint8_t> in_flight_; // the frames of the write in progress
+    std::vector<std::uint8_t> frame_;     // one encoded frame on its way to a delay line
     bool writing_ = false;
     bool goodbye_sent_ = false;
     protocol::SnapshotDecoder replica_;
     ClientStats stats_;
+    InputModel input_model_;
     std::uint64_t last_snapshot_tick_ = 0;
     std::uint64_t input_seq_ = 0;
     int tick_rate_ = 30;
+    std::chrono::steady_clock::time_point started_at_;
     std::chrono::steady_clock::time_point active_since_;
     std::chrono::steady_clock::time_point last_snapshot_at_;
     std::chrono::steady_clock::time_point next_input_at_;
-    std::mt19937_64 rng_;
-    float wish_yaw_deg_ = 0.0f;
-    int ticks_until_turn_ = 0;
 };
 
 } // namespace dsoc::simclient

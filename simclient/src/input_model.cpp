@@ -1,0 +1,60 @@
+#include "dsoc/simclient/input_model.hpp"
+
+#include <cmath>
+
+namespace dsoc::simclient {
+
+namespace {
+constexpr float kPi = 3.14159265358979f;
+
+void set_move(protocol::pb::ClientInput& input, float yaw_deg, float speed) {
+    input.set_move_x(speed * std::cos(yaw_deg * kPi / 180.0f));
+    input.set_move_y(speed * std::sin(yaw_deg * kPi / 180.0f));
+}
+} // namespace
+
+InputModel::InputModel(Behaviour behaviour, std::uint64_t seed)
+    : behaviour_(behaviour), rng_(seed) {}
+
+void InputModel::next(protocol::pb::ClientInput& input, int tick_rate) {
+    if (behaviour_ == Behaviour::camper) {
+        camp(input, tick_rate);
+    } else {
+        wander(input, tick_rate);
+    }
+}
+
+void InputModel::wander(protocol::pb::ClientInput& input, int tick_rate) {
+    if (--ticks_left_ <= 0) {
+        std::uniform_real_distribution<float> yaw(-180.0f, 180.0f);
+        std::uniform_int_distribution<int> hold(tick_rate, 3 * tick_rate);
+        yaw_deg_ = yaw(rng_);
+        ticks_left_ = hold(rng_);
+    }
+    set_move(input, yaw_deg_, 1.0f);
+    input.set_view_yaw(yaw_deg_);
+}
+
+void InputModel::camp(protocol::pb::ClientInput& input, int tick_rate) {
+    if (--ticks_left_ <= 0) {
+        stepping_ = !stepping_;
+        if (stepping_) {
+            std::uniform_real_distribution<float> yaw(-180.0f, 180.0f);
+            std::uniform_int_distribution<int> step(tick_rate / 5 + 1, tick_rate / 2 + 1);
+            yaw_deg_ = yaw(rng_);
+            ticks_left_ = step(rng_);
+        } else {
+            std::uniform_int_distribution<int> pause(2 * tick_rate, 5 * tick_rate);
+            ticks_left_ = pause(rng_);
+        }
+    }
+    set_move(input, yaw_deg_, stepping_ ? 0.33f : 0.0f);
+    // The view sweeps 30 degrees a second, wrapped into [-180, 180).
+    view_deg_ += 30.0f / static_cast<float>(tick_rate);
+    if (view_deg_ >= 180.0f) {
+        view_deg_ -= 360.0f;
+    }
+    input.set_view_yaw(view_deg_);
+}
+
+} // namespace dsoc::simclient
