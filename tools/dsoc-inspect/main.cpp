@@ -354,7 +354,8 @@ int main(int argc, char** argv) {
                  "shaded by height, the eye and its reachable region, entities coloured by "
                  "state, TBV boxes), the z-pyramid's six cube faces, and frame sequences. "
                  "Input: a live in-process run of the server's world and policy on --map, or "
-                 "a replication trace (--trace). See docs/pictures.md."};
+                 "a replication trace (--trace). Each image carries its title, the legend of its "
+                 "colours and (plans) a scale bar. See docs/pictures.md."};
     dsoc::cli::set_up(app, "dsoc-inspect");
     Options o;
     app.add_option("--map", o.map, "map name, file path or gen:city / gen:rooms (live mode)");
