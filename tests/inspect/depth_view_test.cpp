@@ -54,6 +54,37 @@ TEST(DepthView, WallInFrontOfTheEyeShowsOnThePlusXFace) {
     EXPECT_EQ(strip.at(0, 0), (Rgb{0, 0, 0}));                // gap
 }
 
+TEST(DepthView, LabeledStripNamesEachFaceAboveItAndKeepsTheFaces) {
+    visibility::OcclusionBuffer buffer({16});
+    buffer.begin(glm::vec3(0.0f));
+    buffer.finish();
+    const DepthPyramid pyramid = DepthPyramid::of(buffer);
+    DepthStyle style;
+    style.face_pixels = 64;
+    style.gap = 4;
+    const Image strip = render_depth_strip(pyramid, 0, style);
+    const Image labeled = render_labeled_depth_strip(pyramid, 0, style);
+    ASSERT_EQ(labeled.width(), strip.width());
+    const int band = labeled.height() - strip.height();
+    ASSERT_GT(band, 0);
+    EXPECT_EQ(Image::cropped(labeled, 0, band, strip.width(), strip.height()).pixels(),
+              strip.pixels());
+    const Rgb text = CaptionStyle{}.text;
+    for (int f = 0; f < 6; ++f) {
+        int lit = 0;
+        for (int y = 0; y < band; ++y) {
+            for (int x = 4 + f * 68; x < 4 + f * 68 + 64; ++x) {
+                lit += labeled.at(x, y) == text ? 1 : 0;
+            }
+        }
+        EXPECT_GT(lit, 10) << kFaceLabels[f];
+    }
+    // The legend names the far depth of the style.
+    style.far_depth = 512.0f;
+    EXPECT_NE(depth_legend(style).front().label.find("512"), std::string::npos);
+    EXPECT_EQ(depth_legend(style).back().colour, kUnknownDepth);
+}
+
 TEST(DepthView, RejectsFacesAndLevelsOutOfRange) {
     visibility::OcclusionBuffer buffer({16});
     buffer.begin(glm::vec3(0.0f));

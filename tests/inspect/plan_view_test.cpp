@@ -112,6 +112,25 @@ TEST(PlanView, EveryStateHasItsOwnNonGreyColour) {
     }
 }
 
+TEST(PlanView, NotSentColoursAreCoolNotAlarmRed) {
+    // Hidden is the usual state of most entities: their colours must not read as an
+    // error (red), and must be darker than every sent colour.
+    for (const EntityState s :
+         {EntityState::hidden_tbv, EntityState::hidden_expired, EntityState::not_replicated}) {
+        const Rgb c = kPalette.of(s);
+        EXPECT_GE(c.b, c.r) << to_string(s);
+        for (const EntityState sent :
+             {EntityState::replicated_visible, EntityState::replicated_lookahead,
+              EntityState::replicated_held}) {
+            const Rgb v = kPalette.of(sent);
+            if (s != EntityState::hidden_tbv) {
+                EXPECT_LT(c.r + c.g + c.b, v.r + v.g + v.b)
+                    << to_string(s) << " vs " << to_string(sent);
+            }
+        }
+    }
+}
+
 TEST(PlanView, RefusesEmptyBoundsAndOversizedPictures) {
     const ClientView view;
     EXPECT_THROW((void)render_plan({}, Aabb::empty(), view), std::invalid_argument);

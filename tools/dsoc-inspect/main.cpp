@@ -9,10 +9,13 @@
 //                                 into an animation with any tool; docs/pictures.md)
 //   frames/sheet.png              all frames in one picture, --sheet-columns per row
 //   view.json                     the counts behind plan.png
+// Every image carries a title (map, client, tick, policy, run) and a legend (what each
+// colour means; plans also a scale bar in world units; pyramids their faces' names).
 // Exit status (dsoc/cli/program.hpp): 0 written, 1 a trace or file failed (message on
 // stderr), 2 bad usage or a --map that does not load.
 
 #include "dsoc/cli/program.hpp"
+#include "dsoc/inspect/captioned.hpp"
 #include "dsoc/inspect/depth_view.hpp"
 #include "dsoc/inspect/live_source.hpp"
 #include "dsoc/inspect/plan_view.hpp"
@@ -117,35 +120,6 @@ nlohmann::json summary(const inspect::ClientView& v) {
     return j;
 }
 
-void write_pyramid(const Options& o, const std::string& mode, const inspect::ClientView& view,
-                   const visibility::OccluderScene& scene, const std::filesystem::path& out) {
-    inspect::DepthPyramid pyramid;
-    visibility::OcclusionBuffer point({o.face_resolution});
-    visibility::RegionOcclusionBuffer region({o.face_resolution});
-    if (mode == "region") {
-        region.build(view.eye_region, scene.world, scene.bsp);
-        pyramid = inspect::DepthPyramid::of(region);
-    } else {
-        point.build(view.eye, scene.world, scene.bsp);
-        pyramid = inspect::DepthPyramid::of(point);
-    }
-    if (o.level < 0 || o.level >= pyramid.levels) {
-        throw Failure{"--level " + std::to_string(o.level) + " is outside 0.." +
-                      std::to_string(pyramid.levels - 1) + " for --face-resolution " +
-                      std::to_string(o.face_resolution)};
-    }
-    const std::string stem = "pyramid-L" + std::to_string(o.level);
-    save(inspect::render_depth_strip(pyramid, o.level, o.depth), out / (stem + ".png"));
-    for (int f = 0; f < 6; ++f) {
-        save(inspect::render_depth_face(pyramid, f, o.level, o.depth),
-             out / (stem + "-" + inspect::kFaceNames[f] + ".png"));
-    }
-}
-
-class ViewSource;
-void write_frames(const Options& o, ViewSource& source, const visibility::Aabb& bounds,
-                  const inspect::ClientView& first, const std::filesystem::path& dir);
-
 /// One view after another, from either input.
 class ViewSource {
 public:
@@ -155,12 +129,16 @@ public:
     [[nodiscard]] virtual const visibility::OccluderScene& scene() const = 0;
     [[nodiscard]] virtual const std::vector<inspect::Footprint>& footprints() const = 0;
     [[nodiscard]] virtual visibility::Aabb bounds() const = 0;
+    /// What titles name: the map, the policy, where the views come from.
+    [[nodiscard]] virtual inspect::RunInfo run() const = 0;
 };
 
 class LiveViews final : public ViewSource {
 public:
-    LiveViews(std::shared_ptr<const maps::Map> map, const inspect::LiveOptions& options)
-        : map_(map), sim_(map, options), footprints_(inspect::footprints(map->occluders)) {}
+    LiveViews(std::string name, std::shared_ptr<const maps::Map> map,
+              const inspect::LiveOptions& options)
+        : name_(std::move(name)), options_(options), map_(map), sim_(map, options),
+          footprints_(inspect::footprints(map->occluders)) {}
     inspect::ClientView at(std::uint64_t tick) override {
         while (sim_.tick() < std::max<std::uint64_t>(tick, 1)) {
             sim_.advance();
@@ -172,8 +150,18 @@ public:
         return footprints_;
     }
     [[nodiscard]] visibility::Aabb bounds() const override { return map_->bounds; }
+    [[nodiscard]] inspect::RunInfo run() const override {
+        return {name_, options_.policy, options_.tick_rate, false,
+                "live: " + std::to_string(options_.bots) + " bots, " +
+                    std::to_string(options_.tick_rate) + " Hz, " +
+                    std::to_string(options_.latency_allowance_ms) +
+                    " ms latency allowance, culler " + options_.culler + ", seed " +
+                    std::to_string(options_.seed)};
+    }
 
 private:
+    std::string name_;
+    inspect::LiveOptions options_;
     std::shared_ptr<const maps::Map> map_;
     inspect::LiveSimulation sim_;
     std::vector<inspect::Footprint> footprints_;
@@ -181,7 +169,8 @@ private:
 
 class TraceViews final : public ViewSource {
 public:
-    TraceViews(const std::string& path, std::optional<std::uint32_t> client) : client_(client) {
+    TraceViews(const std::string& path, std::optional<std::uint32_t> client)
+        : path_(path), client_(client) {
         std::string error;
         if (!source_.open(path, error)) {
             throw Failure{error};
@@ -206,19 +195,71 @@ public:
     }
     [[nodiscard]] visibility::Aabb bounds() const override { return source_.bounds(); }
     [[nodiscard]] const trace::TraceHeader& header() const { return source_.header(); }
+    [[nodiscard]] inspect::RunInfo run() const override {
+        return {header().map, header().policy, header().tick_rate, true,
+                "trace " + std::filesystem::path(path_).filename().string() + ": " +
+                    std::to_string(header().tick_rate) + " Hz, lookahead " +
+                    std::to_string(header().lookahead_ticks) + " ticks"};
+    }
 
 private:
+    std::string path_;
     inspect::TraceSource source_;
     std::optional<std::uint32_t> client_;
     std::vector<inspect::Footprint> footprints_;
 };
 
+/// pyramid-L<level>.png (the six faces, labelled) and one file per face, each with its
+/// title and the depth legend.
+void write_pyramid(const Options& o, const std::string& mode, const ViewSource& source,
+                   const inspect::ClientView& view, const std::filesystem::path& out) {
+    const visibility::OccluderScene& scene = source.scene();
+    inspect::DepthPyramid pyramid;
+    visibility::OcclusionBuffer point({o.face_resolution});
+    visibility::RegionOcclusionBuffer region({o.face_resolution});
+    if (mode == "region") {
+        region.build(view.eye_region, scene.world, scene.bsp);
+        pyramid = inspect::DepthPyramid::of(region);
+    } else {
+        point.build(view.eye, scene.world, scene.bsp);
+        pyramid = inspect::DepthPyramid::of(point);
+    }
+    if (o.level < 0 || o.level >= pyramid.levels) {
+        throw Failure{"--level " + std::to_string(o.level) + " is outside 0.." +
+                      std::to_string(pyramid.levels - 1) + " for --face-resolution " +
+                      std::to_string(o.face_resolution)};
+    }
+    const int texels = o.face_resolution >> o.level;
+    const std::string what = std::string("z-pyramid from the ") +
+                             (mode == "region" ? "reachable eye region" : "present eye") +
+                             ", level " + std::to_string(o.level) + " (" + std::to_string(texels) +
+                             " x " + std::to_string(texels) + " texels a face)";
+    const auto face_what = [&](int f) {
+        return std::string(inspect::kFaceLabels[f]) + " face of the " + mode +
+               " z-pyramid, level " + std::to_string(o.level);
+    };
+    const inspect::RunInfo run = source.run();
+    const std::string stem = "pyramid-L" + std::to_string(o.level);
+    save(inspect::captioned_depth(inspect::render_labeled_depth_strip(pyramid, o.level, o.depth),
+                                  run, view, what, o.depth),
+         out / (stem + ".png"));
+    for (int f = 0; f < 6; ++f) {
+        save(inspect::captioned_depth(inspect::render_depth_face(pyramid, f, o.level, o.depth), run,
+                                      view, face_what(f), o.depth),
+             out / (stem + "-" + inspect::kFaceNames[f] + ".png"));
+    }
+}
+
 /// frames/plan-NNNN.png, --frame-every ticks apart from `first`, each cropped to
-/// --frame-crop around the eye when given, and frames/sheet.png with all of them.
+/// --frame-crop around the eye when given and labelled with its tick inside, under one
+/// caption naming the whole sequence (so that every frame has the same size); and
+/// frames/sheet.png with all of them under that caption.
 void write_frames(const Options& o, ViewSource& source, const visibility::Aabb& bounds,
                   const inspect::ClientView& first, const std::filesystem::path& dir) {
     std::filesystem::create_directories(dir);
+    const inspect::RunInfo run = source.run();
     std::vector<inspect::Image> frames;
+    inspect::ClientView last = first;
     std::uint64_t tick = first.tick;
     for (int i = 0; i < o.frames; ++i) {
         const inspect::ClientView v = i == 0 ? first : source.at(tick);
@@ -232,12 +273,18 @@ void write_frames(const Options& o, ViewSource& source, const visibility::Aabb& 
                                             frame.pixel_y(v.eye.y) - half, 2 * half + 1,
                                             2 * half + 1, inspect::kPalette.background);
         }
-        char name[32];
-        std::snprintf(name, sizeof name, "plan-%04d.png", i);
-        save(image, dir / name);
-        frames.push_back(std::move(image));
+        frames.push_back(inspect::labeled_frame(std::move(image), run, v));
+        last = v;
     }
-    save(inspect::Image::grid(frames, o.sheet_columns, 4, inspect::Rgb{0, 0, 0}),
+    const inspect::PlanStyle style = plan_style(o, first);
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        char name[32];
+        std::snprintf(name, sizeof name, "plan-%04zu.png", i);
+        save(inspect::captioned_frames(frames[i], run, first, last, style), dir / name);
+    }
+    save(inspect::captioned_frames(
+             inspect::Image::grid(frames, o.sheet_columns, 4, inspect::Rgb{0, 0, 0}), run, first,
+             last, style),
          dir / "sheet.png");
 }
 
@@ -274,7 +321,7 @@ int run(const Options& o) {
         if (o.client >= 0) {
             live.viewer_entity = static_cast<std::uint32_t>(o.client);
         }
-        source = std::make_unique<LiveViews>(shared, live);
+        source = std::make_unique<LiveViews>(o.map, shared, live);
         if (mode == "auto") {
             mode = "region";
         }
@@ -282,7 +329,9 @@ int run(const Options& o) {
     const visibility::Aabb bounds = source->bounds();
 
     const inspect::ClientView view = source->at(o.tick);
-    save(inspect::render_plan(source->footprints(), bounds, view, plan_style(o, view)),
+    const inspect::PlanStyle style = plan_style(o, view);
+    save(inspect::captioned_plan(inspect::render_plan(source->footprints(), bounds, view, style),
+                                 source->run(), view, style),
          out / "plan.png");
     const nlohmann::json j = summary(view);
     std::ofstream(out / "view.json") << j.dump(1) << '\n';
@@ -290,7 +339,7 @@ int run(const Options& o) {
     brief.erase("entity_list");
     std::cout << brief.dump() << '\n';
     if (mode != "none") {
-        write_pyramid(o, mode, view, source->scene(), out);
+        write_pyramid(o, mode, *source, view, out);
     }
     if (o.frames > 0) {
         write_frames(o, *source, bounds, view, out / "frames");
@@ -305,7 +354,8 @@ int main(int argc, char** argv) {
                  "shaded by height, the eye and its reachable region, entities coloured by "
                  "state, TBV boxes), the z-pyramid's six cube faces, and frame sequences. "
                  "Input: a live in-process run of the server's world and policy on --map, or "
-                 "a replication trace (--trace). See docs/pictures.md."};
+                 "a replication trace (--trace). Each image carries its title, the legend of its "
+                 "colours and (plans) a scale bar. See docs/pictures.md."};
     dsoc::cli::set_up(app, "dsoc-inspect");
     Options o;
     app.add_option("--map", o.map, "map name, file path or gen:city / gen:rooms (live mode)");

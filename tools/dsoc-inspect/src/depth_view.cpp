@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -63,6 +65,22 @@ Image render_depth_strip(const DepthPyramid& pyramid, int level, const DepthStyl
         strip.blit(faces[f], gap + f * (side + gap), gap);
     }
     return strip;
+}
+
+Image render_labeled_depth_strip(const DepthPyramid& pyramid, int level, const DepthStyle& style) {
+    const Image strip = render_depth_strip(pyramid, level, style);
+    const int gap = std::max(style.gap, 0);
+    const int side = (strip.width() - 7 * gap) / 6;
+    return with_column_labels(strip, {std::begin(kFaceLabels), std::end(kFaceLabels)}, gap, side,
+                              gap);
+}
+
+std::vector<LegendEntry> depth_legend(const DepthStyle& style) {
+    std::ostringstream far;
+    far << "depth: 0 (white) to " << style.far_depth << " world units (black)";
+    return {
+        {LegendEntry::Swatch::gradient, Rgb{255, 255, 255}, Rgb{0, 0, 0}, far.str()},
+        {LegendEntry::Swatch::fill, kUnknownDepth, {}, "nothing known (nothing proven hidden)"}};
 }
 
 } // namespace dsoc::inspect

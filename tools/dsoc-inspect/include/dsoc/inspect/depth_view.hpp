@@ -9,17 +9,22 @@
 // along the second (z for the x and y faces, else y) drawn bottom to top. These are
 // texel maps, not camera views: the -x, +y and -z faces appear mirrored.
 
+#include "dsoc/inspect/caption.hpp"
 #include "dsoc/inspect/image.hpp"
 #include "dsoc/visibility/occlusion_buffer.hpp"
 #include "dsoc/visibility/region_occlusion_buffer.hpp"
 
 #include <array>
 #include <functional>
+#include <vector>
 
 namespace dsoc::inspect {
 
 inline constexpr Rgb kUnknownDepth{20, 30, 90};
 inline constexpr const char* kFaceNames[6] = {"px", "nx", "py", "ny", "pz", "nz"};
+/// The faces as captions name them: axis, then the map direction (+y north, +z up).
+inline constexpr const char* kFaceLabels[6] = {"+x east",  "-x west", "+y north",
+                                               "-y south", "+z up",   "-z down"};
 
 /// Read access to either z-pyramid (both use the same face layout).
 struct DepthPyramid {
@@ -55,5 +60,13 @@ struct DepthStyle {
 /// The six faces side by side, +x first, separated by `style.gap` background pixels.
 [[nodiscard]] Image render_depth_strip(const DepthPyramid& pyramid, int level,
                                        const DepthStyle& style = {});
+
+/// render_depth_strip with kFaceLabels centred above the faces.
+[[nodiscard]] Image render_labeled_depth_strip(const DepthPyramid& pyramid, int level,
+                                               const DepthStyle& style = {});
+
+/// What the depth images' colours mean: white (depth 0) to black (style.far_depth, in
+/// world units), and kUnknownDepth.
+[[nodiscard]] std::vector<LegendEntry> depth_legend(const DepthStyle& style = {});
 
 } // namespace dsoc::inspect

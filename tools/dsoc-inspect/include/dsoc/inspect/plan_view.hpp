@@ -23,9 +23,11 @@ struct PlanPalette {
     Rgb replicated_visible{40, 210, 70};
     Rgb replicated_lookahead{250, 200, 30};
     Rgb replicated_held{200, 120, 255};
+    // Not sent: cool and dark, so that what the client receives stands out and the
+    // usual hidden entity does not read as an error.
     Rgb hidden_tbv{60, 120, 255};
-    Rgb hidden_expired{235, 50, 50};
-    Rgb not_replicated{150, 70, 70};
+    Rgb hidden_expired{25, 35, 80};
+    Rgb not_replicated{70, 45, 100};
     Rgb tbv_outline{40, 80, 200};
     Rgb viewer{255, 255, 255};
     Rgb eye_region{0, 230, 230};
