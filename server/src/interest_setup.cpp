@@ -69,7 +69,7 @@ std::unique_ptr<interest::InterestPolicy> make_policy(const ServerConfig& config
         spdlog::info("baked stage: {} (exact_stages = {})",
                      interest::use_exact_stages(settings, *table)
                          ? "the table, then the exact stages"
-                         : "the table alone",
+                         : "the table alone (the exact stages where it does not cover)",
                      config.exact_stages);
         return table;
     });

@@ -332,7 +332,11 @@ TEST(BakedRegionVisibility, AFactoryWithoutATableIsTheNextStage) {
 /// manager's bulk path (test_entities_in_bulk()).
 class OneByOne final : public RegionVisibility {
 public:
-    explicit OneByOne(std::shared_ptr<const CellVisibilityTable> table) : stage_(table, nullptr) {}
+    explicit OneByOne(
+        std::shared_ptr<const CellVisibilityTable> table,
+        std::unique_ptr<RegionVisibility> next = nullptr,
+        BakedRegionVisibility::NextFor next_for = BakedRegionVisibility::NextFor::after_table)
+        : stage_(std::move(table), std::move(next), next_for) {}
     void build(const Aabb& region) override { stage_.build(region); }
     [[nodiscard]] Visibility test_box(const Aabb& box) const override {
         return stage_.test_box(box);
@@ -367,28 +371,64 @@ private:
     BakedRegionVisibility stage_;
 };
 
-TEST(BakedRegionVisibility, TheManagersBulkAnswersAreItsOneByOneAnswers) {
-    // Two managers over the same table and the same wandering entities: one takes the
-    // bulk path (the table alone says every prepared test is its coarse one), the
-    // other asks entity by entity. Boxes set after begin_update() (no preparation) and
-    // the cheapest effort are mixed in. Every decision must be the same.
-    const Baked& b = corridor_table();
-    ASSERT_TRUE(BakedRegionVisibility(b.table, nullptr).prepared_tests_are_coarse());
-    ASSERT_FALSE(OneByOne(b.table).prepared_tests_are_coarse());
+/// An exact culler that counts its builds and tests (of every instance it is given).
+class CountingNext final : public RegionVisibility {
+public:
+    CountingNext(std::unique_ptr<RegionVisibility> inner, int* builds, int* tests)
+        : inner_(std::move(inner)), builds_(builds), tests_(tests) {}
+    void build(const Aabb& region) override {
+        ++*builds_;
+        inner_->build(region);
+    }
+    [[nodiscard]] Visibility test_box(const Aabb& box) const override {
+        ++*tests_;
+        return inner_->test_box(box);
+    }
+    [[nodiscard]] Visibility test_box_quick(const Aabb& box) const override {
+        ++*tests_;
+        return inner_->test_box_quick(box);
+    }
+
+private:
+    std::unique_ptr<RegionVisibility> inner_;
+    int* builds_;
+    int* tests_;
+};
+
+/// Two managers over the same table and the same wandering entities: one takes the
+/// bulk path (the table says every prepared test is its coarse one), the other asks
+/// entity by entity. Boxes set after begin_update() (no preparation) and the cheapest
+/// effort are mixed in. Every decision must be the same. With `scene`, the exact
+/// stages answer where the table does not cover (`where_uncovered`), and must be
+/// asked as often by both.
+void expect_bulk_answers_are_one_by_one(std::shared_ptr<const CellVisibilityTable> table,
+                                        const Aabb& area,
+                                        std::shared_ptr<const OccluderScene> scene) {
+    using NextFor = BakedRegionVisibility::NextFor;
+    const RegionVisibilityFactory exact =
+        scene ? occluder_region_visibility(scene) : RegionVisibilityFactory{};
+    int builds[2] = {0, 0};
+    int tests[2] = {0, 0};
+    const auto next = [&](int k) -> std::unique_ptr<RegionVisibility> {
+        return exact ? std::make_unique<CountingNext>(exact(), &builds[k], &tests[k]) : nullptr;
+    };
+    const NextFor next_for = scene ? NextFor::where_uncovered : NextFor::after_table;
+    ASSERT_TRUE(BakedRegionVisibility(table, next(0), next_for).prepared_tests_are_coarse());
+    ASSERT_FALSE(OneByOne(table, next(1), next_for).prepared_tests_are_coarse());
+    builds[0] = builds[1] = tests[0] = tests[1] = 0;
     DSOCConfig config;
     config.validate_state = true;
-    const Aabb world = b.table->grid().bounds();
-    InterestManager bulk(config, world, [&b]() -> std::unique_ptr<RegionVisibility> {
-        return std::make_unique<BakedRegionVisibility>(b.table, nullptr);
+    const Aabb world = table->grid().bounds();
+    InterestManager bulk(config, world, [&]() -> std::unique_ptr<RegionVisibility> {
+        return std::make_unique<BakedRegionVisibility>(table, next(0), next_for);
     });
-    InterestManager one(config, world, [&b]() -> std::unique_ptr<RegionVisibility> {
-        return std::make_unique<OneByOne>(b.table);
+    InterestManager one(config, world, [&]() -> std::unique_ptr<RegionVisibility> {
+        return std::make_unique<OneByOne>(table, next(1), next_for);
     });
     std::mt19937 rng(29);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
     std::uniform_real_distribution<float> step(-6.0f, 6.0f);
     const glm::vec3 half{15.0f, 15.0f, 28.0f};
-    const Aabb area = b.play_area;
     const auto inside = [&](glm::vec3 c) {
         return glm::clamp(c, area.min + half, glm::max(area.min + half, area.max - half));
     };
@@ -450,6 +490,67 @@ TEST(BakedRegionVisibility, TheManagersBulkAnswersAreItsOneByOneAnswers) {
     }
     EXPECT_GT(hidden, 500u) << "the table hides something";
     EXPECT_GT(visible, 500u);
+    // Built as lazily by both (the bulk pass also asks about the viewer's own box, so
+    // it may test a little more).
+    EXPECT_EQ(builds[0], builds[1]);
+    EXPECT_GE(tests[0], tests[1]);
+    if (scene) {
+        EXPECT_GT(tests[1], 100) << "the exact stages answered what the table does not cover";
+        EXPECT_GT(builds[1], 10);
+    }
+}
+
+TEST(BakedRegionVisibility, TheManagersBulkAnswersAreItsOneByOneAnswers) {
+    const Baked& b = corridor_table();
+    expect_bulk_answers_are_one_by_one(b.table, b.play_area, nullptr);
+}
+
+TEST(BakedRegionVisibility, BehindTheTableAloneTheExactStagesAnswerOnlyWhereItDoesNotCover) {
+    // The corridor's table with the lower half of x uncovered: what touches it is asked
+    // of the exact stages, built only when needed; the rest is the table's answer.
+    const Baked& b = corridor_table();
+    const CellGrid& grid = b.table->grid();
+    std::vector<std::uint8_t> covered(grid.cell_count(), 0);
+    for (std::uint32_t i = 0; i < grid.cell_count(); ++i) {
+        covered[i] = grid.coords(i).x >= grid.dims.x / 2 ? 1 : 0;
+    }
+    CellBakeConfig config;
+    config.cell_size = grid.cell_size;
+    config.threads = 2;
+    const auto half = std::make_shared<const CellVisibilityTable>(
+        bake_cell_visibility(*b.scene, grid, config, nullptr, nullptr, {}, covered));
+    ASSERT_GT(half->uncovered_cells().size(), 0u);
+    // A covered region and covered boxes never build the exact stages.
+    int builds = 0;
+    int tests = 0;
+    BakedRegionVisibility stage(
+        half,
+        std::make_unique<CountingNext>(occluder_region_visibility(b.scene)(), &builds, &tests),
+        BakedRegionVisibility::NextFor::where_uncovered);
+    // The covered half of the play area, a cell clear of the uncovered one.
+    Aabb right = b.play_area;
+    right.min.x = std::max(right.min.x, grid.origin.x + static_cast<float>(grid.dims.x / 2 + 1) *
+                                                            grid.cell_size);
+    ASSERT_LT(right.min.x + 60.0f, right.max.x);
+    std::mt19937 rng(3);
+    std::vector<std::int32_t> words;
+    std::vector<std::int32_t> runs;
+    int table_answers = 0;
+    for (int r = 0; r < 40; ++r) {
+        const Aabb region = random_box(rng, right, 16.0f, 40.0f);
+        const Aabb box = random_box(rng, right, 16.0f, 40.0f);
+        stage.build(region);
+        if (!stage.active() || !half->open_words_of(box, words, runs)) {
+            continue;
+        }
+        (void)stage.test_box(box);
+        ++table_answers;
+        EXPECT_FALSE(stage.next_built());
+    }
+    EXPECT_GT(table_answers, 10);
+    EXPECT_EQ(builds, 0);
+    EXPECT_EQ(tests, 0);
+    expect_bulk_answers_are_one_by_one(half, b.play_area, b.scene);
 }
 
 } // namespace

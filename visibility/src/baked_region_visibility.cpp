@@ -14,11 +14,15 @@ constexpr char kSlabUncovered = 2;
 } // namespace
 
 BakedRegionVisibility::BakedRegionVisibility(std::shared_ptr<const CellVisibilityTable> table,
-                                             std::unique_ptr<RegionVisibility> next)
-    : table_(std::move(table)), next_(std::move(next)) {}
+                                             std::unique_ptr<RegionVisibility> next,
+                                             NextFor next_for)
+    : table_(std::move(table)), next_(std::move(next)),
+      next_for_(next_ != nullptr ? next_for : NextFor::after_table) {}
 
 void BakedRegionVisibility::build(const Aabb& region) {
-    if (next_) {
+    region_ = region;
+    next_built_ = false;
+    if (next_ && next_for_ == NextFor::after_table) {
         next_->build(region);
     }
     glm::ivec3 lo;
@@ -116,7 +120,30 @@ bool BakedRegionVisibility::box_hidden(const Aabb& box) const {
     return active_ && table_->open_words_of(box, scratch_, scratch_runs_) && hidden(scratch_);
 }
 
+const RegionVisibility& BakedRegionVisibility::fallback() const {
+    if (!next_built_) {
+        next_->build(region_);
+        next_built_ = true;
+    }
+    return *next_;
+}
+
+bool BakedRegionVisibility::uncovered(const Aabb& box, bool& hidden_box) const {
+    if (!active_ || !table_->open_words_of(box, scratch_, scratch_runs_)) {
+        return true;
+    }
+    hidden_box = hidden(scratch_);
+    return false;
+}
+
 Visibility BakedRegionVisibility::test_box(const Aabb& box) const {
+    if (next_for_ == NextFor::where_uncovered) {
+        bool hidden_box = false;
+        if (uncovered(box, hidden_box)) {
+            return fallback().test_box(box);
+        }
+        return hidden_box ? Visibility::occluded : Visibility::visible;
+    }
     if (box_hidden(box)) {
         return Visibility::occluded;
     }
@@ -124,6 +151,13 @@ Visibility BakedRegionVisibility::test_box(const Aabb& box) const {
 }
 
 Visibility BakedRegionVisibility::test_box_quick(const Aabb& box) const {
+    if (next_for_ == NextFor::where_uncovered) {
+        bool hidden_box = false;
+        if (uncovered(box, hidden_box)) {
+            return fallback().test_box(box);
+        }
+        return hidden_box ? Visibility::occluded : Visibility::visible;
+    }
     if (box_hidden(box)) {
         return Visibility::occluded;
     }
@@ -131,6 +165,13 @@ Visibility BakedRegionVisibility::test_box_quick(const Aabb& box) const {
 }
 
 Visibility BakedRegionVisibility::test_box_hinted(const Aabb& box, std::uint32_t& hint) const {
+    if (next_for_ == NextFor::where_uncovered) {
+        bool hidden_box = false;
+        if (uncovered(box, hidden_box)) {
+            return fallback().test_box(box);
+        }
+        return hidden_box ? Visibility::occluded : Visibility::visible;
+    }
     if (box_hidden(box)) {
         return Visibility::occluded;
     }
@@ -141,7 +182,9 @@ void BakedRegionVisibility::prepare(const Aabb& box, PreparedBox& out) const {
     out.box = box;
     thread_local std::vector<std::int32_t> runs;
     out.prepared = table_->open_words_of(box, out.keys, runs);
-    if (next_ && next_->has_prepared_stage()) {
+    // A next stage that answers only where the table cannot tests the plain box: it is
+    // rarely asked, and preparing every box for it would cost every tick.
+    if (next_ && next_for_ == NextFor::after_table && next_->has_prepared_stage()) {
         out.inner.resize(1);
         next_->prepare(box, out.inner.front());
     } else {
@@ -155,6 +198,12 @@ Visibility BakedRegionVisibility::test_prepared(const PreparedBox& p) const {
     if (!next_) { // the table alone: no branch on the answer
         return hidden ? Visibility::occluded : Visibility::visible;
     }
+    if (next_for_ == NextFor::where_uncovered) {
+        if (active_ && p.prepared) {
+            return hidden ? Visibility::occluded : Visibility::visible;
+        }
+        return fallback().test_box(p.box);
+    }
     if (hidden) {
         return Visibility::occluded;
     }
@@ -165,6 +214,12 @@ Visibility BakedRegionVisibility::test_prepared_quick(const PreparedBox& p) cons
     const bool hidden = prepared_hidden(p);
     if (!next_) {
         return hidden ? Visibility::occluded : Visibility::visible;
+    }
+    if (next_for_ == NextFor::where_uncovered) {
+        if (active_ && p.prepared) {
+            return hidden ? Visibility::occluded : Visibility::visible;
+        }
+        return fallback().test_box(p.box);
     }
     if (hidden) {
         return Visibility::occluded;
@@ -179,6 +234,12 @@ Visibility BakedRegionVisibility::test_prepared_hinted(const PreparedBox& p,
     if (!next_) {
         return hidden ? Visibility::occluded : Visibility::visible;
     }
+    if (next_for_ == NextFor::where_uncovered) {
+        if (active_ && p.prepared) {
+            return hidden ? Visibility::occluded : Visibility::visible;
+        }
+        return fallback().test_box(p.box);
+    }
     if (hidden) {
         return Visibility::occluded;
     }
@@ -187,11 +248,21 @@ Visibility BakedRegionVisibility::test_prepared_hinted(const PreparedBox& p,
 }
 
 Visibility BakedRegionVisibility::test_prepared_coarse(const PreparedBox& p) const {
+    if (next_for_ == NextFor::where_uncovered && !(active_ && p.prepared)) {
+        return fallback().test_box(p.box);
+    }
     return prepared_hidden(p) ? Visibility::occluded : Visibility::visible;
 }
 
 void BakedRegionVisibility::coarse_hidden_all(std::span<const PreparedBox* const> boxes,
                                               std::span<std::uint8_t> hidden) const {
+    if (next_for_ == NextFor::where_uncovered) {
+        for (std::size_t i = 0; i < boxes.size(); ++i) {
+            const PreparedBox* p = boxes[i];
+            hidden[i] = p != nullptr && test_prepared_coarse(*p) == Visibility::occluded ? 1 : 0;
+        }
+        return;
+    }
     for (std::size_t i = 0; i < boxes.size(); ++i) {
         const PreparedBox* p = boxes[i];
         hidden[i] = p != nullptr && prepared_hidden(*p) ? 1 : 0;
@@ -225,12 +296,14 @@ void BakedRegionVisibility::merge_prepared(PreparedBox& into, const PreparedBox&
 }
 
 RegionVisibilityFactory with_baked_stage(std::shared_ptr<const CellVisibilityTable> table,
-                                         RegionVisibilityFactory make_next) {
+                                         RegionVisibilityFactory make_next,
+                                         BakedRegionVisibility::NextFor next_for) {
     if (table == nullptr) {
         return make_next;
     }
-    return [table = std::move(table), make_next = std::move(make_next)] {
-        return std::make_unique<BakedRegionVisibility>(table, make_next ? make_next() : nullptr);
+    return [table = std::move(table), make_next = std::move(make_next), next_for] {
+        return std::make_unique<BakedRegionVisibility>(table, make_next ? make_next() : nullptr,
+                                                       next_for);
     };
 }
 

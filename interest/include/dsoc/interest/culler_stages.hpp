@@ -19,7 +19,8 @@ struct CullerStages {
     /// The map's PVS over every cluster a region touches; null (or a map without vis
     /// data): no PVS stage.
     std::shared_ptr<const maps::Pvs> pvs;
-    /// false: the table alone (the PVS and the exact tests are skipped). Needs a table.
+    /// false: the table alone wherever it covers the region and the box (the PVS and
+    /// the exact tests answer only what it does not cover). Needs a table.
     bool exact = true;
     /// The exact occluder tests' settings (shaft, pyramid, fusion, portal depth).
     visibility::RegionCullerConfig exact_config;

@@ -5,8 +5,15 @@
 // that union is hidden from all of them. A prepared box costs a few bit tests.
 //
 // A region or box the table does not cover (part of it outside the grid or in an
-// uncovered cell, or only solid cells) is never answered by guess: it goes to the next stage, or is
-// `visible` when there is none.
+// uncovered cell, or only solid cells) is never answered by guess: it goes to the next
+// stage, or is `visible` when there is none.
+//
+// Two ways to chain the next stage: `after_table`, it answers every box the table does
+// not prove hidden (the table, then the exact stages); `where_uncovered`, it answers
+// only what the table does not cover and the table's "visible" stands (the table
+// alone, with the exact stages where it has nothing to say). In the second way the next
+// stage is built only when first needed after build(), so test_*() of one culler must
+// come from one thread at a time (as the InterestManager's per-client pass does).
 
 #include "dsoc/visibility/cell_visibility.hpp"
 #include "dsoc/visibility/region_visibility.hpp"
@@ -18,10 +25,14 @@ namespace dsoc::visibility {
 
 class BakedRegionVisibility final : public RegionVisibility {
 public:
-    /// `next` (may be null: the table alone) answers what the table passes or does
-    /// not cover.
+    enum class NextFor { after_table, where_uncovered };
+
+    /// `next` (may be null: the table alone, "visible" for what it does not cover)
+    /// answers what the table passes or does not cover (`after_table`), or only what
+    /// it does not cover (`where_uncovered`).
     BakedRegionVisibility(std::shared_ptr<const CellVisibilityTable> table,
-                          std::unique_ptr<RegionVisibility> next);
+                          std::unique_ptr<RegionVisibility> next,
+                          NextFor next_for = NextFor::after_table);
 
     void build(const Aabb& region) override;
     [[nodiscard]] Visibility test_box(const Aabb& box) const override;
@@ -37,10 +48,16 @@ public:
                                                   std::uint32_t& hint) const override;
     /// A pair's first answer is a few bit tests: TBVs and entity clusters do not pay.
     [[nodiscard]] bool pair_shortcuts_pay() const override { return false; }
-    /// The table alone: `visible` whenever it passes the box (the next stage is skipped).
+    /// The table's answer where it covers the box and the region (the next stage is
+    /// skipped when it passes the box); elsewhere `visible`, or with `where_uncovered`
+    /// the next stage's test_box(). With `where_uncovered` every test of a box the
+    /// table does not cover is that one (no quick test, no hint), so that every
+    /// prepared test is the coarse one.
     [[nodiscard]] Visibility test_prepared_coarse(const PreparedBox& p) const override;
-    /// The table alone (no next stage): every prepared test is the coarse one.
-    [[nodiscard]] bool prepared_tests_are_coarse() const override { return next_ == nullptr; }
+    /// No next stage, or one `where_uncovered`: every prepared test is the coarse one.
+    [[nodiscard]] bool prepared_tests_are_coarse() const override {
+        return next_ == nullptr || next_for_ == NextFor::where_uncovered;
+    }
     void coarse_hidden_all(std::span<const PreparedBox* const> boxes,
                            std::span<std::uint8_t> hidden) const override;
     /// Keys are row words of open cells (CellVisibilityTable::open_words_of): the union
@@ -49,6 +66,9 @@ public:
 
     /// True when the last build() found the region covered by the table.
     [[nodiscard]] bool active() const { return active_; }
+    /// With `where_uncovered`: whether the next stage was built for the last region
+    /// (it is only when something the table does not cover was tested).
+    [[nodiscard]] bool next_built() const { return next_built_; }
 
 private:
     /// True when the table proves every open cell of `words` (open_words_of()'s
@@ -57,10 +77,18 @@ private:
     [[nodiscard]] bool box_hidden(const Aabb& box) const;
     /// The table proves a box prepared by this stage hidden from the built region.
     [[nodiscard]] bool prepared_hidden(const PreparedBox& p) const;
+    /// With `where_uncovered`: the next stage, built for the last region first.
+    [[nodiscard]] const RegionVisibility& fallback() const;
+    /// With `where_uncovered`: whether the next stage answers for `box` (the table does
+    /// not cover it or the region), and the table's answer when it does not.
+    [[nodiscard]] bool uncovered(const Aabb& box, bool& hidden) const;
 
     std::shared_ptr<const CellVisibilityTable> table_;
     std::unique_ptr<RegionVisibility> next_;
+    NextFor next_for_ = NextFor::after_table;
     bool active_ = false;
+    Aabb region_;                     ///< the last built region
+    mutable bool next_built_ = false; ///< `where_uncovered`: next_ built for region_
     glm::ivec3 built_lo_{1};
     glm::ivec3 built_hi_{0};
     std::vector<std::uint64_t> visible_; ///< union of the region's rows
@@ -73,9 +101,10 @@ private:
 };
 
 /// Puts the table in front of every culler `make_next` makes (`make_next` empty: the
-/// table alone); returns `make_next` itself when `table` is null.
-[[nodiscard]] RegionVisibilityFactory
-with_baked_stage(std::shared_ptr<const CellVisibilityTable> table,
-                 RegionVisibilityFactory make_next);
+/// table alone), the next stage answering as `next_for` says; returns `make_next`
+/// itself when `table` is null.
+[[nodiscard]] RegionVisibilityFactory with_baked_stage(
+    std::shared_ptr<const CellVisibilityTable> table, RegionVisibilityFactory make_next,
+    BakedRegionVisibility::NextFor next_for = BakedRegionVisibility::NextFor::after_table);
 
 } // namespace dsoc::visibility
