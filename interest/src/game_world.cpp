@@ -129,7 +129,15 @@ void GameWorld::step(float dt) {
             }
         } else {
             sim::player_move(collision_, move_, e.input, dt, e.move);
-            e.teleported = false;
+            // A player who touches a hazard dies and is put back at the next spawn point
+            // (as bots are): a teleport.
+            e.teleported =
+                !map_->spawn_points.empty() && sim::touches_hazard(move_, e.move, map_->hazards);
+            if (e.teleported) {
+                const auto& spawn = map_->spawn_points[next_spawn_++ % map_->spawn_points.size()];
+                e.move = sim::spawn_state(collision_, move_, spawn.origin);
+                e.yaw_deg = wrap_degrees(spawn.yaw_degrees);
+            }
         }
     }
 }

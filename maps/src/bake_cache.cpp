@@ -47,7 +47,8 @@ static std::unique_ptr<PvsBakePruner> pvs_pruner(const Map& map) {
 template <class Take>
 visibility::CellGrid first_grid(const Map& map, float cell_size, Take take) {
     for (;; cell_size *= 1.25f) {
-        const auto grid = visibility::CellGrid::covering(map.bounds, cell_size);
+        const auto grid =
+            visibility::CellGrid::covering(map.bounds.expanded(kBakeGridMargin), cell_size);
         const bool last = cell_size > 1024.0f;
         if (grid.cell_count() > kMaxBakeGridCells && !last) {
             continue;

@@ -342,6 +342,13 @@ void player_move(const CollisionWorld& world, const MoveConfig& config, const Mo
     state.climb_credit = std::clamp(climb_budget - rise, 0.0f, config.step_height);
 }
 
+bool touches_hazard(const MoveConfig& config, const MoveState& state,
+                    std::span<const maps::Hazard> hazards) {
+    const visibility::Aabb box{state.position + config.mins, state.position + config.maxs};
+    return std::ranges::any_of(hazards,
+                               [&](const maps::Hazard& h) { return h.bounds.overlaps(box); });
+}
+
 MoveState spawn_state(const CollisionWorld& world, const MoveConfig& config,
                       glm::vec3 spawn_origin) {
     MoveState state;

@@ -111,16 +111,12 @@ void wander_step(WanderBot& bot, const CollisionWorld& world, const WanderConfig
     const MoveInput input = wander_think(bot, config, move, spawns, dt);
     player_move(world, move, input, dt, bot.state);
     bot.respawned = false;
-    const visibility::Aabb box{bot.state.position + move.mins, bot.state.position + move.maxs};
-    for (const maps::Hazard& hazard : hazards) {
-        if (hazard.bounds.overlaps(box) && !spawns.empty()) {
-            ++bot.deaths;
-            bot.respawned = true;
-            bot.state = spawn_state(world, move,
-                                    spawns[next_random(bot.random_state) % spawns.size()].origin);
-            pick_goal(bot, config, spawns);
-            break;
-        }
+    if (!spawns.empty() && touches_hazard(move, bot.state, hazards)) {
+        ++bot.deaths;
+        bot.respawned = true;
+        bot.state =
+            spawn_state(world, move, spawns[next_random(bot.random_state) % spawns.size()].origin);
+        pick_goal(bot, config, spawns);
     }
 }
 

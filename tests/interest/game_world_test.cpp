@@ -48,5 +48,33 @@ TEST(GameWorld, ReservedPlayersSpawnInIdOrderWhateverOrderTheySpawnIn) {
     EXPECT_TRUE(ids_increasing(world));
 }
 
+TEST(GameWorld, APlayerWhoTouchesAHazardRespawnsAtTheNextSpawnPoint) {
+    // A pit under the first spawn point: the player put there dies on its first step
+    // and is back at the next spawn point, flagged as a teleport for that tick only.
+    auto map = std::make_shared<maps::Map>(*testing::rooms_map());
+    ASSERT_GE(map->spawn_points.size(), 2u);
+    WorldSettings settings;
+    settings.bots = 0;
+    // The world hands out spawn points round robin from seed % count.
+    const std::size_t first = settings.seed % map->spawn_points.size();
+    const glm::vec3 pit = map->spawn_points[first].origin;
+    map->hazards.push_back(
+        {visibility::Aabb{pit - glm::vec3(40.0f), pit + glm::vec3(40.0f)}, "test pit"});
+    for (std::size_t i = 0; i < map->spawn_points.size(); ++i) {
+        if (i != first) {
+            ASSERT_GT(glm::length(map->spawn_points[i].origin - pit), 200.0f);
+        }
+    }
+    GameWorld world(settings, map);
+    const std::uint32_t id = world.spawn_player();
+    world.step(1.0f / 30.0f);
+    const Entity* e = world.find(id);
+    ASSERT_NE(e, nullptr);
+    EXPECT_TRUE(e->teleported);
+    EXPECT_GT(glm::length(e->move.position - pit), 150.0f);
+    world.step(1.0f / 30.0f);
+    EXPECT_FALSE(world.find(id)->teleported);
+}
+
 } // namespace
 } // namespace dsoc::interest

@@ -6,6 +6,7 @@
 
 #include "dsoc/interest/bake_request.hpp"
 #include "dsoc/interest/walking_interest.hpp"
+#include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/maps/map_source.hpp"
 #include "dsoc/maps/player_space.hpp"
 #include "dsoc/sim/wander_bot.hpp"
@@ -47,7 +48,9 @@ TEST(PlayerSpace, WanderingBotsAndTheirEyeRegionsStayInTheCoveredCells) {
     const sim::MoveConfig move;
     const auto request = walking_bake_request(move);
     ASSERT_TRUE(request.player_space.has_value());
-    const auto grid = visibility::CellGrid::covering(map->bounds, 32.0f);
+    // The bake's grid: the map's bounds and a margin.
+    const auto grid =
+        visibility::CellGrid::covering(map->bounds.expanded(maps::kBakeGridMargin), 32.0f);
     const auto covered =
         maps::cells_meeting(grid, maps::player_space_boxes(map.value(), *request.player_space));
     std::size_t covered_count = 0;

@@ -3,8 +3,8 @@
 // Quake 3 style movement (dsoc::sim): the server's world, and the one dsoc-inspect
 // runs in-process. Clients only send intent; the world moves every entity, so every
 // entity obeys sim::motion_bound() — the speed contract that interest policies and
-// TBVs rely on. A bot that falls into a hazard respawns (a teleport, flagged for that
-// tick).
+// TBVs rely on. A bot or player whose box touches a hazard (a pit, lava) respawns at a
+// spawn point (a teleport, flagged for that tick).
 
 #include "dsoc/maps/map.hpp"
 #include "dsoc/sim/collision_world.hpp"

@@ -50,7 +50,16 @@ struct BakedTable {
     visibility::CellBakeStats stats; ///< of the bake, when one ran
 };
 
-/// The grid `map` is baked over: cells of `cell_size` over the map's bounds, grown by
+/// How far the baked grid reaches past the map's bounds. The reachable eye region of a
+/// walker pressed against an outer wall is a box that pokes through the wall; a grid
+/// that ends at the wall cannot answer for it, and then the exact stages must. Cells
+/// out there are covered only within the player space's margin of a floor; the rest
+/// are uncovered (no row).
+/// [Units: world units]
+inline constexpr float kBakeGridMargin = 128.0f;
+
+/// The grid `map` is baked over: cells of `cell_size` over the map's bounds grown by
+/// kBakeGridMargin on every side, grown by
 /// 1.25x steps until the dense rows of its open covered cells (all open cells when
 /// `space` is nothing) fit `max_table_bytes`.
 [[nodiscard]] visibility::CellGrid bake_grid(const Map& map, const visibility::OccluderScene& scene,

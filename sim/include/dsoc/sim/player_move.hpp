@@ -20,10 +20,12 @@
 //   credit has refilled): on stairs steeper than climb_rate / max_speed a player
 //   climbs at climb_rate, not faster.
 
+#include "dsoc/maps/map.hpp"
 #include "dsoc/sim/collision_world.hpp"
 
 #include <glm/vec3.hpp>
 
+#include <span>
 #include <string>
 #include <vector>
 
@@ -105,6 +107,11 @@ struct MotionBound {
 /// into a brush when it starts outside one (a trace that starts inside one stops).
 void player_move(const CollisionWorld& world, const MoveConfig& config, const MoveInput& input,
                  float dt, MoveState& state);
+
+/// Whether the box of a player at `state` touches one of `hazards` (a pit's
+/// trigger_hurt, lava): such a player dies, and a simulation respawns it.
+[[nodiscard]] bool touches_hazard(const MoveConfig& config, const MoveState& state,
+                                  std::span<const maps::Hazard> hazards);
 
 /// Puts a player at a spawn point's origin (raised a little, as Quake 3 does, so that
 /// the box does not touch the floor) and finds the ground.
