@@ -128,21 +128,16 @@ const RegionVisibility& BakedRegionVisibility::fallback() const {
     return *next_;
 }
 
-bool BakedRegionVisibility::uncovered(const Aabb& box, bool& hidden_box) const {
+Visibility BakedRegionVisibility::where_uncovered_answer(const Aabb& box) const {
     if (!active_ || !table_->open_words_of(box, scratch_, scratch_runs_)) {
-        return true;
+        return fallback().test_box(box);
     }
-    hidden_box = hidden(scratch_);
-    return false;
+    return hidden(scratch_) ? Visibility::occluded : Visibility::visible;
 }
 
 Visibility BakedRegionVisibility::test_box(const Aabb& box) const {
     if (next_for_ == NextFor::where_uncovered) {
-        bool hidden_box = false;
-        if (uncovered(box, hidden_box)) {
-            return fallback().test_box(box);
-        }
-        return hidden_box ? Visibility::occluded : Visibility::visible;
+        return where_uncovered_answer(box);
     }
     if (box_hidden(box)) {
         return Visibility::occluded;
@@ -152,11 +147,7 @@ Visibility BakedRegionVisibility::test_box(const Aabb& box) const {
 
 Visibility BakedRegionVisibility::test_box_quick(const Aabb& box) const {
     if (next_for_ == NextFor::where_uncovered) {
-        bool hidden_box = false;
-        if (uncovered(box, hidden_box)) {
-            return fallback().test_box(box);
-        }
-        return hidden_box ? Visibility::occluded : Visibility::visible;
+        return where_uncovered_answer(box);
     }
     if (box_hidden(box)) {
         return Visibility::occluded;
@@ -166,11 +157,7 @@ Visibility BakedRegionVisibility::test_box_quick(const Aabb& box) const {
 
 Visibility BakedRegionVisibility::test_box_hinted(const Aabb& box, std::uint32_t& hint) const {
     if (next_for_ == NextFor::where_uncovered) {
-        bool hidden_box = false;
-        if (uncovered(box, hidden_box)) {
-            return fallback().test_box(box);
-        }
-        return hidden_box ? Visibility::occluded : Visibility::visible;
+        return where_uncovered_answer(box);
     }
     if (box_hidden(box)) {
         return Visibility::occluded;
@@ -199,10 +186,7 @@ Visibility BakedRegionVisibility::test_prepared(const PreparedBox& p) const {
         return hidden ? Visibility::occluded : Visibility::visible;
     }
     if (next_for_ == NextFor::where_uncovered) {
-        if (active_ && p.prepared) {
-            return hidden ? Visibility::occluded : Visibility::visible;
-        }
-        return fallback().test_box(p.box);
+        return test_prepared_coarse(p); // every prepared test is the coarse one
     }
     if (hidden) {
         return Visibility::occluded;
@@ -216,10 +200,7 @@ Visibility BakedRegionVisibility::test_prepared_quick(const PreparedBox& p) cons
         return hidden ? Visibility::occluded : Visibility::visible;
     }
     if (next_for_ == NextFor::where_uncovered) {
-        if (active_ && p.prepared) {
-            return hidden ? Visibility::occluded : Visibility::visible;
-        }
-        return fallback().test_box(p.box);
+        return test_prepared_coarse(p); // every prepared test is the coarse one
     }
     if (hidden) {
         return Visibility::occluded;
@@ -235,10 +216,7 @@ Visibility BakedRegionVisibility::test_prepared_hinted(const PreparedBox& p,
         return hidden ? Visibility::occluded : Visibility::visible;
     }
     if (next_for_ == NextFor::where_uncovered) {
-        if (active_ && p.prepared) {
-            return hidden ? Visibility::occluded : Visibility::visible;
-        }
-        return fallback().test_box(p.box);
+        return test_prepared_coarse(p); // every prepared test is the coarse one
     }
     if (hidden) {
         return Visibility::occluded;

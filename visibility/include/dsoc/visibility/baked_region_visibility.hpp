@@ -79,9 +79,9 @@ private:
     [[nodiscard]] bool prepared_hidden(const PreparedBox& p) const;
     /// With `where_uncovered`: the next stage, built for the last region first.
     [[nodiscard]] const RegionVisibility& fallback() const;
-    /// With `where_uncovered`: whether the next stage answers for `box` (the table does
-    /// not cover it or the region), and the table's answer when it does not.
-    [[nodiscard]] bool uncovered(const Aabb& box, bool& hidden) const;
+    /// With `where_uncovered`, every test of `box`: the table's answer where it covers
+    /// the box and the region, else the next stage's test_box().
+    [[nodiscard]] Visibility where_uncovered_answer(const Aabb& box) const;
 
     std::shared_ptr<const CellVisibilityTable> table_;
     std::unique_ptr<RegionVisibility> next_;
