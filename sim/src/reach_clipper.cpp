@@ -31,7 +31,8 @@ bool is_axial_box(const maps::CollisionBrush& brush) {
 
 } // namespace
 
-ReachClipper::ReachClipper(std::span<const maps::CollisionBrush> brushes, const MoveConfig& move)
+ReachClipper::ReachClipper(std::span<const maps::CollisionBrush> brushes, const MoveConfig& move,
+                           float column_size)
     : box_min_(move.mins - glm::vec3(0.0f, 0.0f, move.eye_height)),
       box_max_(move.maxs - glm::vec3(0.0f, 0.0f, move.eye_height)) {
     for (const auto& b : brushes) {
@@ -53,6 +54,77 @@ ReachClipper::ReachClipper(std::span<const maps::CollisionBrush> brushes, const 
         }
         if (steepest > 0.0f) {
             slopes_.push_back({b.bounds, steepest});
+        }
+    }
+    index_boxes(column_size);
+}
+
+void ReachClipper::index_boxes(float column_size) {
+    if (boxes_.empty()) {
+        return;
+    }
+    visibility::Aabb all = boxes_.front();
+    for (const auto& k : boxes_) {
+        all.extend(k);
+    }
+    columns_origin_ = {all.min.x, all.min.y};
+    const glm::vec2 size{all.max.x - all.min.x, all.max.y - all.min.y};
+    column_size_ =
+        std::max({column_size, size.x / kMaxColumnsPerAxis, size.y / kMaxColumnsPerAxis});
+    columns_x_ = static_cast<int>(size.x / column_size_) + 1;
+    columns_y_ = static_cast<int>(size.y / column_size_) + 1;
+    // Two passes over the boxes: count per column, then fill (CSR).
+    column_start_.assign(static_cast<std::size_t>(columns_x_ * columns_y_) + 1, 0);
+    for (int pass = 0; pass < 2; ++pass) {
+        std::vector<std::uint32_t> next(column_start_.begin(), column_start_.end() - 1);
+        for (std::uint32_t i = 0; i < boxes_.size(); ++i) {
+            const ColumnRange r = columns_of(boxes_[i]);
+            for (int y = r.y0; y <= r.y1; ++y) {
+                for (int x = r.x0; x <= r.x1; ++x) {
+                    const auto col = static_cast<std::size_t>(y * columns_x_ + x);
+                    if (pass == 0) {
+                        ++column_start_[col + 1];
+                    } else {
+                        column_boxes_[next[col]++] = i;
+                    }
+                }
+            }
+        }
+        if (pass == 0) {
+            for (std::size_t c = 1; c < column_start_.size(); ++c) {
+                column_start_[c] += column_start_[c - 1];
+            }
+            column_boxes_.resize(column_start_.back());
+        }
+    }
+}
+
+ReachClipper::ColumnRange ReachClipper::columns_of(const visibility::Aabb& area) const {
+    const auto column = [&](float v, float origin, int count) {
+        const float c = std::floor((v - origin) / column_size_);
+        if (!(c >= 0.0f)) { // below the grid, or NaN
+            return 0;
+        }
+        return c >= static_cast<float>(count - 1) ? count - 1 : static_cast<int>(c);
+    };
+    return {column(area.min.x, columns_origin_.x, columns_x_),
+            column(area.max.x, columns_origin_.x, columns_x_),
+            column(area.min.y, columns_origin_.y, columns_y_),
+            column(area.max.y, columns_origin_.y, columns_y_)};
+}
+
+template <class Visit>
+void ReachClipper::for_boxes_near(const visibility::Aabb& area, Visit&& visit) const {
+    if (boxes_.empty()) {
+        return;
+    }
+    const ColumnRange r = columns_of(area);
+    for (int y = r.y0; y <= r.y1; ++y) {
+        for (int x = r.x0; x <= r.x1; ++x) {
+            const auto col = static_cast<std::size_t>(y * columns_x_ + x);
+            for (std::uint32_t k = column_start_[col]; k < column_start_[col + 1]; ++k) {
+                visit(boxes_[column_boxes_[k]]);
+            }
         }
     }
 }
@@ -96,14 +168,18 @@ visibility::Aabb ReachClipper::clip_to_walls(glm::vec3 eye, const visibility::Aa
     for (int pass = 0; pass < 3; ++pass) {
         bool changed = false;
         const visibility::Aabb swept{e.min + box_min_, e.max + box_max_};
-        for (const auto& k : boxes_) {
+        bool stuck = false;
+        // Every box's clip is a min or a max against the same swept region, so the order
+        // of the boxes, and a box seen twice, change nothing.
+        for_boxes_near(swept, [&](const visibility::Aabb& k) {
             if (!(k.min.x < swept.max.x && k.max.x > swept.min.x && k.min.y < swept.max.y &&
                   k.max.y > swept.min.y && k.min.z < swept.max.z && k.max.z > swept.min.z)) {
-                continue;
+                return;
             }
             if (player.min.x < k.max.x && player.max.x > k.min.x && player.min.y < k.max.y &&
                 player.max.y > k.min.y && player.min.z < k.max.z && player.max.z > k.min.z) {
-                return region; // stuck inside a brush: promise nothing extra
+                stuck = true;
+                return;
             }
             for (int a = 0; a < 3; ++a) {
                 const int b = (a + 1) % 3;
@@ -127,6 +203,9 @@ visibility::Aabb ReachClipper::clip_to_walls(glm::vec3 eye, const visibility::Aa
                     }
                 }
             }
+        });
+        if (stuck) {
+            return region; // stuck inside a brush: promise nothing extra
         }
         if (!changed) {
             break;

@@ -1,5 +1,6 @@
 // The clipped reachable eye region must contain every eye a walking player really
-// has over the lookahead: checked against bots' actual future eyes on real maps.
+// has over the lookahead: checked against bots' actual future eyes on real maps. The
+// walls found through the clipper's xy columns give the same region as all the walls.
 
 #include "dsoc/maps/map_source.hpp"
 #include "dsoc/sim/motion_limits.hpp"
@@ -11,6 +12,7 @@
 #include <algorithm>
 #include <deque>
 #include <filesystem>
+#include <random>
 
 namespace dsoc::sim {
 namespace {
@@ -28,6 +30,8 @@ TEST_P(ReachClipperOnMaps, ContainsEveryFutureEyeAndClipsSomething) {
     const WanderConfig wander;
     const CollisionWorld world(map.collision_brushes);
     const ReachClipper clipper(map.collision_brushes, move);
+    // The slow twin: one column holding every wall, so every region looks at all of them.
+    const ReachClipper every_wall(map.collision_brushes, move, 1e9f);
     auto bots = spawn_wander_bots(world, move, map.spawn_points, 60, 5);
     constexpr int kLookahead = 5;
     constexpr float kDt = 1.0f / 30.0f;
@@ -59,6 +63,12 @@ TEST_P(ReachClipperOnMaps, ContainsEveryFutureEyeAndClipsSomething) {
             const auto walls_only = clipper.clip(eye, full);
             const auto region =
                 clipper.clip(eye, full, visibility::EyeReach{&limits, seconds, down});
+            const auto same_walls = [](const visibility::Aabb& a, const visibility::Aabb& b) {
+                return a.min == b.min && a.max == b.max;
+            };
+            ASSERT_TRUE(same_walls(walls_only, every_wall.clip(eye, full)));
+            ASSERT_TRUE(same_walls(
+                region, every_wall.clip(eye, full, visibility::EyeReach{&limits, seconds, down})));
             ASSERT_TRUE(full.contains(walls_only));
             ASSERT_TRUE(walls_only.contains(region));
             if (walls_only.size() != full.size()) {
@@ -75,6 +85,24 @@ TEST_P(ReachClipperOnMaps, ContainsEveryFutureEyeAndClipsSomething) {
             }
         }
     }
+    // Eyes scattered around the spawn points (inside walls too) with regions up to
+    // twice a tick's reach: the columns still find every wall that clips.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::uniform_real_distribution<float> offset(-400.0f, 400.0f);
+    long differing_from_input = 0;
+    for (int i = 0; i < 5000; ++i) {
+        const glm::vec3 spawn = map.spawn_points[rng() % map.spawn_points.size()].origin;
+        const glm::vec3 eye = spawn + glm::vec3(offset(rng), offset(rng), offset(rng) / 8.0f);
+        const glm::vec3 below(unit(rng) * 120.0f, unit(rng) * 120.0f, unit(rng) * 60.0f);
+        const glm::vec3 above(unit(rng) * 120.0f, unit(rng) * 120.0f, unit(rng) * 60.0f);
+        const visibility::Aabb region{eye - below, eye + above};
+        const auto fast = clipper.clip(eye, region);
+        const auto slow = every_wall.clip(eye, region);
+        ASSERT_TRUE(fast.min == slow.min && fast.max == slow.max) << GetParam() << " sample " << i;
+        differing_from_input += fast.min != region.min || fast.max != region.max ? 1 : 0;
+    }
+    EXPECT_GT(differing_from_input, 50) << "some random regions should meet walls";
     const double samples = 600.0 * static_cast<double>(bots.size());
     EXPECT_GT(checks, 100000);
     EXPECT_GT(clipped, static_cast<long>(samples * 0.05)) << "the clipper should bite near walls";

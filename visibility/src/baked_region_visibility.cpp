@@ -233,17 +233,20 @@ Visibility BakedRegionVisibility::test_prepared_coarse(const PreparedBox& p) con
 }
 
 void BakedRegionVisibility::coarse_hidden_all(std::span<const PreparedBox* const> boxes,
-                                              std::span<std::uint8_t> hidden) const {
-    if (next_for_ == NextFor::where_uncovered) {
-        for (std::size_t i = 0; i < boxes.size(); ++i) {
-            const PreparedBox* p = boxes[i];
-            hidden[i] = p != nullptr && test_prepared_coarse(*p) == Visibility::occluded ? 1 : 0;
-        }
-        return;
-    }
+                                              std::span<std::uint8_t> answers) const {
+    // test_prepared_coarse() for every box, with the table's bit tests inline: only a
+    // box the table cannot answer (behind the table alone, where it does not cover)
+    // takes the call.
+    const bool answer_rest = next_for_ == NextFor::where_uncovered;
     for (std::size_t i = 0; i < boxes.size(); ++i) {
         const PreparedBox* p = boxes[i];
-        hidden[i] = p != nullptr && prepared_hidden(*p) ? 1 : 0;
+        if (p == nullptr) {
+            answers[i] = 0;
+        } else if (active_ && p->prepared) {
+            answers[i] = hidden(p->keys) ? 1 : 0;
+        } else {
+            answers[i] = answer_rest && fallback().test_box(p->box) == Visibility::occluded ? 1 : 0;
+        }
     }
 }
 

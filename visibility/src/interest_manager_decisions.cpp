@@ -29,39 +29,59 @@ std::uint8_t level_of_detail(float distance_squared, float near_squared, float f
 }
 
 /// Ids in `previous` and not in `now` go to `leave`, the reverse to `enter`. Both
-/// inputs increasing; so are the outputs.
+/// inputs increasing; so are the outputs. Branch-free while both lists last (which
+/// list holds the smaller id is a coin toss): each step writes both candidates and
+/// keeps the one that is not in the other list.
 void diff_sets(const std::vector<EntityId>& previous, const std::vector<Replicated>& now,
                std::vector<EntityId>& enter, std::vector<EntityId>& leave) {
+    enter.resize(now.size());
+    leave.resize(previous.size());
     std::size_t i = 0;
     std::size_t j = 0;
-    while (i < previous.size() || j < now.size()) {
-        if (j == now.size() || (i < previous.size() && previous[i] < now[j].id)) {
-            leave.push_back(previous[i++]);
-        } else if (i == previous.size() || now[j].id < previous[i]) {
-            enter.push_back(now[j++].id);
-        } else {
-            ++i;
-            ++j;
-        }
+    std::size_t entered = 0;
+    std::size_t left = 0;
+    while (i < previous.size() && j < now.size()) {
+        const EntityId a = previous[i];
+        const EntityId b = now[j].id;
+        leave[left] = a;
+        enter[entered] = b;
+        left += a < b ? 1 : 0;
+        entered += b < a ? 1 : 0;
+        i += a <= b ? 1 : 0;
+        j += b <= a ? 1 : 0;
     }
+    for (; i < previous.size(); ++i) {
+        leave[left++] = previous[i];
+    }
+    for (; j < now.size(); ++j) {
+        enter[entered++] = now[j].id;
+    }
+    enter.resize(entered);
+    leave.resize(left);
 }
 
 } // namespace
 
 void InterestManager::decide(ClientSlot& c) {
     ClientDecisions& d = c.decisions;
-    d.enter.clear();
-    d.leave.clear();
     const float near_squared = config_.lod_near_distance * config_.lod_near_distance;
     const float far_squared = config_.lod_far_distance * config_.lod_far_distance;
     const Aabb region = c.region; // a local: the writes below cannot alias it
+    // First the kept slots, branch-free (whether a slot is kept is a coin toss for the
+    // branch predictor): each slot is written at the end and the end moves when kept.
+    std::vector<std::uint32_t>& kept = c.kept_slots;
+    kept.resize(entities_.size());
+    std::size_t count = 0;
+    for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
+        kept[count] = slot;
+        count += static_cast<std::size_t>(views_[slot].alive &
+                                          (c.pairs[slot].state == PairState::visible));
+    }
+    kept.resize(count);
     d.replicated.clear();
     bool increasing = true; // slots are reused, so ids need not follow slot order
-    for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
+    for (const std::uint32_t slot : kept) {
         const EntityView& e = views_[slot];
-        if (!e.alive || c.pairs[slot].state != PairState::visible) {
-            continue;
-        }
         increasing = increasing && (d.replicated.empty() || d.replicated.back().id < e.id);
         d.replicated.push_back({e.id, level_of_detail(conservative_distance_squared(region, e.box),
                                                       near_squared, far_squared)});

@@ -167,6 +167,7 @@ struct InterestManager::ClientSlot {
     std::vector<const PreparedBox*> bulk_boxes; // test_entities_in_bulk()'s scratch
     std::vector<std::uint8_t> bulk_hidden;      // by slot
     std::vector<EntityId> previous;             // replicated ids of the last update, increasing
+    std::vector<std::uint32_t> kept_slots;      // decide()'s scratch
     ClientDecisions decisions;
     ClientStats stats;
 };

@@ -26,6 +26,7 @@
 #include "dsoc/sim/player_move.hpp"
 #include "dsoc/visibility/geometry.hpp"
 #include "dsoc/visibility/interest_manager.hpp"
+#include <glm/vec2.hpp>
 
 #include <span>
 #include <vector>
@@ -34,10 +35,16 @@ namespace dsoc::sim {
 
 class ReachClipper {
 public:
+    /// The default column of the wall index. [Units: world units]
+    static constexpr float kColumnSize = 128.0f;
+
     ReachClipper() = default;
     /// Keeps the brushes of `brushes` that block players (solid or player clip) and
     /// are axis-aligned boxes. `move` gives the player's box and eye height.
-    ReachClipper(std::span<const maps::CollisionBrush> brushes, const MoveConfig& move);
+    /// `column_size` is the xy grid that finds the walls near a region (a few walls
+    /// near it instead of all of them; the answers are the same for any size).
+    ReachClipper(std::span<const maps::CollisionBrush> brushes, const MoveConfig& move,
+                 float column_size = kColumnSize);
 
     /// `region` (a box of eye positions containing `eye`) minus the parts the
     /// player's box cannot reach from `eye`. Returns `region` unchanged when `eye`'s
@@ -66,7 +73,27 @@ private:
     [[nodiscard]] visibility::Aabb clip_to_walls(glm::vec3 eye,
                                                  const visibility::Aabb& region) const;
 
+    static constexpr float kMaxColumnsPerAxis = 256.0f;
+    struct ColumnRange {
+        int x0, x1, y0, y1; ///< inclusive
+    };
+    /// Builds the columns, each at least `column_size` (at most kMaxColumnsPerAxis a side).
+    void index_boxes(float column_size);
+    [[nodiscard]] ColumnRange columns_of(const visibility::Aabb& area) const;
+    /// Calls `visit(box)` for every box of boxes_ whose xy bounds may overlap `area`'s
+    /// (some more than once: every visit here is idempotent).
+    template <class Visit>
+    void for_boxes_near(const visibility::Aabb& area, Visit&& visit) const;
+
     std::vector<visibility::Aabb> boxes_;
+    /// boxes_ by column of a uniform xy grid (CSR): a box is listed in every column its
+    /// bounds overlap, so a small region looks at the walls near it only.
+    glm::vec2 columns_origin_{0.0f};
+    float column_size_ = 1.0f; ///< [Units: world units]
+    int columns_x_ = 0;
+    int columns_y_ = 0;
+    std::vector<std::uint32_t> column_start_;
+    std::vector<std::uint32_t> column_boxes_;
     std::vector<Slope> slopes_;
     glm::vec3 box_min_{0.0f}; ///< the player's box relative to the eye
     glm::vec3 box_max_{0.0f};
