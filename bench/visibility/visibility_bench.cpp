@@ -205,11 +205,17 @@ void BM_SpeedupVersusReference(benchmark::State& state) {
 }
 BENCHMARK(BM_SpeedupVersusReference)->Unit(benchmark::kMillisecond);
 
+/// An octree over the scene's play area (and 256 units around it) for `max_items`.
+LooseOctreeConfig octree_config(std::uint32_t max_items) {
+    LooseOctreeConfig config;
+    config.world_bounds = scene().tw.play_area.expanded(256.0f);
+    config.max_items = max_items;
+    return config;
+}
+
 void BM_OctreeMove(benchmark::State& state) {
     const Scene& s = scene();
-    LooseOctreeConfig config;
-    config.world_bounds = s.tw.play_area.expanded(256.0f);
-    config.max_items = 4096;
+    const LooseOctreeConfig config = octree_config(4096);
     LooseOctree tree(config);
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
@@ -239,10 +245,7 @@ BENCHMARK(BM_OctreeMove);
 
 void BM_OctreeCulledTraversal(benchmark::State& state) {
     const Scene& s = scene();
-    LooseOctreeConfig config;
-    config.world_bounds = s.tw.play_area.expanded(256.0f);
-    config.max_items = 512;
-    LooseOctree tree(config);
+    LooseOctree tree(octree_config(512));
     for (ItemId id = 0; id < 512; ++id) {
         (void)tree.insert(id, s.boxes[id]);
     }
