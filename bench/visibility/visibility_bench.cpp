@@ -68,6 +68,30 @@ const Scene& scene() {
     return s;
 }
 
+/// How many of `boxes` `test` (Aabb -> Visibility) proves occluded.
+template <class Test>
+int count_occluded(const std::vector<Aabb>& boxes, const Test& test) {
+    int occluded = 0;
+    for (const Aabb& b : boxes) {
+        occluded += test(b) == Visibility::occluded;
+    }
+    return occluded;
+}
+
+/// Times `test` over the scene's boxes (items: boxes tested); the counter `name` holds
+/// how many it proves occluded.
+template <class Test>
+void time_box_tests(benchmark::State& state, const Test& test, const char* name) {
+    const Scene& s = scene();
+    int occluded = 0;
+    for (auto _ : state) {
+        occluded = count_occluded(s.boxes, test);
+        benchmark::DoNotOptimize(occluded);
+    }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(s.boxes.size()));
+    state.counters[name] = occluded;
+}
+
 void report_scene(benchmark::State& state) {
     const Scene& s = scene();
     state.counters["brushes"] = static_cast<double>(s.tw.world.size());
@@ -98,16 +122,13 @@ void BM_OcclusionBufferBuildRegion(benchmark::State& state) {
     const Scene& s = scene();
     OcclusionBuffer buffer;
     const Aabb region = Aabb::from_center_half_extents(s.eye, {48.0f, 48.0f, 16.0f});
-    int culled = 0;
     for (auto _ : state) {
         buffer.build_region(region, s.tw.world, s.bsp);
         benchmark::ClobberMemory();
     }
-    for (const Aabb& b : s.boxes) {
-        culled += buffer.test_box(b) == Visibility::occluded;
-    }
     state.counters["occluders"] = buffer.stats().occluders_visited;
-    state.counters["culled"] = culled;
+    state.counters["culled"] =
+        count_occluded(s.boxes, [&](const Aabb& b) { return buffer.test_box(b); });
 }
 BENCHMARK(BM_OcclusionBufferBuildRegion)->Unit(benchmark::kMicrosecond);
 
@@ -117,19 +138,11 @@ void BM_OcclusionBufferTestBox(benchmark::State& state) {
     config.face_resolution = static_cast<int>(state.range(0));
     OcclusionBuffer buffer(config);
     buffer.build(s.eye, s.tw.world, s.bsp);
-    int culled = 0;
-    for (auto _ : state) {
-        culled = 0;
-        for (const Aabb& b : s.boxes) {
-            culled += buffer.test_box(b) == Visibility::occluded;
-        }
-        benchmark::DoNotOptimize(culled);
-    }
-    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(s.boxes.size()));
+    time_box_tests(
+        state, [&](const Aabb& b) { return buffer.test_box(b); }, "culled");
     state.counters["ns_per_box"] = benchmark::Counter(
         static_cast<double>(state.iterations() * s.boxes.size()),
         benchmark::Counter::kIsRate | benchmark::Counter::kInvert, benchmark::Counter::kIs1000);
-    state.counters["culled"] = culled;
 }
 BENCHMARK(BM_OcclusionBufferTestBox)->Arg(32)->Arg(64)->Arg(128);
 
@@ -148,32 +161,16 @@ void BM_OcclusionBeamsTestBox(benchmark::State& state) {
     const Scene& s = scene();
     OcclusionBeams beams;
     beams.build(s.eye, s.tw.world, s.bsp);
-    int culled = 0;
-    for (auto _ : state) {
-        culled = 0;
-        for (const Aabb& b : s.boxes) {
-            culled += beams.test_box(b) == Visibility::occluded;
-        }
-        benchmark::DoNotOptimize(culled);
-    }
-    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(s.boxes.size()));
-    state.counters["culled"] = culled;
+    time_box_tests(
+        state, [&](const Aabb& b) { return beams.test_box(b); }, "culled");
 }
 BENCHMARK(BM_OcclusionBeamsTestBox);
 
 void BM_ReferenceTestBox(benchmark::State& state) {
     const Scene& s = scene();
     const ReferenceVisibility reference(s.tw.world);
-    int hidden = 0;
-    for (auto _ : state) {
-        hidden = 0;
-        for (const Aabb& b : s.boxes) {
-            hidden += reference.test_box(s.eye, b) == Visibility::occluded;
-        }
-        benchmark::DoNotOptimize(hidden);
-    }
-    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(s.boxes.size()));
-    state.counters["hidden"] = hidden;
+    time_box_tests(
+        state, [&](const Aabb& b) { return reference.test_box(s.eye, b); }, "hidden");
 }
 BENCHMARK(BM_ReferenceTestBox)->Unit(benchmark::kMillisecond);
 
@@ -189,15 +186,11 @@ void BM_SpeedupVersusReference(benchmark::State& state) {
     for (auto _ : state) {
         const auto t0 = clock::now();
         buffer.build(s.eye, s.tw.world, s.bsp);
-        int culled = 0;
-        for (const Aabb& b : s.boxes) {
-            culled += buffer.test_box(b) == Visibility::occluded;
-        }
+        const int culled =
+            count_occluded(s.boxes, [&](const Aabb& b) { return buffer.test_box(b); });
         const auto t1 = clock::now();
-        int hidden = 0;
-        for (const Aabb& b : s.boxes) {
-            hidden += reference.test_box(s.eye, b) == Visibility::occluded;
-        }
+        const int hidden =
+            count_occluded(s.boxes, [&](const Aabb& b) { return reference.test_box(s.eye, b); });
         const auto t2 = clock::now();
         benchmark::DoNotOptimize(culled + hidden);
         fast_ns += std::chrono::duration<double, std::nano>(t1 - t0).count();
@@ -212,11 +205,17 @@ void BM_SpeedupVersusReference(benchmark::State& state) {
 }
 BENCHMARK(BM_SpeedupVersusReference)->Unit(benchmark::kMillisecond);
 
+/// An octree over the scene's play area (and 256 units around it) for `max_items`.
+LooseOctreeConfig octree_config(std::uint32_t max_items) {
+    LooseOctreeConfig config;
+    config.world_bounds = scene().tw.play_area.expanded(256.0f);
+    config.max_items = max_items;
+    return config;
+}
+
 void BM_OctreeMove(benchmark::State& state) {
     const Scene& s = scene();
-    LooseOctreeConfig config;
-    config.world_bounds = s.tw.play_area.expanded(256.0f);
-    config.max_items = 4096;
+    const LooseOctreeConfig config = octree_config(4096);
     LooseOctree tree(config);
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
@@ -246,10 +245,7 @@ BENCHMARK(BM_OctreeMove);
 
 void BM_OctreeCulledTraversal(benchmark::State& state) {
     const Scene& s = scene();
-    LooseOctreeConfig config;
-    config.world_bounds = s.tw.play_area.expanded(256.0f);
-    config.max_items = 512;
-    LooseOctree tree(config);
+    LooseOctree tree(octree_config(512));
     for (ItemId id = 0; id < 512; ++id) {
         (void)tree.insert(id, s.boxes[id]);
     }

@@ -1,16 +1,14 @@
 #include "dsoc/protocol/connect_token.hpp"
 
+#include "dsoc/common/read_file.hpp"
+
 #include <openssl/crypto.h>
 #include <openssl/evp.h>
 #include <openssl/hmac.h>
 #include <openssl/rand.h>
 
 #include <cctype>
-#include <cerrno>
 #include <chrono>
-#include <cstring>
-#include <fstream>
-#include <sstream>
 #include <stdexcept>
 
 namespace dsoc::protocol {
@@ -95,14 +93,12 @@ bool parse_token_key(std::string_view text, TokenKey& key, std::string& error) {
 }
 
 bool load_token_key(const std::string& path, TokenKey& key, std::string& error) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        error = path + ": cannot read token key: " + std::strerror(errno);
+    std::string text;
+    if (const std::string why = common::read_file(path, text); !why.empty()) {
+        error = path + ": cannot read token key: " + why;
         return false;
     }
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (!parse_token_key(text.str(), key, error)) {
+    if (!parse_token_key(text, key, error)) {
         error = path + ": " + error;
         return false;
     }

@@ -1,15 +1,14 @@
 #include "dsoc/server/config_file.hpp"
 
+#include "dsoc/common/read_file.hpp"
+
 #include "dsoc/server/config_fields.hpp"
 #include "dsoc/server/dsoc_settings.hpp"
 
 #include <toml++/toml.h>
 
 #include <array>
-#include <cerrno>
 #include <charconv>
-#include <cstring>
-#include <fstream>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -202,13 +201,11 @@ std::vector<std::string> apply_config_toml(std::string_view text, std::string_vi
 }
 
 std::vector<std::string> apply_config_file(const std::string& path, ServerConfig& config) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        return {path + ": cannot read config file: " + std::strerror(errno)};
+    std::string text;
+    if (const std::string why = common::read_file(path, text); !why.empty()) {
+        return {path + ": cannot read config file: " + why};
     }
-    std::ostringstream text;
-    text << in.rdbuf();
-    return apply_config_toml(text.str(), path, config);
+    return apply_config_toml(text, path, config);
 }
 
 std::string format_config_toml(const ServerConfig& config,

@@ -1,12 +1,10 @@
 #include "dsoc/simclient/scenario_file.hpp"
 
+#include "dsoc/common/read_file.hpp"
+
 #include <toml++/toml.h>
 
-#include <cerrno>
-#include <cstring>
-#include <fstream>
 #include <set>
-#include <sstream>
 
 namespace dsoc::simclient {
 
@@ -235,14 +233,12 @@ bool parse_scenario(std::string_view text, std::string_view source, Scenario& ou
 }
 
 bool load_scenario_file(const std::string& path, Scenario& out, std::string& error) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        error = path + ": cannot read scenario file: " + std::strerror(errno);
+    std::string text;
+    if (const std::string why = common::read_file(path, text); !why.empty()) {
+        error = path + ": cannot read scenario file: " + why;
         return false;
     }
-    std::ostringstream text;
-    text << in.rdbuf();
-    return parse_scenario(text.str(), path, out, error);
+    return parse_scenario(text, path, out, error);
 }
 
 } // namespace dsoc::simclient

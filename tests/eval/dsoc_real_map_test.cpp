@@ -4,6 +4,7 @@
 // and a large share of entities culled.
 
 #include "dsoc/eval/evaluation.hpp"
+#include "support/openarena.hpp"
 
 #include <gtest/gtest.h>
 
@@ -34,9 +35,7 @@ EvalOptions judged_every_tick(const char* name, const char* map, int viewers, in
 }
 
 TEST(DsocOnARealMap, ZeroPopInOverTwentyThousandClientTicks) {
-    if (!std::filesystem::exists("/usr/share/games/openarena/baseoa/pak1-maps.pk3")) {
-        GTEST_SKIP() << "OpenArena maps not installed (scripts/setup installs openarena-081-maps)";
-    }
+    DSOC_REQUIRE_OPENARENA();
     // 630 ticks x 32 viewers = 20,160 client-ticks
     EvalOptions options = judged_every_tick("dsoc-acceptance", "oa_dm4", 32, 96, 21.0, 17);
     options.policies = {"broadcast", "dsoc"};
@@ -91,9 +90,7 @@ TEST(DsocWithoutAPvs, ZeroPopInOnAGeneratedCityWithEntityClusters) {
 }
 
 TEST(DsocOnARealMap, ZeroPopInWhenHalfTheClientTicksGetTheCheapestAnswer) {
-    if (!std::filesystem::exists("/usr/share/games/openarena/baseoa/pak1-maps.pk3")) {
-        GTEST_SKIP() << "OpenArena maps not installed (scripts/setup installs openarena-081-maps)";
-    }
+    DSOC_REQUIRE_OPENARENA();
     // The server's fail-open, emulated: half the client-ticks over budget get the
     // culler's prepared stage alone (the map's PVS). 120 ticks x 32 viewers.
     EvalOptions options = judged_every_tick("dsoc-fail-open", "oa_dm4", 32, 96, 4.0, 31);
@@ -168,9 +165,7 @@ void expect_no_popin_and_culling(const std::vector<PolicyMetrics>& policies, con
 }
 
 TEST(DsocOnARealMap, ZeroPopInWithTheBakedStage) {
-    if (!std::filesystem::exists("/usr/share/games/openarena/baseoa/pak1-maps.pk3")) {
-        GTEST_SKIP() << "OpenArena maps not installed (scripts/setup installs openarena-081-maps)";
-    }
+    DSOC_REQUIRE_OPENARENA();
     // 240 ticks x 32 viewers = 7,680 client-ticks
     EvalOptions options = judged_every_tick("dsoc-baked-acceptance", "oa_dm4", 32, 96, 8.0, 19);
     options.bake_cell_size = 64.0f; // bakes in seconds; the figures use 32

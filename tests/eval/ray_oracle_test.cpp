@@ -4,7 +4,7 @@
 #include "dsoc/eval/ray_oracle.hpp"
 #include "dsoc/visibility/occluder_world.hpp"
 #include "dsoc/visibility/reference_visibility.hpp"
-#include "test_maps.hpp"
+#include "support/test_maps.hpp"
 
 #include <gtest/gtest.h>
 

@@ -4,6 +4,7 @@
 #include "dsoc/inspect/depth_view.hpp"
 #include "dsoc/inspect/png_io.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
+#include "through_png.hpp"
 
 #include <gtest/gtest.h>
 
@@ -41,12 +42,8 @@ TEST(DepthView, WallInFrontOfTheEyeShowsOnThePlusXFace) {
     EXPECT_EQ(c.r, c.g);
     EXPECT_GT(c.r, 255 * 0.85); // near: bright
 
-    const std::string path =
-        (std::filesystem::temp_directory_path() / "dsoc_inspect_depth_test.png").string();
-    ASSERT_EQ(write_png(render_depth_strip(pyramid, level, style), path), "");
-    Image strip;
-    ASSERT_EQ(read_png(path, strip), "");
-    std::filesystem::remove(path);
+    const Image strip = testing::through_png(render_depth_strip(pyramid, level, style),
+                                             "dsoc_inspect_depth_test.png");
     ASSERT_EQ(strip.width(), 6 * 128 + 7 * 4);
     ASSERT_EQ(strip.height(), 128 + 2 * 4);
     EXPECT_EQ(strip.at(4 + 64, 4 + 64), c);                   // +x: the wall

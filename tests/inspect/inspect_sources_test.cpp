@@ -7,7 +7,8 @@
 #include "dsoc/inspect/png_io.hpp"
 #include "dsoc/inspect/trace_source.hpp"
 #include "dsoc/trace/trace_writer.hpp"
-#include "test_maps.hpp"
+#include "support/test_maps.hpp"
+#include "through_png.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,25 +18,6 @@ namespace dsoc::inspect {
 namespace {
 
 using visibility::Aabb;
-
-/// The colour the plan must use for `s` (spelled out, not PlanPalette::of()).
-Rgb colour_of(EntityState s) {
-    switch (s) {
-    case EntityState::replicated_visible:
-        return kPalette.replicated_visible;
-    case EntityState::replicated_lookahead:
-        return kPalette.replicated_lookahead;
-    case EntityState::replicated_held:
-        return kPalette.replicated_held;
-    case EntityState::hidden_tbv:
-        return kPalette.hidden_tbv;
-    case EntityState::hidden_expired:
-        return kPalette.hidden_expired;
-    case EntityState::not_replicated:
-        return kPalette.not_replicated;
-    }
-    return {};
-}
 
 TEST(LiveSource, RoomsMapStatesAreConsistentAndDrawnInTheirColours) {
     const auto map = dsoc::testing::rooms_map();
@@ -73,12 +55,7 @@ TEST(LiveSource, RoomsMapStatesAreConsistentAndDrawnInTheirColours) {
     style.units_per_pixel = 4.0f;
     style.cut_above = view.eye.z + 64.0f; // below the rooms' ceiling
     const Image rendered = render_plan(footprints(map->occluders), map->bounds, view, style);
-    const std::string path =
-        (std::filesystem::temp_directory_path() / "dsoc_inspect_live_test.png").string();
-    ASSERT_EQ(write_png(rendered, path), "");
-    Image image;
-    ASSERT_EQ(read_png(path, image), "");
-    std::filesystem::remove(path);
+    const Image image = testing::through_png(rendered, "dsoc_inspect_live_test.png");
     const PlanFrame frame(map->bounds, style);
     EXPECT_EQ(image.width(), frame.width());
     EXPECT_EQ(image.height(), frame.height());
@@ -97,7 +74,7 @@ TEST(LiveSource, RoomsMapStatesAreConsistentAndDrawnInTheirColours) {
             continue;
         }
         const glm::vec3 c = e.box.center();
-        EXPECT_EQ(image.at(frame.pixel_x(c.x), frame.pixel_y(c.y)), colour_of(e.state))
+        EXPECT_EQ(image.at(frame.pixel_x(c.x), frame.pixel_y(c.y)), kPalette.of(e.state))
             << "entity " << e.id << " " << to_string(e.state);
         ++checked;
     }

@@ -3,6 +3,7 @@
 
 #include "dsoc/inspect/plan_view.hpp"
 #include "dsoc/inspect/png_io.hpp"
+#include "through_png.hpp"
 
 #include <gtest/gtest.h>
 
@@ -53,13 +54,7 @@ TEST(PlanView, SmallMapDecodesWithExpectedSizeAndColours) {
     style.margin = 8;
     style.cut_above = 60.0f; // the beam's bottom (90) is above: left out
     const Image rendered = render_plan(footprints(m.occluders), m.bounds, m.view, style);
-
-    const std::string path =
-        (std::filesystem::temp_directory_path() / "dsoc_inspect_plan_test.png").string();
-    ASSERT_EQ(write_png(rendered, path), "");
-    Image image;
-    ASSERT_EQ(read_png(path, image), "");
-    std::filesystem::remove(path);
+    const Image image = testing::through_png(rendered, "dsoc_inspect_plan_test.png");
 
     // 400 x 200 world units at 2 units per pixel, plus an 8-pixel margin each side.
     ASSERT_EQ(image.width(), 400 / 2 + 16);

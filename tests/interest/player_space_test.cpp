@@ -10,6 +10,7 @@
 #include "dsoc/maps/map_source.hpp"
 #include "dsoc/maps/player_space.hpp"
 #include "dsoc/sim/wander_bot.hpp"
+#include "support/openarena.hpp"
 
 #include <gtest/gtest.h>
 
@@ -40,9 +41,7 @@ bool inside(const visibility::CellGrid& grid, const std::vector<std::uint8_t>& c
 }
 
 TEST(PlayerSpace, WanderingBotsAndTheirEyeRegionsStayInTheCoveredCells) {
-    if (!std::filesystem::exists("/usr/share/games/openarena/baseoa/pak1-maps.pk3")) {
-        GTEST_SKIP() << "OpenArena maps not installed (scripts/setup installs them)";
-    }
+    DSOC_REQUIRE_OPENARENA();
     auto map = maps::load_map("oa_dm4", maps::MapSearch::from_environment());
     ASSERT_TRUE(map.ok()) << map.error().message();
     const sim::MoveConfig move;

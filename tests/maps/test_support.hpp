@@ -1,10 +1,12 @@
 #pragma once
-// Shared helpers for the maps tests: where the OpenArena maps are, and a small
-// in-memory Quake 3 BSP writer for building valid and corrupt files.
+// Shared helpers for the maps tests: a corridor map, where the OpenArena maps are
+// (support/openarena.hpp), and a small in-memory Quake 3 BSP writer for building valid
+// and corrupt files.
 
 #include "dsoc/maps/map.hpp"
 #include "dsoc/maps/q3_bsp.hpp"
 #include "dsoc/visibility/test_worlds.hpp"
+#include "support/openarena.hpp"
 
 #include <gtest/gtest.h>
 
@@ -28,16 +30,7 @@ inline Map corridor_map(std::uint32_t seed = 3) {
     return map;
 }
 
-inline const std::filesystem::path kOpenArenaPak =
-    "/usr/share/games/openarena/baseoa/pak1-maps.pk3";
-
-#define DSOC_REQUIRE_OPENARENA()                                                                   \
-    do {                                                                                           \
-        if (!std::filesystem::exists(::dsoc::maps::test::kOpenArenaPak)) {                         \
-            GTEST_SKIP() << "OpenArena maps not installed (" << ::dsoc::maps::test::kOpenArenaPak  \
-                         << " missing; scripts/setup installs openarena-081-maps)";                \
-        }                                                                                          \
-    } while (false)
+using ::dsoc::testing::kOpenArenaPak;
 
 /// Lumps as raw byte strings; build() lays them out after the header.
 struct BspWriter {

@@ -6,6 +6,7 @@
 #include "program_paths.hpp"
 #include "support/child_process.hpp"
 #include "support/http_client.hpp"
+#include "support/temp_dir.hpp"
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
@@ -22,38 +23,6 @@ namespace dsoc::testing {
 namespace {
 
 namespace fs = std::filesystem;
-
-/// A small server that starts in moments: a generated map, no bake, few bots.
-std::vector<std::string> light_server(std::vector<std::string> more = {}) {
-    std::vector<std::string> argv = {
-        program("dsoc-server"), "--insecure", "--port", "0", "--map",     "gen:rooms:1",
-        "--baked-stage",        "false",      "--bots", "4", "--threads", "1"};
-    argv.insert(argv.end(), more.begin(), more.end());
-    return argv;
-}
-
-/// A fresh directory for one test's files, removed at the end.
-class TempDir {
-public:
-    explicit TempDir(const std::string& name) : path_(fs::temp_directory_path() / name) {
-        fs::remove_all(path_);
-        fs::create_directories(path_);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path_, ec);
-    }
-    [[nodiscard]] std::string file(const std::string& name) const {
-        return (path_ / name).string();
-    }
-
-private:
-    fs::path path_;
-};
-
-void write_file(const std::string& path, const std::string& text) {
-    std::ofstream(path) << text;
-}
 
 /// The lines of `text` that are not comments.
 std::string settings_lines(const std::string& text) {
@@ -106,8 +75,7 @@ TEST(ServerConfig, PrintConfigRoundTripsWithOneEditTheTokenKey) {
     EXPECT_NE(printed.err.find("token_key_file: required unless insecure = true"),
               std::string::npos)
         << printed.err;
-    const std::string toml = dir.file("server.toml");
-    write_file(toml, printed.out);
+    const std::string toml = dir.write("server.toml", printed.out);
 
     // As printed, the server names the one thing to fix.
     const ProgramRun unedited =
@@ -117,14 +85,14 @@ TEST(ServerConfig, PrintConfigRoundTripsWithOneEditTheTokenKey) {
                             "(mint a key with dsoc-token keygen)\n");
 
     // The edit docs/operations.md shows: a key, and its path in token_key_file.
-    const std::string key = dir.file("token.key");
+    const std::string key = dir.path("token.key");
     ASSERT_EQ(run_program({program("dsoc-token"), "keygen", "--out", key}).status, 0);
     std::string text = printed.out;
     const std::string unset = "\ntoken_key_file = ''\n";
     const auto at = text.find(unset);
     ASSERT_NE(at, std::string::npos) << text;
     text.replace(at, unset.size(), "\ntoken_key_file = '" + key + "'\n");
-    write_file(toml, text);
+    dir.write("server.toml", text);
 
     const ProgramRun checked =
         run_program({program("dsoc-server"), "--config", toml, "--check-config"});
@@ -148,10 +116,8 @@ TEST(ServerConfig, PrintConfigRoundTripsWithOneEditTheTokenKey) {
 
 TEST(ServerConfig, DsocConfigNamesTheFileAndConfigOverridesIt) {
     const TempDir dir("dsoc-config-env");
-    const std::string from_env = dir.file("env.toml");
-    const std::string from_flag = dir.file("flag.toml");
-    write_file(from_env, "insecure = true\ntick_rate = 20\n");
-    write_file(from_flag, "insecure = true\ntick_rate = 40\n");
+    const std::string from_env = dir.write("env.toml", "insecure = true\ntick_rate = 20\n");
+    const std::string from_flag = dir.write("flag.toml", "insecure = true\ntick_rate = 40\n");
 
     const ProgramRun env =
         run_program({program("dsoc-server"), "--print-config"}, {"DSOC_CONFIG=" + from_env});
@@ -165,9 +131,9 @@ TEST(ServerConfig, DsocConfigNamesTheFileAndConfigOverridesIt) {
     EXPECT_NE(none.out.find("\ntick_rate = 30\n"), std::string::npos) << none.out;
 
     const ProgramRun missing = run_program({program("dsoc-server"), "--check-config"},
-                                           {"DSOC_CONFIG=" + dir.file("missing.toml")});
+                                           {"DSOC_CONFIG=" + dir.path("missing.toml")});
     EXPECT_EQ(missing.status, 2);
-    EXPECT_EQ(missing.err, "invalid config file (from DSOC_CONFIG): " + dir.file("missing.toml") +
+    EXPECT_EQ(missing.err, "invalid config file (from DSOC_CONFIG): " + dir.path("missing.toml") +
                                ": cannot read config file: No such file or directory\n");
 }
 
@@ -180,12 +146,11 @@ TEST(ServerExit, SettingsAndInputsAreUsageErrorsServingIsAFailure) {
         << bad_setting.err;
     // The key is read before the map, so that a bad key does not wait for a bake.
     const ProgramRun no_key = run_program({program("dsoc-server"), "--token-key-file",
-                                           dir.file("none.key"), "--map", "no_such_map_dsoc"});
+                                           dir.path("none.key"), "--map", "no_such_map_dsoc"});
     EXPECT_EQ(no_key.status, 2);
-    EXPECT_EQ(no_key.err, "invalid setting: token_key_file: " + dir.file("none.key") +
+    EXPECT_EQ(no_key.err, "invalid setting: token_key_file: " + dir.path("none.key") +
                               ": cannot read token key: No such file or directory\n");
-    const std::string bad_toml = dir.file("bad.toml");
-    write_file(bad_toml, "port = 70000\n");
+    const std::string bad_toml = dir.write("bad.toml", "port = 70000\n");
     const ProgramRun bad_file = run_program({program("dsoc-server"), "--config", bad_toml});
     EXPECT_EQ(bad_file.status, 2);
     EXPECT_EQ(bad_file.err, "invalid config file: " + bad_toml +
@@ -196,7 +161,7 @@ TEST(ServerExit, SettingsAndInputsAreUsageErrorsServingIsAFailure) {
     boost::asio::ip::tcp::acceptor taken(io, {boost::asio::ip::make_address("127.0.0.1"), 0});
     const std::string port = std::to_string(taken.local_endpoint().port());
     std::vector<std::string> argv = light_server({"--duration", "5"});
-    argv[3] = port; // --port
+    *(std::find(argv.begin(), argv.end(), "--port") + 1) = port;
     const ProgramRun busy = run_program(argv);
     EXPECT_EQ(busy.status, 1) << busy.err;
     EXPECT_NE(busy.err.find("cannot start on 127.0.0.1:" + port), std::string::npos) << busy.err;

@@ -4,6 +4,7 @@
 
 #include "program_paths.hpp"
 #include "support/child_process.hpp"
+#include "support/temp_dir.hpp"
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
@@ -25,23 +26,8 @@ using nlohmann::json;
 /// A small dsoc-server that starts in moments, on a free port, stopped at the end.
 class LightServer {
 public:
-    explicit LightServer(std::vector<std::string> more = {}) {
-        std::vector<std::string> argv = {program("dsoc-server"),
-                                         "--port",
-                                         "0",
-                                         "--map",
-                                         "gen:rooms:1",
-                                         "--baked-stage",
-                                         "false",
-                                         "--bots",
-                                         "4",
-                                         "--threads",
-                                         "1"};
-        argv.insert(argv.end(), more.begin(), more.end());
-        if (std::find(more.begin(), more.end(), "--token-key-file") == more.end()) {
-            argv.emplace_back("--insecure");
-        }
-        child_ = std::make_unique<ChildProcess>(argv);
+    explicit LightServer(const std::vector<std::string>& more = {}) {
+        child_ = std::make_unique<ChildProcess>(light_server(more));
         if (!child_->wait_for_output("listening on port")) {
             ADD_FAILURE() << "the server did not start: " << child_->err();
             return;
@@ -67,27 +53,6 @@ private:
     std::string address_;
 };
 
-/// A fresh directory for one test's files, removed at the end.
-class Files {
-public:
-    explicit Files(const std::string& name) : dir_(fs::temp_directory_path() / name) {
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    ~Files() {
-        std::error_code ec;
-        fs::remove_all(dir_, ec);
-    }
-    [[nodiscard]] std::string path(const std::string& name) const { return (dir_ / name).string(); }
-    std::string write(const std::string& name, const std::string& text) const {
-        std::ofstream(path(name)) << text;
-        return path(name);
-    }
-
-private:
-    fs::path dir_;
-};
-
 json read_json(const std::string& path) {
     std::ifstream in(path);
     return json::parse(in, nullptr, /*allow_exceptions=*/false);
@@ -103,7 +68,7 @@ std::vector<json> read_json_lines(const std::string& path) {
 }
 
 /// Runs dsoc-simclient with `args` (quiet, a JSON report in `files`); the report in `report`.
-ProgramRun simclient(const Files& files, std::vector<std::string> args, json& report) {
+ProgramRun simclient(const TempDir& files, std::vector<std::string> args, json& report) {
     std::vector<std::string> argv = {program("dsoc-simclient"), "--quiet", "--report",
                                      files.path("report.json")};
     argv.insert(argv.end(), args.begin(), args.end());
@@ -124,7 +89,7 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 }
 
 TEST(SimclientFailures, RefusedUnresolvableAndTimeoutAreNamedAndEndTheRunEarly) {
-    const Files files("dsoc-simclient-connect");
+    const TempDir files("dsoc-simclient-connect");
     json report;
     auto t0 = std::chrono::steady_clock::now();
     const ProgramRun refused = simclient(
@@ -165,7 +130,7 @@ TEST(SimclientFailures, RefusedUnresolvableAndTimeoutAreNamedAndEndTheRunEarly) 
 }
 
 TEST(SimclientFailures, UnauthorizedVersionMismatchAndDroppedByServer) {
-    const Files files("dsoc-simclient-refusals");
+    const TempDir files("dsoc-simclient-refusals");
     const std::string key = files.path("server.key");
     const std::string other_key = files.path("other.key");
     ASSERT_EQ(run_program({program("dsoc-token"), "keygen", "--out", key}).status, 0);
@@ -214,7 +179,7 @@ TEST(SimclientFailures, UnauthorizedVersionMismatchAndDroppedByServer) {
 }
 
 TEST(SimclientShutdown, AServerStoppingBeforeTheEndFailsTheRun) {
-    const Files files("dsoc-simclient-shutdown");
+    const TempDir files("dsoc-simclient-shutdown");
     LightServer server({"--duration", "1"});
     json report;
     const auto t0 = std::chrono::steady_clock::now();
@@ -232,7 +197,7 @@ TEST(SimclientShutdown, AServerStoppingBeforeTheEndFailsTheRun) {
 }
 
 TEST(SimclientThresholds, AFailedThresholdFailsTheRunAndNamesLimitAndValue) {
-    const Files files("dsoc-simclient-thresholds");
+    const TempDir files("dsoc-simclient-thresholds");
     LightServer server;
     json report;
     // At 30 Hz snapshots come every 33 ms: below 1 ms fails, below 5 s holds.
@@ -272,7 +237,7 @@ TEST(SimclientThresholds, AFailedThresholdFailsTheRunAndNamesLimitAndValue) {
 }
 
 TEST(SimclientScenario, ThreeStagesAndTwoGroupsAreFollowedSecondBySecond) {
-    const Files files("dsoc-simclient-scenario");
+    const TempDir files("dsoc-simclient-scenario");
     const std::string scenario = files.write("scenario.toml", R"(
 stages = [
   { duration = "1s", target = 6 },    # ramp up to 6
@@ -326,7 +291,7 @@ latency = "20ms"
 }
 
 TEST(SimclientScenario, RespawnersComeBackAsThemselvesAndChurnBringsNewClients) {
-    const Files files("dsoc-simclient-churn");
+    const TempDir files("dsoc-simclient-churn");
     const std::string key = files.path("server.key");
     ASSERT_EQ(run_program({program("dsoc-token"), "keygen", "--out", key}).status, 0);
     const std::string scenario = files.write("scenario.toml", R"(
@@ -360,7 +325,7 @@ churn_per_s = 2
 }
 
 TEST(SimclientUsage, BadThresholdsAndScenarioFilesAreUsageErrors) {
-    const Files files("dsoc-simclient-usage");
+    const TempDir files("dsoc-simclient-usage");
     const ProgramRun unknown =
         run_program({program("dsoc-simclient"), "--threshold", "latency_p99<50ms"});
     EXPECT_EQ(unknown.status, 2);

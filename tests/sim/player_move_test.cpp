@@ -44,10 +44,15 @@ float horizontal_speed(const MoveState& s) {
     return std::hypot(s.velocity.x, s.velocity.y);
 }
 
-TEST(PlayerMove, FallsAndLandsOnTheFloor) {
+/// A player with the default MoveConfig on test_world().
+class PlayerMoveOnTestWorld : public ::testing::Test {
+protected:
     const maps::Map map = test_world();
-    const CollisionWorld world(map.collision_brushes);
+    const CollisionWorld world{map.collision_brushes};
     const MoveConfig config;
+};
+
+TEST_F(PlayerMoveOnTestWorld, FallsAndLandsOnTheFloor) {
     MoveState state;
     state.position = {0, 0, 200};
     for (int i = 0; i < 90; ++i) {
@@ -71,10 +76,7 @@ TEST(PlayerMove, FallingSpeedIsCapped) {
     EXPECT_FLOAT_EQ(state.velocity.z, -500.0f);
 }
 
-TEST(PlayerMove, WalksAtMaxSpeedAndStopsAtWalls) {
-    const maps::Map map = test_world();
-    const CollisionWorld world(map.collision_brushes);
-    const MoveConfig config;
+TEST_F(PlayerMoveOnTestWorld, WalksAtMaxSpeedAndStopsAtWalls) {
     MoveState state = spawn_state(world, config, {0, 0, 25});
     MoveInput input;
     input.wish_direction = {1, 0, 0};
@@ -91,10 +93,7 @@ TEST(PlayerMove, WalksAtMaxSpeedAndStopsAtWalls) {
     EXPECT_NEAR(state.position.y, 0.0f, 1e-3f);
 }
 
-TEST(PlayerMove, SlidesAlongWalls) {
-    const maps::Map map = test_world();
-    const CollisionWorld world(map.collision_brushes);
-    const MoveConfig config;
+TEST_F(PlayerMoveOnTestWorld, SlidesAlongWalls) {
     MoveState state = spawn_state(world, config, {480, 0, 25});
     MoveInput input;
     input.wish_direction = glm::normalize(glm::vec3(1, -1, 0));
@@ -105,10 +104,7 @@ TEST(PlayerMove, SlidesAlongWalls) {
     EXPECT_LT(state.position.y, -100.0f); // kept moving along the wall
 }
 
-TEST(PlayerMove, StepsUpSmallLedgesOnly) {
-    const maps::Map map = test_world();
-    const CollisionWorld world(map.collision_brushes);
-    const MoveConfig config;
+TEST_F(PlayerMoveOnTestWorld, StepsUpSmallLedgesOnly) {
     MoveInput input;
     input.wish_direction = {0, 1, 0};
     MoveState low = spawn_state(world, config, {-800, 200, 25});
@@ -126,10 +122,7 @@ TEST(PlayerMove, StepsUpSmallLedgesOnly) {
     EXPECT_NEAR(high.position.z, 24.0f, 0.5f);
 }
 
-TEST(PlayerMove, JumpsOntoACrate) {
-    const maps::Map map = test_world();
-    const CollisionWorld world(map.collision_brushes);
-    const MoveConfig config;
+TEST_F(PlayerMoveOnTestWorld, JumpsOntoACrate) {
     MoveState state = spawn_state(world, config, {232, -500, 25});
     for (int i = 0; i < 30; ++i) {
         player_move(world, config, {}, kDt, state); // settle
@@ -156,10 +149,7 @@ TEST(PlayerMove, JumpsOntoACrate) {
     EXPECT_LT(peak, 24.0f + 46.0f + 18.0f);
 }
 
-TEST(PlayerMove, MotionBoundHoldsForRandomInput) {
-    const maps::Map map = test_world();
-    const CollisionWorld world(map.collision_brushes);
-    const MoveConfig config;
+TEST_F(PlayerMoveOnTestWorld, MotionBoundHoldsForRandomInput) {
     MoveState state = spawn_state(world, config, {0, 0, 25});
     std::uint32_t rng = 12345;
     auto random = [&] {

@@ -6,6 +6,7 @@
 #include "dsoc/sim/motion_limits.hpp"
 #include "dsoc/sim/reach_clipper.hpp"
 #include "dsoc/sim/wander_bot.hpp"
+#include "support/openarena.hpp"
 
 #include <gtest/gtest.h>
 
@@ -20,9 +21,7 @@ namespace {
 class ReachClipperOnMaps : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(ReachClipperOnMaps, ContainsEveryFutureEyeAndClipsSomething) {
-    if (!std::filesystem::exists(std::string(maps::kOpenArenaBaseDir) + "/pak1-maps.pk3")) {
-        GTEST_SKIP() << "OpenArena maps not installed (scripts/setup installs openarena-081-maps)";
-    }
+    DSOC_REQUIRE_OPENARENA();
     auto loaded = maps::load_map(GetParam(), maps::MapSearch::from_environment());
     ASSERT_TRUE(loaded) << loaded.error().message();
     const maps::Map& map = loaded.value();

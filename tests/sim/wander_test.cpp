@@ -6,6 +6,7 @@
 #include "dsoc/maps/map_spec.hpp"
 #include "dsoc/sim/motion_limits.hpp"
 #include "dsoc/sim/wander_bot.hpp"
+#include "support/openarena.hpp"
 
 #include <gtest/gtest.h>
 
@@ -173,12 +174,8 @@ void check(const maps::Map& map, std::uint64_t seed) {
 class OpenArenaWander : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(OpenArenaWander, TwoHundredBotsForSixtySeconds) {
-    const std::filesystem::path pak = "/usr/share/games/openarena/baseoa/pak1-maps.pk3";
-    if (!std::filesystem::exists(pak)) {
-        GTEST_SKIP() << "OpenArena maps not installed (" << pak
-                     << " missing; scripts/setup installs openarena-081-maps)";
-    }
-    const auto map = maps::load_map(GetParam(), maps::MapSearch{{pak}});
+    DSOC_REQUIRE_OPENARENA();
+    const auto map = maps::load_map(GetParam(), maps::MapSearch{{testing::kOpenArenaPak}});
     ASSERT_TRUE(map.ok()) << map.error().message();
     check(map.value(), 1);
 }

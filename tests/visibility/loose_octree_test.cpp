@@ -1,6 +1,8 @@
 #include "dsoc/visibility/loose_octree.hpp"
 #include "dsoc/visibility/occlusion_buffer.hpp"
 
+#include "test_scene.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -179,12 +181,11 @@ TEST(LooseOctree, MovesTouchOnlyTheCommonAncestorSubtree) {
 }
 
 TEST(LooseOctree, FrontToBackTraversalCullsBehindAWall) {
-    OccluderWorld world;
-    (void)world.add(ConvexPolyhedron::from_aabb({{100, -2000, -2000}, {120, 2000, 2000}}));
-    BspTree bsp;
-    bsp.build(world);
+    testing::Scene wall;
+    wall.add_box({100, -2000, -2000}, {120, 2000, 2000});
+    wall.build();
     OcclusionBuffer buffer;
-    buffer.build(glm::vec3(0.0f), world, bsp);
+    buffer.build(glm::vec3(0.0f), wall.world, wall.bsp);
     Fixture fx;
     LooseOctreeConfig config;
     config.max_items = 500;

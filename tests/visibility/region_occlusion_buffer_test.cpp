@@ -123,38 +123,26 @@ TEST(RegionOcclusionBuffer, OccluderTouchingTheRegionWritesNothing) {
 }
 
 TEST(RegionOcclusionBuffer, PyramidLevelsHoldTheMaxOfTheirFourChildren) {
-    const TestWorld tw = make_corridor_world(5, 5, 5);
-    BspTree bsp;
-    bsp.build(tw.world);
-    RegionOcclusionBufferConfig config;
-    config.face_resolution = 32;
-    RegionOcclusionBuffer buffer(config);
-    buffer.build(region_at({700, 800, 60}, {48, 48, 40}), tw.world, bsp);
-    ASSERT_GT(buffer.stats().texels_written, 0);
-    EXPECT_GT(testing::expect_max_pyramid(buffer, config.face_resolution), 0);
-    EXPECT_EQ(buffer.levels(), 6);
+    testing::expect_pyramid_of_maxima<RegionOcclusionBuffer, RegionOcclusionBufferConfig>(
+        region_at({700, 800, 60}, {48, 48, 40}));
 }
 
 TEST(RegionOcclusionBuffer, BudgetAndEmptyRegion) {
-    const TestWorld tw = make_corridor_world(5, 6, 6);
-    BspTree bsp;
-    bsp.build(tw.world);
+    const Scene s(make_corridor_world(5, 6, 6));
     RegionOcclusionBufferConfig config;
     config.max_occluders = 5;
     RegionOcclusionBuffer buffer(config);
-    buffer.build(region_at({700, 800, 60}, {48, 48, 40}), tw.world, bsp);
+    buffer.build(region_at({700, 800, 60}, {48, 48, 40}), s.world, s.bsp);
     EXPECT_EQ(buffer.stats().occluders_visited, 5);
-    buffer.build(Aabb::empty(), tw.world, bsp);
+    buffer.build(Aabb::empty(), s.world, s.bsp);
     EXPECT_EQ(buffer.stats().texels_written, 0);
     EXPECT_EQ(buffer.test_box(cube({5000, 5000, 60}, 1)), Visibility::visible);
 }
 
 TEST(RegionOcclusionBuffer, ConcurrentTestsAgreeWithSerialOnes) {
-    const TestWorld tw = make_corridor_world(6, 4, 4);
-    BspTree bsp;
-    bsp.build(tw.world);
+    const Scene s(make_corridor_world(6, 4, 4));
     RegionOcclusionBuffer buffer;
-    buffer.build(region_at({700, 800, 60}, {48, 48, 40}), tw.world, bsp);
+    buffer.build(region_at({700, 800, 60}, {48, 48, 40}), s.world, s.bsp);
     std::vector<Aabb> boxes;
     for (int i = 0; i < 400; ++i) {
         const float x = 40.0f + 5.0f * static_cast<float>(i);

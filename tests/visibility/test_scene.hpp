@@ -6,6 +6,7 @@
 #include "dsoc/visibility/convex_polyhedron.hpp"
 #include "dsoc/visibility/geometry.hpp"
 #include "dsoc/visibility/occluder_world.hpp"
+#include "dsoc/visibility/test_worlds.hpp"
 
 #include <gtest/gtest.h>
 
@@ -13,11 +14,16 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 
 namespace dsoc::visibility::testing {
 
-/// Box occluders; build() once they are all added.
+/// Box occluders; build() once they are all added. Or a test world's occluders, with
+/// the BSP built.
 struct Scene {
+    Scene() = default;
+    explicit Scene(TestWorld tw) : world(std::move(tw.world)) { build(); }
+
     OccluderWorld world;
     BspTree bsp;
     void add_box(glm::vec3 lo, glm::vec3 hi) {
@@ -59,6 +65,21 @@ int expect_max_pyramid(const Buffer& buffer, int face_resolution) {
         }
     }
     return finite;
+}
+
+/// Builds a `Buffer` (OcclusionBuffer or RegionOcclusionBuffer) of face resolution 32
+/// from `from` (its eye or region) over a 5 x 5 corridor world, and expects written
+/// texels and a pyramid of 6 levels (32 .. 1) each holding the max of its children.
+template <class Buffer, class Config, class From>
+void expect_pyramid_of_maxima(const From& from) {
+    const Scene s(make_corridor_world(5, 5, 5));
+    Config config;
+    config.face_resolution = 32;
+    Buffer buffer(config);
+    buffer.build(from, s.world, s.bsp);
+    ASSERT_GT(buffer.stats().texels_written, 0);
+    EXPECT_GT(expect_max_pyramid(buffer, config.face_resolution), 0);
+    EXPECT_EQ(buffer.levels(), 6);
 }
 
 /// Half-sizes of the property tests' random boxes: a fifth `tiny`, seven tenths

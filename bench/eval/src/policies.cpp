@@ -80,12 +80,11 @@ private:
     std::shared_ptr<const maps::Pvs> pvs_;
 };
 
-/// The server's culler: the exact shaft stage without a per-region z-pyramid build
-/// (see ServerConfig::culler).
+/// The server's culler (interest::PolicySettings' default culler: the exact shaft
+/// stage without a per-region z-pyramid build).
 visibility::RegionCullerConfig culler_config(bool fusion, int portal_depth) {
     visibility::RegionCullerConfig c;
-    c.pyramid = false;
-    c.shaft = true;
+    interest::set_culler_stages(interest::PolicySettings{}.culler, c);
     c.fusion = fusion;
     c.portal_depth = portal_depth;
     return c;
@@ -299,10 +298,7 @@ std::unique_ptr<Policy> make_policy(std::string_view name, const PolicyEnv& env)
     config.tick_rate = env.scenario->tick_rate;
     PolicyEnv point_env = env;
     if (name == "occlusion" || name == "occlusion-k0") { // every box, every tick
-        config.tbvs_enabled = false;
-        config.reuse_buffers = false;
-        config.full_test_interval = 1;
-        config.blocker_hints = false; // no temporal coherence at all
+        interest::apply_policy_presets("occlusion", config);
         if (name == "occlusion-k0") {
             point_env.lookahead_ticks = 0; // diagnostic: the present eye only
             return std::make_unique<CullingPolicy>(std::string(name), config, point_env);

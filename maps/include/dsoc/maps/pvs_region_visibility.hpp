@@ -28,17 +28,11 @@ public:
         next_->build(region);
     }
     [[nodiscard]] visibility::Visibility test_box(const visibility::Aabb& box) const override {
-        if (active_ && !pvs_->may_see(visible_clusters_, box, scratch_)) {
-            return visibility::Visibility::occluded;
-        }
-        return next_->test_box(box);
+        return hides(box) ? visibility::Visibility::occluded : next_->test_box(box);
     }
     [[nodiscard]] visibility::Visibility
     test_box_quick(const visibility::Aabb& box) const override {
-        if (active_ && !pvs_->may_see(visible_clusters_, box, scratch_)) {
-            return visibility::Visibility::occluded;
-        }
-        return next_->test_box_quick(box);
+        return hides(box) ? visibility::Visibility::occluded : next_->test_box_quick(box);
     }
 
     // Prepared boxes carry their clusters, so the PVS stage costs a few bit tests.
@@ -52,37 +46,25 @@ public:
         if (!p.prepared) {
             return test_box(p.box);
         }
-        if (active_ && !pvs_->may_see_clusters(visible_clusters_, p.keys)) {
-            return visibility::Visibility::occluded;
-        }
-        return next_->test_box(p.box);
+        return hides(p) ? visibility::Visibility::occluded : next_->test_box(p.box);
     }
     [[nodiscard]] visibility::Visibility
     test_prepared_quick(const visibility::PreparedBox& p) const override {
         if (!p.prepared) {
             return test_box_quick(p.box);
         }
-        if (active_ && !pvs_->may_see_clusters(visible_clusters_, p.keys)) {
-            return visibility::Visibility::occluded;
-        }
-        return next_->test_box_quick(p.box);
+        return hides(p) ? visibility::Visibility::occluded : next_->test_box_quick(p.box);
     }
     [[nodiscard]] visibility::Visibility test_box_hinted(const visibility::Aabb& box,
                                                          std::uint32_t& hint) const override {
-        if (active_ && !pvs_->may_see(visible_clusters_, box, scratch_)) {
-            return visibility::Visibility::occluded;
-        }
-        return next_->test_box_hinted(box, hint);
+        return hides(box) ? visibility::Visibility::occluded : next_->test_box_hinted(box, hint);
     }
     [[nodiscard]] visibility::Visibility test_prepared_hinted(const visibility::PreparedBox& p,
                                                               std::uint32_t& hint) const override {
         if (!p.prepared) {
             return test_box_hinted(p.box, hint);
         }
-        if (active_ && !pvs_->may_see_clusters(visible_clusters_, p.keys)) {
-            return visibility::Visibility::occluded;
-        }
-        return next_->test_box_hinted(p.box, hint);
+        return hides(p) ? visibility::Visibility::occluded : next_->test_box_hinted(p.box, hint);
     }
     /// The PVS alone: `visible` whenever the PVS passes the box (the next stage is skipped).
     [[nodiscard]] visibility::Visibility
@@ -90,11 +72,20 @@ public:
         if (!p.prepared || !active_) {
             return test_prepared(p);
         }
-        return pvs_->may_see_clusters(visible_clusters_, p.keys) ? visibility::Visibility::visible
-                                                                 : visibility::Visibility::occluded;
+        return hides(p) ? visibility::Visibility::occluded : visibility::Visibility::visible;
     }
 
 private:
+    /// Whether no cluster `box` touches is in the region's PVS rows (hidden from every
+    /// eye of the region); false before build() found the region's clusters.
+    [[nodiscard]] bool hides(const visibility::Aabb& box) const {
+        return active_ && !pvs_->may_see(visible_clusters_, box, scratch_);
+    }
+    /// The same for a prepared box (p.prepared: its clusters are p.keys).
+    [[nodiscard]] bool hides(const visibility::PreparedBox& p) const {
+        return active_ && !pvs_->may_see_clusters(visible_clusters_, p.keys);
+    }
+
     std::shared_ptr<const Pvs> pvs_;
     std::unique_ptr<visibility::RegionVisibility> next_;
     bool active_ = false;

@@ -1,6 +1,8 @@
 #pragma once
 // Combining occlusion testers. Every `occluded` answer is a proof, so a box is
 // occluded when ANY tester proves it; the result is as conservative as its parts.
+// Not on the server's path: the property test uses it (docs/architecture.md, "Seed and
+// alternative implementations").
 
 #include "dsoc/visibility/box_visibility.hpp"
 #include "dsoc/visibility/geometry.hpp"

@@ -3,7 +3,8 @@
 // occluder casts a beam: the convex region behind it inside its silhouette cone.
 // BSP nodes whose containment sphere lies inside a beam are skipped wholesale.
 // Beams do not fuse: an item hidden only by two occluders together stays visible.
-// It exists to compare honestly against the z-pyramid (OcclusionBuffer).
+// It exists to compare honestly against the z-pyramid (OcclusionBuffer): not on the
+// server's path; visibility_bench and the property tests use it (docs/architecture.md).
 
 #include "dsoc/visibility/box_visibility.hpp"
 #include "dsoc/visibility/bsp_tree.hpp"

@@ -3,6 +3,9 @@
 // around one eye: six axis-aligned cube faces of face_resolution^2 texels each,
 // every face with a max-pyramid. Occluders are rasterized conservatively; boxes are
 // tested hierarchically. See docs/visibility.md for the conservative rules.
+// A seed backend, not on the server's path (its culler covers an eye region:
+// RegionOcclusionBuffer, ShaftOcclusion); dsoc-inspect's depth pictures,
+// visibility_bench and the property tests use it (docs/architecture.md).
 
 #include "dsoc/visibility/box_visibility.hpp"
 #include "dsoc/visibility/bsp_tree.hpp"

@@ -1,6 +1,7 @@
 #pragma once
 // Small synthetic occluder worlds for tests and benchmarks (the real map loaders
 // live in dsoc::maps). Deterministic for a given seed on a given standard library.
+// Not on the server's path: the tests and visibility_bench use them.
 
 #include "dsoc/visibility/occluder_world.hpp"
 
