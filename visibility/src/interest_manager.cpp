@@ -64,6 +64,7 @@ bool InterestManager::add_entity(EntityId id, const EntityDesc& desc, const Aabb
         counts.emplace_back(0);
         for (auto& c : clients_) {
             c->pairs.resize(entities_.size());
+            c->states.resize(entities_.size(), PairState::unknown);
         }
     }
     EntitySlot& e = entities_[slot];
@@ -86,10 +87,11 @@ bool InterestManager::remove_entity(EntityId id) {
     }
     const std::uint32_t slot = it->second;
     for (auto& c : clients_) {
-        if (c->pairs[slot].state == PairState::hidden_with_tbv) {
+        if (c->states[slot] == PairState::hidden_with_tbv) {
             release_group_member(*c, slot);
         }
         c->pairs[slot] = {};
+        c->states[slot] = PairState::unknown;
     }
     entities_[slot].alive = false;
     views_[slot].alive = false;
@@ -122,6 +124,7 @@ bool InterestManager::add_client(ClientId id, const ClientDesc& desc) {
     tree_config.max_items = static_cast<std::uint32_t>(config_.max_tbvs_per_client);
     auto slot = std::make_unique<ClientSlot>(id, desc, tree_config, make_visibility_());
     slot->pairs.resize(entities_.size());
+    slot->states.resize(entities_.size(), PairState::unknown);
     slot->groups.reserve(static_cast<std::size_t>(std::min(config_.max_tbvs_per_client, 1024)));
     client_index_[id] = clients_.size();
     clients_.push_back(std::move(slot));
@@ -136,8 +139,8 @@ bool InterestManager::remove_client(ClientId id) {
     const std::size_t index = it->second;
     ClientSlot& c = *clients_[index];
     auto& counts = tbv_counts_;
-    for (std::size_t slot = 0; slot < c.pairs.size(); ++slot) {
-        if (c.pairs[slot].state == PairState::hidden_with_tbv) {
+    for (std::size_t slot = 0; slot < c.states.size(); ++slot) {
+        if (c.states[slot] == PairState::hidden_with_tbv) {
             counts[slot].fetch_sub(1, std::memory_order_relaxed);
         }
     }
@@ -181,7 +184,7 @@ PairState InterestManager::state(ClientId client, EntityId entity) const {
     if (c == client_index_.end() || e == entity_slot_.end()) {
         return PairState::unknown;
     }
-    return clients_[c->second]->pairs[e->second].state;
+    return clients_[c->second]->states[e->second];
 }
 
 Aabb InterestManager::eye_region(ClientId id) const {

@@ -82,8 +82,8 @@ void InterestManager::test_clusters(ClientSlot& c, const RegionVisibility& now,
         }
         int due = 0;
         for (const std::uint32_t slot : cluster.members) {
-            const bool decided = c.pairs[slot].state == PairState::hidden_with_tbv ||
-                                 slot == viewer || !entities_[slot].prepared_is_current();
+            const bool decided = c.states[slot] == PairState::hidden_with_tbv || slot == viewer ||
+                                 !entities_[slot].prepared_is_current();
             due += decided || takes_quick_test(c, slot) ? 0 : 1;
         }
         if (due < 2) {
@@ -104,7 +104,7 @@ void InterestManager::hide_cluster(ClientSlot& c, std::uint32_t cluster,
     members.clear();
     for (const std::uint32_t slot : clusters_[cluster].members) {
         const EntitySlot& e = entities_[slot];
-        if (e.alive && slot != viewer_slot && c.pairs[slot].state != PairState::hidden_with_tbv &&
+        if (e.alive && slot != viewer_slot && c.states[slot] != PairState::hidden_with_tbv &&
             e.prepared_is_current()) {
             members.push_back(slot);
         }
@@ -122,7 +122,7 @@ void InterestManager::hide_cluster(ClientSlot& c, std::uint32_t cluster,
     for (const std::uint32_t slot : members) {
         if (tick_ < c.pairs[slot].next_tbv_tick ||
             entities_[slot].tbvs_at_tick_start >= config_.max_tbvs_per_object) {
-            c.pairs[slot].state = PairState::hidden_expired;
+            c.states[slot] = PairState::hidden_expired;
             continue;
         }
         members[eligible++] = slot;

@@ -122,8 +122,9 @@ struct InterestManager::EntityCluster {
 };
 
 struct InterestManager::ClientSlot {
+    /// A pair's TBV bookkeeping; its state is in `states` (scanned every tick, so
+    /// one byte per entity slot, apart from these).
     struct Pair {
-        PairState state = PairState::unknown;
         std::uint32_t group = detail::kNoGroup;
         /// The culler's hint for this box (test_prepared_hinted): e.g. its last blocker.
         std::uint32_t hint = 0;
@@ -152,8 +153,9 @@ struct InterestManager::ClientSlot {
     std::unique_ptr<RegionVisibility> exact;
     Aabb buffer_region;
     Aabb region;
-    std::vector<Pair> pairs; // by entity slot
-    LooseOctree tree;        // item id = group index
+    std::vector<PairState> states; // by entity slot
+    std::vector<Pair> pairs;       // by entity slot
+    LooseOctree tree;              // item id = group index
     std::vector<TbvGroup> groups;
     std::vector<std::uint32_t> free_groups;
     std::size_t live_groups = 0;

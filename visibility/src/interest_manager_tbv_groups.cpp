@@ -28,9 +28,8 @@ std::uint32_t InterestManager::new_group(ClientSlot& c, const PreparedBox& prepa
 
 void InterestManager::join_group(ClientSlot& c, std::uint32_t group, std::uint32_t slot) {
     c.groups[group].members.push_back(slot);
-    auto& pair = c.pairs[slot];
-    pair.state = PairState::hidden_with_tbv;
-    pair.group = group;
+    c.states[slot] = PairState::hidden_with_tbv;
+    c.pairs[slot].group = group;
     tbv_counts_[slot].fetch_add(1, std::memory_order_relaxed);
     ++c.stats.tbvs_created;
 }
@@ -43,7 +42,7 @@ std::size_t InterestManager::expire_earliest_group(ClientSlot& c) {
         return 0; // stale heap entry: the group was freed or reused since
     }
     for (const std::uint32_t slot : g.members) {
-        c.pairs[slot].state = PairState::hidden_expired;
+        c.states[slot] = PairState::hidden_expired;
     }
     const std::size_t members = g.members.size();
     free_group(c, top.group);

@@ -39,7 +39,7 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
     auto& pair = c.pairs[slot];
     if (!tbvs_enabled_ || tick_ < pair.next_tbv_tick ||
         entities_[slot].tbvs_at_tick_start >= config_.max_tbvs_per_object) {
-        pair.state = PairState::hidden_expired;
+        c.states[slot] = PairState::hidden_expired;
         return;
     }
     const EntitySlot& e = entities_[slot];
@@ -78,7 +78,7 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
         }
     }
     if (found == nullptr) {
-        pair.state = PairState::hidden_expired;
+        c.states[slot] = PairState::hidden_expired;
         pair.next_tbv_tick = tick_ + kTbvRetryTicks;
         ++c.stats.tbvs_rejected;
         return;
@@ -86,7 +86,7 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
     const PreparedBox& candidate = *found;
     const Aabb box = candidate.box;
     if (expiry <= tick_) {
-        pair.state = PairState::hidden_expired;
+        c.states[slot] = PairState::hidden_expired;
         pair.next_tbv_tick = tick_ + kTbvRetryTicks;
         ++c.stats.tbvs_rejected;
         return;

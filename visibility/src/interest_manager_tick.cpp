@@ -190,9 +190,9 @@ void InterestManager::update_client(std::size_t index, UpdateEffort effort) {
 
 void InterestManager::forget_visible(ClientSlot& c) {
     // No eye: nothing may be known.
-    for (auto& pair : c.pairs) {
-        if (pair.state == PairState::visible) {
-            pair.state = PairState::unknown;
+    for (PairState& state : c.states) {
+        if (state == PairState::visible) {
+            state = PairState::unknown;
         }
     }
 }
@@ -247,15 +247,14 @@ void InterestManager::void_broken_tbvs(ClientSlot& c) {
     const bool fuzzy = config_.strategy == TbvStrategy::fuzzy;
     for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
         const EntitySlot& e = entities_[slot];
-        auto& pair = c.pairs[slot];
-        if (!e.alive || pair.state != PairState::hidden_with_tbv) {
+        if (!e.alive || c.states[slot] != PairState::hidden_with_tbv) {
             continue;
         }
         const bool jumped = e.teleported_at == tick_;
-        const bool escaped = !jumped && fuzzy && !c.groups[pair.group].box.contains(e.box);
+        const bool escaped = !jumped && fuzzy && !c.groups[c.pairs[slot].group].box.contains(e.box);
         if (jumped || escaped) {
             release_group_member(c, slot);
-            pair.state = PairState::hidden_expired;
+            c.states[slot] = PairState::hidden_expired;
             ++(jumped ? c.stats.teleports : c.stats.fuzzy_escapes);
         }
     }
@@ -284,7 +283,7 @@ void InterestManager::reprove_tbvs(ClientSlot& c) {
     for (const std::uint32_t group : c.scratch) {
         ++c.stats.tbv_hits;
         for (const std::uint32_t slot : c.groups[group].members) {
-            c.pairs[slot].state = PairState::hidden_expired;
+            c.states[slot] = PairState::hidden_expired;
         }
         free_group(c, group);
     }
@@ -299,7 +298,7 @@ std::uint32_t InterestManager::viewer_slot_of(const ClientSlot& c) const {
 bool InterestManager::takes_quick_test(const ClientSlot& c, std::uint32_t slot) const {
     // Temporal coherence: an entity visible last tick most likely still is; give it
     // the full (slower) test only every full_test_interval ticks, staggered.
-    return c.pairs[slot].state == PairState::visible && full_test_phase(slot) != 0;
+    return c.states[slot] == PairState::visible && full_test_phase(slot) != 0;
 }
 
 std::uint32_t InterestManager::full_test_phase(std::uint32_t slot) const {
@@ -326,9 +325,9 @@ void InterestManager::test_entities_in_bulk(ClientSlot& c, const RegionVisibilit
         if (!view.alive) {
             continue;
         }
-        auto& pair = c.pairs[slot];
+        PairState& state = c.states[slot];
         if (slot == viewer) {
-            pair.state = PairState::visible;
+            state = PairState::visible;
             continue;
         }
         ++c.stats.box_tests;
@@ -337,7 +336,7 @@ void InterestManager::test_entities_in_bulk(ClientSlot& c, const RegionVisibilit
         const bool hidden = view.prepared_current
                                 ? c.bulk_hidden[slot] != 0
                                 : !cheapest && now.test_box(view.box) == Visibility::occluded;
-        pair.state = hidden ? PairState::hidden_expired : PairState::visible;
+        state = hidden ? PairState::hidden_expired : PairState::visible;
     }
 }
 
@@ -356,12 +355,12 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
     for (std::uint32_t slot = 0; slot < entities_.size();
          ++slot, phase = phase + 1 == interval ? 0 : phase + 1) {
         const EntityView& view = views_[slot];
-        auto& pair = c.pairs[slot];
-        if (!view.alive || pair.state == PairState::hidden_with_tbv) {
+        PairState& state = c.states[slot];
+        if (!view.alive || state == PairState::hidden_with_tbv) {
             continue;
         }
         if (slot == viewer) {
-            pair.state = PairState::visible;
+            state = PairState::visible;
             continue;
         }
         // The preparation (and the cluster's box) is current unless the box was set
@@ -374,8 +373,8 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
                 c.cluster_hidden[cluster] = 2;
                 hide_cluster(c, cluster, viewer);
             }
-            if (pair.state != PairState::hidden_with_tbv) {
-                pair.state = PairState::hidden_expired; // hide_cluster() made no TBV
+            if (state != PairState::hidden_with_tbv) {
+                state = PairState::hidden_expired; // hide_cluster() made no TBV
             }
             continue;
         }
@@ -385,17 +384,17 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
             // A box set after begin_update() has no preparation: visible, never guessed.
             const bool hidden =
                 fresh && now.test_prepared_coarse(e.prepared) == Visibility::occluded;
-            pair.state = hidden ? PairState::hidden_expired : PairState::visible;
+            state = hidden ? PairState::hidden_expired : PairState::visible;
             continue;
         }
-        const bool quick = pair.state == PairState::visible && phase != 0; // takes_quick_test()
+        const bool quick = state == PairState::visible && phase != 0; // takes_quick_test()
         const BoxTest kind = box_test_for(quick, config_.blocker_hints);
-        const bool visible = test_current_box(now, kind, e.prepared, view.box, fresh, pair.hint) ==
-                             Visibility::visible;
+        const bool visible = test_current_box(now, kind, e.prepared, view.box, fresh,
+                                              c.pairs[slot].hint) == Visibility::visible;
         if (!tbvs_enabled_) { // hide() would only mark it: no branch on the answer
-            pair.state = visible ? PairState::visible : PairState::hidden_expired;
+            state = visible ? PairState::visible : PairState::hidden_expired;
         } else if (visible) {
-            pair.state = PairState::visible;
+            state = PairState::visible;
         } else {
             hide(c, slot);
         }

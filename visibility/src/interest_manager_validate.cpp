@@ -43,7 +43,7 @@ std::vector<std::string> InterestManager::validate_state() const {
                 problems.push_back("client " + std::to_string(c.id) + ": empty live group");
             }
             for (const std::uint32_t slot : group.members) {
-                if (c.pairs[slot].group != g || c.pairs[slot].state != PairState::hidden_with_tbv) {
+                if (c.pairs[slot].group != g || c.states[slot] != PairState::hidden_with_tbv) {
                     say(c.id, entities_[slot].id, "member of a group it does not point to");
                 }
             }
@@ -55,16 +55,16 @@ std::vector<std::string> InterestManager::validate_state() const {
             const EntitySlot& e = entities_[slot];
             const auto& pair = c.pairs[slot];
             if (!e.alive) {
-                if (pair.state != PairState::unknown || pair.group != kNoGroup) {
+                if (c.states[slot] != PairState::unknown || pair.group != kNoGroup) {
                     problems.push_back("client " + std::to_string(c.id) +
                                        ": state kept for a removed entity");
                 }
                 continue;
             }
-            if (pair.state == PairState::visible && pair.group != kNoGroup) {
+            if (c.states[slot] == PairState::visible && pair.group != kNoGroup) {
                 say(c.id, e.id, "visible but holds a TBV");
             }
-            if (pair.state != PairState::hidden_with_tbv) {
+            if (c.states[slot] != PairState::hidden_with_tbv) {
                 continue;
             }
             if (pair.group == kNoGroup || !c.groups[pair.group].alive) {
