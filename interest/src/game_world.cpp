@@ -115,8 +115,9 @@ void GameWorld::set_player_input(std::uint32_t id, glm::vec3 wish, bool jump, fl
     e.pitch_deg = std::clamp(pitch_deg, -90.0f, 90.0f);
 }
 
-void GameWorld::step(float dt) {
-    for (Entity& e : entities_) {
+void GameWorld::step(float dt, const ParallelFor& parallel) {
+    const auto move_one = [this, dt](std::size_t i) {
+        Entity& e = entities_[i];
         if (e.bot >= 0) {
             sim::WanderBot& brain = bots_[static_cast<std::size_t>(e.bot)];
             sim::wander_step(brain, collision_, wander_, move_, map_->spawn_points, map_->hazards,
@@ -129,15 +130,24 @@ void GameWorld::step(float dt) {
             }
         } else {
             sim::player_move(collision_, move_, e.input, dt, e.move);
-            // A player who touches a hazard dies and is put back at the next spawn point
-            // (as bots are): a teleport.
+            // A player who touches a hazard dies (put back at a spawn point below).
             e.teleported =
                 !map_->spawn_points.empty() && sim::touches_hazard(move_, e.move, map_->hazards);
-            if (e.teleported) {
-                const auto& spawn = map_->spawn_points[next_spawn_++ % map_->spawn_points.size()];
-                e.move = sim::spawn_state(collision_, move_, spawn.origin);
-                e.yaw_deg = wrap_degrees(spawn.yaw_degrees);
-            }
+        }
+    };
+    if (parallel) {
+        parallel(entities_.size(), move_one);
+    } else {
+        for (std::size_t i = 0; i < entities_.size(); ++i) {
+            move_one(i);
+        }
+    }
+    // The dead players go to the next spawn points in id order (as bots do: a teleport).
+    for (Entity& e : entities_) {
+        if (e.bot < 0 && e.teleported) {
+            const auto& spawn = map_->spawn_points[next_spawn_++ % map_->spawn_points.size()];
+            e.move = sim::spawn_state(collision_, move_, spawn.origin);
+            e.yaw_deg = wrap_degrees(spawn.yaw_degrees);
         }
     }
 }

@@ -143,7 +143,10 @@ void Server::start_tick() {
     apply_joins();
     apply_inputs();
     const float dt = 1.0f / static_cast<float>(config_.tick_rate);
-    world_.step(dt);
+    // The moves on the pool's threads (idle between phases); this thread waits.
+    world_.step(dt, [this](std::size_t count, const std::function<void(std::size_t)>& body) {
+        pool_.run(count, body);
+    });
     prepare_client_ticks(); // may disconnect slow clients
     culling_start_ = Clock::now();
     policy_->begin_tick(world_, tick_);

@@ -1,5 +1,6 @@
 // GameWorld's reserved player ids: the server tells a client its entity id at hello
-// and spawns it at the next tick start, possibly after later-reserved ones.
+// and spawns it at the next tick start, possibly after later-reserved ones. Its step
+// gives the same world whether the moves run one by one or through a parallel for.
 
 #include "dsoc/interest/game_world.hpp"
 #include "support/test_maps.hpp"
@@ -7,6 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
+#include <random>
+#include <thread>
 
 namespace dsoc::interest {
 namespace {
@@ -74,6 +78,69 @@ TEST(GameWorld, APlayerWhoTouchesAHazardRespawnsAtTheNextSpawnPoint) {
     EXPECT_GT(glm::length(e->move.position - pit), 150.0f);
     world.step(1.0f / 30.0f);
     EXPECT_FALSE(world.find(id)->teleported);
+}
+
+TEST(GameWorld, MovesThroughAParallelForGiveTheSameWorldAsOneByOne) {
+    // Pits under half the spawn points, so players die and respawn (the one step that
+    // is not per entity); the parallel world's moves run on four threads, in blocks.
+    auto map = std::make_shared<maps::Map>(*testing::rooms_map());
+    for (std::size_t i = 0; i < map->spawn_points.size(); i += 2) {
+        const glm::vec3 at = map->spawn_points[i].origin;
+        map->hazards.push_back(
+            {visibility::Aabb{at - glm::vec3(40.0f), at + glm::vec3(40.0f)}, "test pit"});
+    }
+    WorldSettings settings;
+    settings.bots = 40;
+    GameWorld serial(settings, map);
+    GameWorld parallel(settings, map);
+    std::vector<std::uint32_t> players;
+    for (int i = 0; i < 40; ++i) {
+        players.push_back(serial.spawn_player());
+        ASSERT_EQ(parallel.spawn_player(), players.back());
+    }
+    std::size_t parallel_calls = 0;
+    const GameWorld::ParallelFor four_threads = [&](std::size_t count,
+                                                    const std::function<void(std::size_t)>& body) {
+        ++parallel_calls;
+        std::vector<std::thread> threads;
+        for (std::size_t t = 0; t < 4; ++t) {
+            threads.emplace_back([&, t] {
+                for (std::size_t i = t; i < count; i += 4) {
+                    body(i);
+                }
+            });
+        }
+        for (auto& th : threads) {
+            th.join();
+        }
+    };
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    int teleports = 0;
+    for (int tick = 0; tick < 300; ++tick) {
+        for (const std::uint32_t id : players) {
+            const glm::vec3 wish(unit(rng), unit(rng), 0.0f);
+            const bool jump = unit(rng) > 0.9f;
+            const float yaw = unit(rng) * 180.0f;
+            serial.set_player_input(id, wish, jump, yaw, 0.0f);
+            parallel.set_player_input(id, wish, jump, yaw, 0.0f);
+        }
+        serial.step(1.0f / 30.0f);
+        parallel.step(1.0f / 30.0f, four_threads);
+        ASSERT_EQ(serial.entities().size(), parallel.entities().size());
+        for (std::size_t i = 0; i < serial.entities().size(); ++i) {
+            const Entity& a = serial.entities()[i];
+            const Entity& b = parallel.entities()[i];
+            ASSERT_EQ(a.id, b.id);
+            ASSERT_TRUE(a.move.position == b.move.position && a.move.velocity == b.move.velocity &&
+                        a.move.on_ground == b.move.on_ground && a.yaw_deg == b.yaw_deg &&
+                        a.teleported == b.teleported)
+                << "tick " << tick << " entity " << a.id;
+            teleports += a.teleported ? 1 : 0;
+        }
+    }
+    EXPECT_EQ(parallel_calls, 300u);
+    EXPECT_GT(teleports, 10) << "the pits should have killed players and bots";
 }
 
 } // namespace

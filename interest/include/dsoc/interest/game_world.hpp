@@ -15,6 +15,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <random>
 #include <unordered_map>
@@ -67,8 +68,16 @@ public:
     void set_player_input(std::uint32_t id, glm::vec3 wish, bool jump, float yaw_deg,
                           float pitch_deg);
 
-    /// Advances every entity by `dt` seconds.
-    void step(float dt);
+    /// Runs `body(i)` for every i in [0, count), possibly on several threads at once,
+    /// and returns when all have returned.
+    using ParallelFor =
+        std::function<void(std::size_t count, const std::function<void(std::size_t)>& body)>;
+
+    /// Advances every entity by `dt` seconds. Each entity moves on its own (bots with
+    /// their own random streams), so the moves may run through `parallel`; the players
+    /// who touched a hazard are then put at spawn points in id order, so the world is
+    /// the same with or without it.
+    void step(float dt, const ParallelFor& parallel = {});
 
     /// All entities in increasing id order.
     [[nodiscard]] const std::vector<Entity>& entities() const { return entities_; }
