@@ -19,7 +19,7 @@ void add_summary(std::vector<Figure>& out, const std::string& prefix, const std:
         {"max", &common::Summary::max}};
     for (const auto& [stat, field] : stats) {
         out.push_back({prefix + "_" + stat, Dimension::time, std::string(stat) + " of " + what,
-                       [member, field](const LoadReport& r) {
+                       [member, field = field](const LoadReport& r) {
                            const common::Summary& s = r.*member;
                            return FigureValue{s.*field, s.count > 0};
                        }});

@@ -74,8 +74,8 @@ void InterestManager::decide(ClientSlot& c) {
     std::size_t count = 0;
     for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
         kept[count] = slot;
-        count +=
-            static_cast<std::size_t>(views_[slot].alive & (c.states[slot] == PairState::visible));
+        count += static_cast<std::size_t>(views_[slot].alive) *
+                 static_cast<std::size_t>(c.states[slot] == PairState::visible);
     }
     kept.resize(count);
     d.replicated.clear();
