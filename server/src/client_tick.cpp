@@ -66,16 +66,11 @@ void run_client_ticks(const interest::GameWorld& world, interest::InterestPolicy
 
 void start_client_ticks(const interest::GameWorld& world, interest::InterestPolicy& policy,
                         std::uint64_t tick, std::span<const ClientTick> jobs, WorkerPool& pool,
-                        std::function<void(std::exception_ptr)> done, CullingBudget* budget,
-                        std::function<void(std::size_t)> job_done) {
+                        std::function<void(std::exception_ptr)> done, CullingBudget* budget) {
     pool.start(
         jobs.size(),
-        [&world, &policy, tick, jobs, budget, job_done = std::move(job_done)](std::size_t i) {
-            const std::size_t job = job_at_turn(i, jobs.size(), tick);
-            run_one(world, policy, tick, jobs[job], budget);
-            if (job_done) {
-                job_done(job);
-            }
+        [&world, &policy, tick, jobs, budget](std::size_t i) {
+            run_one(world, policy, tick, jobs[job_at_turn(i, jobs.size(), tick)], budget);
         },
         std::move(done));
 }

@@ -148,8 +148,6 @@ void Server::start_tick() {
         pool_.run(count, body);
     });
     prepare_client_ticks(); // may disconnect slow clients
-    snapshot_sent_.assign(client_ticks_.size(), 0);
-    last_send_end_ = Clock::time_point{};
     culling_start_ = Clock::now();
     policy_->begin_tick(world_, tick_);
     shared_poses_.compute(world_, quantization(config_));
@@ -166,12 +164,7 @@ void Server::start_tick() {
             const auto phase_end = Clock::now();
             asio::post(io_, [this, phase_end, error] { finish_tick(phase_end, error); });
         },
-        &culling_budget_,
-        // Each client's frame goes to its socket as soon as its job is done: the writes
-        // run on this thread while the pool works on the other clients, instead of 500
-        // one after another at the hand-over. (Posted before `done`'s post: they run
-        // before finish_tick.)
-        [this](std::size_t job) { asio::post(io_, [this, job] { send_snapshot(job); }); });
+        &culling_budget_);
 }
 
 void Server::finish_tick(Clock::time_point phase_end, std::exception_ptr error) {
@@ -184,7 +177,7 @@ void Server::finish_tick(Clock::time_point phase_end, std::exception_ptr error) 
     stats_.culling_duration.observe(
         std::chrono::duration<double>(phase_end - culling_start_).count());
     stats_.cheapest_client_ticks += culling_budget_.cheapest.load(std::memory_order_relaxed);
-    send_snapshots(); // any not sent during the phase (none, unless a job threw)
+    send_snapshots();
     if (trace_ && !shutting_down_ && tick_ % static_cast<std::uint64_t>(config_.trace_every) == 0) {
         write_trace_tick();
     }
@@ -192,11 +185,8 @@ void Server::finish_tick(Clock::time_point phase_end, std::exception_ptr error) 
     apply_leaves();
     ++stats_.ticks;
     const auto handover_end = Clock::now();
-    // The tick's work ends when its last job or its last socket write during the phase
-    // ended, whichever is later, plus the hand-over.
-    const auto work_end = std::max(phase_end, last_send_end_);
     const double cost_s =
-        std::chrono::duration<double>((work_end - tick_start_) + (handover_end - handover_start))
+        std::chrono::duration<double>((phase_end - tick_start_) + (handover_end - handover_start))
             .count();
     stats_.tick_duration.observe(cost_s);
     if (stats_.tick_cost_us.size() < kMaxTickSamples) {
@@ -271,30 +261,21 @@ void Server::prepare_client_ticks() {
     }
 }
 
-void Server::send_snapshot(std::size_t job_index) {
-    if (snapshot_sent_[job_index] != 0) {
-        return;
-    }
-    snapshot_sent_[job_index] = 1;
-    const ClientTick& job = client_ticks_[job_index];
-    if (!job.build) {
-        return;
-    }
-    Client& client = *tick_clients_[job_index];
-    if (!client.session->active()) {
-        return; // left or kicked during the phase
-    }
-    const pb::Snapshot& snapshot = job.envelope->snapshot();
-    stats_.entity_updates_sent +=
-        static_cast<std::uint64_t>(snapshot.enter_size() + snapshot.update_id_size());
-    ++stats_.snapshots_sent;
-    client.session->send_snapshot_frame(client.frame);
-    last_send_end_ = Clock::now();
-}
-
 void Server::send_snapshots() {
     for (std::size_t i = 0; i < client_ticks_.size(); ++i) {
-        send_snapshot(i);
+        const ClientTick& job = client_ticks_[i];
+        if (!job.build) {
+            continue;
+        }
+        Client& client = *tick_clients_[i];
+        if (!client.session->active()) {
+            continue; // left or kicked during the phase
+        }
+        const pb::Snapshot& snapshot = job.envelope->snapshot();
+        stats_.entity_updates_sent +=
+            static_cast<std::uint64_t>(snapshot.enter_size() + snapshot.update_id_size());
+        ++stats_.snapshots_sent;
+        client.session->send_snapshot_frame(client.frame);
     }
 }
 

@@ -70,13 +70,9 @@ void run_client_ticks(const interest::GameWorld& world, interest::InterestPolicy
 /// span's memory and everything the jobs point to: the caller must neither write nor
 /// destroy any of it (reading `world` is fine), and must keep all of it alive (`budget`
 /// too, when not null). The bytes are the same as run_client_ticks() gives.
-/// `job_done(i)` (optional) runs on the pool thread right after jobs[i] has returned
-/// (not after one that threw), before `done`: e.g. to hand that client's frame to
-/// its socket while the other jobs run.
 void start_client_ticks(const interest::GameWorld& world, interest::InterestPolicy& policy,
                         std::uint64_t tick, std::span<const ClientTick> jobs, WorkerPool& pool,
                         std::function<void(std::exception_ptr)> done,
-                        CullingBudget* budget = nullptr,
-                        std::function<void(std::size_t)> job_done = {});
+                        CullingBudget* budget = nullptr);
 
 } // namespace dsoc::server

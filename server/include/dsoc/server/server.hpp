@@ -143,10 +143,6 @@ private:
     void apply_joins();
     void apply_inputs();
     void prepare_client_ticks();
-    /// Hands job `job_index`'s frame to its client's socket (once a tick; nothing for a
-    /// job that built no snapshot or a client that left). On the I/O thread.
-    void send_snapshot(std::size_t job_index);
-    /// send_snapshot() for every job not sent yet.
     void send_snapshots();
     void apply_leaves();
     void maybe_finish_shutdown();
@@ -187,12 +183,9 @@ private:
     std::chrono::steady_clock::time_point tick_start_;
     std::chrono::steady_clock::time_point culling_start_;
     CullingBudget culling_budget_; ///< this tick's fail-open deadline (config culling_budget)
-    std::vector<ClientTick> client_ticks_;    // this tick's jobs, in client id order
-    std::vector<Client*> tick_clients_;       // the client of each job (clients_ is a std::map)
-    std::vector<std::uint8_t> snapshot_sent_; // by job: its frame went to the socket
-    std::chrono::steady_clock::time_point
-        last_send_end_;        // when this tick's last frame was handed over
-    SharedPoses shared_poses_; // this tick's quantized poses, for every job
+    std::vector<ClientTick> client_ticks_; // this tick's jobs, in client id order
+    std::vector<Client*> tick_clients_;    // the client of each job (clients_ is a std::map)
+    SharedPoses shared_poses_;             // this tick's quantized poses, for every job
     std::unique_ptr<trace::TraceWriter> trace_;
     trace::TraceTick trace_tick_;
     WorkerPool pool_; // last: its threads stop first (after ~Server waited for a phase)
