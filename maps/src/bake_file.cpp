@@ -230,10 +230,22 @@ Result<visibility::CellVisibilityTable> decode_bake(std::span<const std::byte> b
         std::abs(grid.origin.z) > 1e7f) {
         return fail("header", "grid origin or cell size out of range");
     }
-    if (grid.dims.x < 1 || grid.dims.y < 1 || grid.dims.z < 1 ||
-        static_cast<std::uint64_t>(grid.dims.x) * static_cast<std::uint64_t>(grid.dims.y) *
-                static_cast<std::uint64_t>(grid.dims.z) >
-            kMaxGridCells) {
+    // One factor at a time: three sides of up to 2^31 would overflow 64 bits (and wrap
+    // to a small count) if multiplied at once.
+    const auto dims_fit = [&] {
+        std::uint64_t cells = 1;
+        for (const std::int32_t side : {grid.dims.x, grid.dims.y, grid.dims.z}) {
+            if (side < 1 || static_cast<std::uint64_t>(side) > kMaxGridCells) {
+                return false;
+            }
+            cells *= static_cast<std::uint64_t>(side); // both factors <= 2^24: no overflow
+            if (cells > kMaxGridCells) {
+                return false;
+            }
+        }
+        return true;
+    };
+    if (!dims_fit()) {
         return fail("header", "grid dimensions out of range");
     }
     const std::uint64_t open = get<std::uint32_t>(bytes, 52);

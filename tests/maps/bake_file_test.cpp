@@ -117,6 +117,14 @@ TEST_F(BakeFileTest, EveryKindOfDamageIsRefusedNamingTheFileAndWhat) {
     const std::int32_t huge = 1 << 30;
     std::memcpy(dims.data() + 40, &huge, 4);
     cases.push_back({"absurd grid", dims, "grid dimensions"});
+    // Three sides whose product is 0 modulo 2^64 (found by fuzz_bake): the reader used
+    // to multiply them at once, and the wrapped count passed its limit.
+    auto wrapping = good;
+    for (int axis = 0; axis < 3; ++axis) {
+        const std::int32_t side = (0x2A + 2 * axis) << 24;
+        std::memcpy(wrapping.data() + 40 + 4 * axis, &side, 4);
+    }
+    cases.push_back({"grid whose cell count wraps", wrapping, "grid dimensions"});
     auto sparse = good; // a grid far larger than its open cells (allocation guard)
     const std::int32_t side = 200;
     for (int axis = 0; axis < 3; ++axis) {
