@@ -30,6 +30,14 @@ std::string Server::render_metrics() const {
                   "Wall time per tick of the policy's begin_tick and the parallel phase: interest "
                   "evaluation (culling) and snapshot building for all clients, on the worker pool.",
                   stats_.culling_duration);
+    out.histogram("dsoc_prepare_duration_seconds",
+                  "Wall time per tick before the parallel phase, on the I/O thread: joins, inputs, "
+                  "the world's step, snapshot offers and the shared preparation.",
+                  stats_.prepare_duration);
+    out.histogram("dsoc_handover_duration_seconds",
+                  "Wall time per tick of the hand-over after the parallel phase: snapshot frames "
+                  "handed to the sockets, the trace, the leaves.",
+                  stats_.handover_duration);
     out.counter("dsoc_ticks_total", "Ticks run.", d(stats_.ticks));
     out.counter("dsoc_late_ticks_total",
                 "Ticks that started more than one period late, or in place of skipped ones.",
@@ -57,6 +65,10 @@ std::string Server::render_metrics() const {
     out.counter("dsoc_snapshots_sent_total", "Snapshots sent.", d(stats_.snapshots_sent));
     out.counter("dsoc_entity_updates_sent_total", "Entity enters and updates sent.",
                 d(stats_.entity_updates_sent));
+    out.counter("dsoc_snapshot_writes_queued_total",
+                "Snapshots the kernel did not take whole at the hand-over (a full socket buffer): "
+                "the rest waited in the client's send queue.",
+                d(stats_.snapshot_writes_queued));
     out.counter("dsoc_snapshots_dropped_total",
                 "Snapshots not built because the client's previous one was still unsent.",
                 d(snapshots_dropped));

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <limits>
 
+#include <sys/socket.h>
+
 #include <spdlog/spdlog.h>
 
 namespace dsoc::server {
@@ -261,6 +263,39 @@ void Session::send_snapshot_frame(std::vector<std::uint8_t>& frame) {
     frame.swap(spare_frame_); // empty, with the capacity of an earlier snapshot
     frame.clear();
     enqueue(std::move(bytes), true);
+}
+
+bool Session::writable_now() const {
+    return state_ == State::active && !snapshot_queued_ && !writing_ && write_queue_.empty();
+}
+
+std::size_t Session::write_now(std::span<const std::uint8_t> frame) noexcept {
+    // Not through asio: the io thread, which owns the socket's asynchronous operations,
+    // waits while this runs, and no write of ours is pending (writable_now()).
+    const ssize_t n =
+        ::send(socket_.native_handle(), frame.data(), frame.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+    return n > 0 ? static_cast<std::size_t>(n) : 0;
+}
+
+bool Session::finish_write_now(std::vector<std::uint8_t>& frame, std::size_t written) {
+    if (written == 0) {
+        send_snapshot_frame(frame);
+        return true;
+    }
+    bytes_sent_ += written;
+    if (written >= frame.size()) {
+        frame.clear();
+        return false;
+    }
+    frame.erase(frame.begin(), frame.begin() + static_cast<std::ptrdiff_t>(written));
+    snapshot_queued_ = true;
+    snapshot_queued_at_ = Clock::now();
+    std::vector<std::uint8_t> rest;
+    rest.swap(frame);
+    frame.swap(spare_frame_);
+    frame.clear();
+    enqueue(std::move(rest), true);
+    return true;
 }
 
 void Session::disconnect(pb::DisconnectReason reason, const std::string& text) {

@@ -132,6 +132,36 @@ TEST(ClientAbuse, StalledReaderThatReadsAgainLateReceivesTooSlowThenEndOfFile) {
     EXPECT_EQ(slow.trailing_bytes(), 0u) << "the connection ended inside a frame";
 }
 
+TEST(ClientAbuse, SnapshotsTheKernelTakesInPartArriveWhole) {
+    // At the hand-over a frame goes straight to the kernel, which may take only part of
+    // it; the rest must follow through the session's queue, in order, before anything
+    // else. The first snapshot here (400 entities entering) is larger than the socket's
+    // buffers on both sides, and the reader is slow.
+    auto c = base_config();
+    c.bots = 400;
+    c.policy = "broadcast";            // every bot in every snapshot
+    c.socket_send_buffer_bytes = 4096; // small kernel buffers
+    c.slow_client_timeout_ms = 10'000; // slow, but never dropped here
+    RunningServer server(c);
+
+    RawClient reader(server.port(), 4096);
+    reader.send_message(client_hello());
+    std::optional<pb::Disconnect> d;
+    std::thread read([&] { d = reader.read_until_closed(1024, std::chrono::milliseconds(5)); });
+    std::this_thread::sleep_for(std::chrono::milliseconds(2000));
+    server.stop();
+    read.join();
+
+    EXPECT_GT(server.stats().snapshot_writes_queued, 0u)
+        << "the kernel took every frame whole: the test did not reach the partial write";
+    EXPECT_GE(reader.snapshots(), 10u);
+    EXPECT_EQ(reader.undecodable_frames(), 0u);
+    EXPECT_EQ(reader.trailing_bytes(), 0u) << "the connection ended inside a frame";
+    ASSERT_TRUE(d.has_value()) << "no disconnect message";
+    EXPECT_EQ(protocol::disconnect_reason_name(d->reason()), "server_shutdown") << d->text();
+    EXPECT_EQ(server.stats().disconnects.count("too_slow"), 0u);
+}
+
 TEST(ClientAbuse, ConnectionsWithoutHelloAreClosedAtTheDeadline) {
     RunningServer server(base_config());
     GoodClients good(server.port(), kGoodSeconds);

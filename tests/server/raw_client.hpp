@@ -69,6 +69,7 @@ public:
             while (decoder.next(payload) == protocol::FrameDecoder::Status::frame) {
                 protocol::pb::Envelope message;
                 if (protocol::decode_payload(payload, message) != protocol::DecodeError::none) {
+                    ++undecodable_frames_;
                     continue;
                 }
                 if (message.has_disconnect()) {
@@ -84,6 +85,8 @@ public:
     }
 
     [[nodiscard]] std::uint64_t snapshots() const { return snapshots_; }
+    /// Frames whose payload did not decode as an envelope (bytes lost or mixed up).
+    [[nodiscard]] std::uint64_t undecodable_frames() const { return undecodable_frames_; }
     [[nodiscard]] bool hello_received() const { return hello_received_; }
     /// Bytes of an unfinished frame when the connection ended (a cut-off frame).
     [[nodiscard]] std::size_t trailing_bytes() const { return trailing_bytes_; }
@@ -92,6 +95,7 @@ private:
     boost::asio::io_context io_;
     boost::asio::ip::tcp::socket socket_;
     std::uint64_t snapshots_ = 0;
+    std::uint64_t undecodable_frames_ = 0;
     bool hello_received_ = false;
     std::size_t trailing_bytes_ = 0;
 };

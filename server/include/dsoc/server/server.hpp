@@ -70,6 +70,9 @@ struct ServerStats {
     std::uint64_t bytes_received = 0; ///< from clients, frame headers included
     std::uint64_t snapshots_sent = 0;
     std::uint64_t entity_updates_sent = 0; ///< enters + updates
+    /// Snapshots the kernel did not take whole at the hand-over (the client's socket
+    /// buffer was full): the rest waited in the session's queue.
+    std::uint64_t snapshot_writes_queued = 0;
     std::uint64_t clients_accepted = 0;
     std::map<std::string, std::uint64_t> disconnects; ///< by reason name
     // Of closed connections (render_metrics() adds the live ones).
@@ -86,6 +89,12 @@ struct ServerStats {
     /// last job returns): interest evaluation (culling) and snapshot building of every
     /// client on the worker pool.
     DurationHistogram culling_duration;
+    /// Per tick, wall time on the I/O thread before the parallel phase: joins, inputs,
+    /// the world's step (on the pool), snapshot offers and the shared preparation.
+    DurationHistogram prepare_duration;
+    /// Per tick, wall time of the hand-over after the phase: the snapshot frames handed
+    /// to the sockets (on the pool), the trace, the leaves.
+    DurationHistogram handover_duration;
     /// Client-ticks served the policy's cheapest answer: their turn came after the
     /// tick's culling budget (ServerConfig::culling_budget).
     std::uint64_t cheapest_client_ticks = 0;
@@ -185,7 +194,9 @@ private:
     CullingBudget culling_budget_; ///< this tick's fail-open deadline (config culling_budget)
     std::vector<ClientTick> client_ticks_; // this tick's jobs, in client id order
     std::vector<Client*> tick_clients_;    // the client of each job (clients_ is a std::map)
-    SharedPoses shared_poses_;             // this tick's quantized poses, for every job
+    std::vector<Client*> direct_writes_;   // the hand-over's clients whose frame goes straight out
+    std::vector<std::size_t> direct_written_; // bytes the kernel took of each of those frames
+    SharedPoses shared_poses_;                // this tick's quantized poses, for every job
     std::unique_ptr<trace::TraceWriter> trace_;
     trace::TraceTick trace_tick_;
     WorkerPool pool_; // last: its threads stop first (after ~Server waited for a phase)

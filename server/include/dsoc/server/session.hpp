@@ -78,6 +78,25 @@ public:
     /// two buffers without allocating.
     void send_snapshot_frame(std::vector<std::uint8_t>& frame);
 
+    /// The hand-over's fast path for a snapshot frame, in three steps, so that the
+    /// server can hand many clients' frames to the kernel on several threads:
+    /// - writable_now(), on the io thread: true when the client is active, has no
+    ///   snapshot queued and has nothing queued or being written; the frame may then go
+    ///   to the socket directly, in order, instead of through the queue.
+    /// - write_now(): hands as much of `frame` as the kernel takes without blocking and
+    ///   returns how many bytes that was (0 when it took none or failed). It may run on
+    ///   another thread, while the io thread waits for it: nothing else may touch this
+    ///   session meanwhile.
+    /// - finish_write_now(), on the io thread: counts the bytes written and queues the
+    ///   rest of the frame as send_snapshot_frame() does (a frame started is never cut,
+    ///   so a rest goes out whatever the queue's limit). With nothing written the whole
+    ///   frame takes the queued path, whose write retries and reports any socket error.
+    ///   Leaves in `frame` an empty buffer with spare capacity; returns false when the
+    ///   kernel took the whole frame, true when some or all of it went to the queue.
+    [[nodiscard]] bool writable_now() const;
+    [[nodiscard]] std::size_t write_now(std::span<const std::uint8_t> frame) noexcept;
+    bool finish_write_now(std::vector<std::uint8_t>& frame, std::size_t written);
+
     /// Drops every queued frame but the one being written (a frame is never cut),
     /// queues a Disconnect with `reason` behind it, grows the socket's send buffer so
     /// that both go to the kernel at once, stops handling messages and half-closes;
