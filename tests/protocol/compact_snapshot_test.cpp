@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 
@@ -112,6 +113,59 @@ TEST(CompactSnapshot, YawDeltasTakeTheShortWayAround) {
     EXPECT_LE(std::abs(s.update_values(0)), 3); // 0.2 degrees = 2.3 steps, not 4094
     ASSERT_TRUE(dec.apply(through_wire(s)).empty());
     EXPECT_NEAR(dec.pose(3)->yaw_deg, -179.9f, 0.05f);
+}
+
+TEST(CompactSnapshot, AnyYawDeltaLandsOnTheCircleAsTheModuloRuleSays) {
+    // The decoder wraps an encoder's deltas without dividing; any other delta (a
+    // hostile sender's, up to the int32 limits) must still land where the plain
+    // modulo rule puts it.
+    const QuantizationSettings q;
+    const auto steps = static_cast<std::int64_t>(q.angle_steps);
+    SnapshotDecoder dec(q);
+    pb::Snapshot s;
+    s.set_server_tick(1);
+    pb::EntityState& e = *s.add_enter();
+    e.set_id(3);
+    e.set_yaw(4000);
+    ASSERT_TRUE(dec.apply(s).empty());
+    std::int64_t yaw = 4000;
+    std::mt19937 rng(11);
+    const std::array<std::int32_t, 8> edges{std::numeric_limits<std::int32_t>::min(),
+                                            std::numeric_limits<std::int32_t>::max(),
+                                            -4096,
+                                            4095,
+                                            -2048,
+                                            2047,
+                                            -8191,
+                                            8191};
+    for (int round = 0; round < 3000; ++round) {
+        std::int32_t delta = 0;
+        switch (round % 4) {
+        case 0:
+            delta = static_cast<std::int32_t>(rng() % 4096) - 2048;
+            break; // an encoder's
+        case 1:
+            delta = static_cast<std::int32_t>(rng() % 20000) - 10000;
+            break;
+        case 2:
+            delta = static_cast<std::int32_t>(rng());
+            break; // anything
+        default:
+            delta = edges[static_cast<std::size_t>(round / 4) % edges.size()];
+            break;
+        }
+        pb::Snapshot u;
+        u.set_server_tick(static_cast<std::uint64_t>(round) + 2);
+        u.add_update_id(3);
+        u.add_update_fields(kFieldYaw);
+        u.add_update_values(delta);
+        ASSERT_TRUE(dec.apply(u).empty()) << "delta " << delta;
+        yaw = (((yaw + delta) % steps) + steps) % steps;
+        std::int32_t got = -1;
+        dec.entities().for_each(
+            [&](std::uint32_t, const ReplicaEntity& r) { got = r.quantized.yaw; });
+        ASSERT_EQ(got, yaw) << "round " << round << " delta " << delta;
+    }
 }
 
 TEST(CompactSnapshot, UpdateColumnBytesMatchTheRealEncoder) {
