@@ -36,7 +36,8 @@ public:
     virtual void on_closed(Session& session) = 0;
 };
 
-/// Threading: every call on the io_context thread that runs the socket.
+/// Threading: every call on the io_context thread that runs the socket, but
+/// write_now(), which another thread may make while that thread waits for it.
 ///
 /// Memory: at most one snapshot is queued per client (being written or waiting);
 /// a client that cannot take a snapshot when one is due simply skips it (see
