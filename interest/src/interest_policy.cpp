@@ -66,8 +66,8 @@ void PvsPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
     }
 }
 
-void apply_policy_presets(std::string_view policy, visibility::DSOCConfig& config) {
-    if (policy == "occlusion") { // every entity's current box, every tick
+void apply_policy_presets(PolicyKind policy, visibility::DSOCConfig& config) {
+    if (policy == PolicyKind::occlusion) { // every entity's current box, every tick
         config.tbvs_enabled = false;
         config.reuse_buffers = false;
         config.full_test_interval = 1;
@@ -75,9 +75,9 @@ void apply_policy_presets(std::string_view policy, visibility::DSOCConfig& confi
     }
 }
 
-void set_culler_stages(std::string_view culler, visibility::RegionCullerConfig& config) {
-    config.pyramid = culler != "shaft";
-    config.shaft = culler != "pyramid";
+void set_culler_stages(CullerKind culler, visibility::RegionCullerConfig& config) {
+    config.pyramid = culler != CullerKind::shaft;
+    config.shaft = culler != CullerKind::pyramid;
 }
 
 int lookahead_ticks(int latency_allowance_ms, int tick_rate) {
@@ -86,8 +86,8 @@ int lookahead_ticks(int latency_allowance_ms, int tick_rate) {
 
 bool use_exact_stages(const PolicySettings& settings,
                       const visibility::CellVisibilityTable& table) {
-    if (settings.exact_stages != "auto") {
-        return settings.exact_stages == "true";
+    if (settings.exact_stages != ExactStages::when_coarse) {
+        return settings.exact_stages == ExactStages::always;
     }
     // The bake grows cells by 1.25x steps until the table fits its budget: a grown
     // table was made coarse by the map's size, not chosen.
@@ -96,14 +96,16 @@ bool use_exact_stages(const PolicySettings& settings,
 
 std::unique_ptr<InterestPolicy> make_policy(const PolicySettings& settings, const GameWorld& world,
                                             const BakedTableSource& baked_table) {
-    if (settings.policy == "broadcast") {
+    switch (settings.policy) {
+    case PolicyKind::broadcast:
         return std::make_unique<BroadcastPolicy>();
-    }
-    if (settings.policy == "distance") {
+    case PolicyKind::distance:
         return std::make_unique<DistancePolicy>(settings.distance_radius);
-    }
-    if (settings.policy == "pvs") {
+    case PolicyKind::pvs:
         return std::make_unique<PvsPolicy>(world.map().pvs);
+    case PolicyKind::dsoc:
+    case PolicyKind::occlusion:
+        break; // the culling policies, below
     }
     CullerStages stages;
     set_culler_stages(settings.culler, stages.exact_config);
@@ -119,7 +121,7 @@ std::unique_ptr<InterestPolicy> make_policy(const PolicySettings& settings, cons
         stages.table = baked_table(*scene);
         stages.exact = use_exact_stages(settings, *stages.table);
     }
-    return std::make_unique<CullingPolicy>(settings.policy, settings.dsoc, world,
+    return std::make_unique<CullingPolicy>(name_of(settings.policy), settings.dsoc, world,
                                            make_culler(std::move(scene), stages),
                                            settings.lookahead_ticks);
 }

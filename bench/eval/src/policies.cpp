@@ -298,7 +298,7 @@ std::unique_ptr<Policy> make_policy(std::string_view name, const PolicyEnv& env)
     config.tick_rate = env.scenario->tick_rate;
     PolicyEnv point_env = env;
     if (name == "occlusion" || name == "occlusion-k0") { // every box, every tick
-        interest::apply_policy_presets("occlusion", config);
+        interest::apply_policy_presets(interest::PolicyKind::occlusion, config);
         if (name == "occlusion-k0") {
             point_env.lookahead_ticks = 0; // diagnostic: the present eye only
             return std::make_unique<CullingPolicy>(std::string(name), config, point_env);

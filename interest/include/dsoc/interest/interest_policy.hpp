@@ -9,6 +9,7 @@
 // on the world, the tick and that viewer, never on the order or the thread.
 
 #include "dsoc/interest/game_world.hpp"
+#include "dsoc/interest/policy_choices.hpp"
 #include "dsoc/maps/pvs.hpp"
 #include "dsoc/visibility/cell_visibility.hpp"
 #include "dsoc/visibility/dsoc_config.hpp"
@@ -127,17 +128,15 @@ private:
 /// the server builds it from its own settings in one place
 /// (dsoc::server::policy_settings()).
 struct PolicySettings {
-    /// "dsoc" (occlusion culling with TBVs, latency-safe), "occlusion" (the same
-    /// culler, every entity tested every tick, no TBVs), "pvs", "distance" or
-    /// "broadcast".
-    std::string policy = "dsoc";
+    /// Which policy (its names: kPolicyNames).
+    PolicyKind policy = PolicyKind::dsoc;
     /// distance: the radius from the viewer's eye. [Units: world units] [Limit: > 0]
     float distance_radius = 1500.0f;
     /// dsoc and occlusion: the InterestManager's settings, the policy's presets
     /// included. Must pass visibility::validate().
     visibility::DSOCConfig dsoc;
-    /// dsoc and occlusion: the exact occluder stage, "shaft", "pyramid" or "both".
-    std::string culler = "shaft";
+    /// dsoc and occlusion: the exact occluder stages (their names: kCullerNames).
+    CullerKind culler = CullerKind::shaft;
     /// Levels of portal tests in the shaft stage. [Limit: 0..4]
     int portal_depth = 0;
     /// The map's PVS over the reachable clusters before the exact stage.
@@ -146,20 +145,20 @@ struct PolicySettings {
     bool baked_stage = true;
     /// The cell edge the baked table was asked for. [Units: world units]
     float bake_cell_size = 32.0f;
-    /// With baked_stage: "true", "false" or "auto" (use_exact_stages()).
-    std::string exact_stages = "auto";
+    /// With baked_stage: whether the exact stages follow the table (use_exact_stages();
+    /// the names "auto", "true", "false": kExactStagesNames).
+    ExactStages exact_stages = ExactStages::when_coarse;
     /// The client latency allowance. [Units: ticks] [Limit: >= 0]
     int lookahead_ticks = 5;
 };
 
-/// PolicySettings::culler ("shaft", "pyramid" or "both") as the exact stages of
-/// `config`.
-void set_culler_stages(std::string_view culler, visibility::RegionCullerConfig& config);
+/// PolicySettings::culler as the exact stages of `config`.
+void set_culler_stages(CullerKind culler, visibility::RegionCullerConfig& config);
 
-/// The occlusion policy's presets over `config` when `policy` is "occlusion" (every
+/// The occlusion policy's presets over `config` when `policy` is occlusion (every
 /// entity's current box every tick: no TBVs, no culler reuse, no temporal coherence,
 /// no blocker hints); other policies leave it as it is.
-void apply_policy_presets(std::string_view policy, visibility::DSOCConfig& config);
+void apply_policy_presets(PolicyKind policy, visibility::DSOCConfig& config);
 
 /// A latency allowance in whole ticks at `tick_rate`, rounded up: how far ahead a
 /// client's own movement is covered (PolicySettings::lookahead_ticks).
@@ -177,8 +176,8 @@ using BakedTableSource = std::function<std::shared_ptr<const visibility::CellVis
 std::unique_ptr<InterestPolicy> make_policy(const PolicySettings& settings, const GameWorld& world,
                                             const BakedTableSource& baked_table = {});
 
-/// Whether the exact stages follow `table` (PolicySettings::exact_stages; "auto": when
-/// the bake had to make its cells coarser than settings.bake_cell_size).
+/// Whether the exact stages follow `table` (PolicySettings::exact_stages; when_coarse:
+/// when the bake had to make its cells coarser than settings.bake_cell_size).
 [[nodiscard]] bool use_exact_stages(const PolicySettings& settings,
                                     const visibility::CellVisibilityTable& table);
 
