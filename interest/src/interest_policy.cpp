@@ -20,39 +20,41 @@ bool eye_pvs_rows(const maps::Pvs* pvs, glm::vec3 eye, std::vector<std::int32_t>
     return true;
 }
 
-void BroadcastPolicy::select(const GameWorld& world, const Viewer& /*viewer*/,
+void BroadcastPolicy::select(const WorldView& world, const Viewer& /*viewer*/,
                              std::vector<Interest>& out) {
     out.clear();
-    for (const Entity& e : world.entities()) {
-        out.push_back({e.id, 0});
+    for (std::size_t i = 0; i < world.entity_count(); ++i) {
+        out.push_back({world.entity(i).id, 0});
     }
 }
 
-void DistancePolicy::select(const GameWorld& world, const Viewer& viewer,
+void DistancePolicy::select(const WorldView& world, const Viewer& viewer,
                             std::vector<Interest>& out) {
     out.clear();
-    for (const Entity& e : world.entities()) {
-        if (within_radius(world.box_of(e), viewer.eye, radius_)) {
+    for (std::size_t i = 0; i < world.entity_count(); ++i) {
+        const EntityView e = world.entity(i);
+        if (within_radius(e.box, viewer.eye, radius_)) {
             out.push_back({e.id, 0});
         }
     }
 }
 
-void PvsPolicy::begin_tick(const GameWorld& world, std::uint64_t /*tick*/) {
-    const auto& entities = world.entities();
-    ids_.resize(entities.size());
-    always_sent_.resize(entities.size());
-    if (clusters_.size() < entities.size()) {
-        clusters_.resize(entities.size());
+void PvsPolicy::begin_tick(const WorldView& world, std::uint64_t /*tick*/) {
+    const std::size_t count = world.entity_count();
+    ids_.resize(count);
+    always_sent_.resize(count);
+    if (clusters_.size() < count) {
+        clusters_.resize(count);
     }
     const bool vis = pvs_ != nullptr && pvs_->has_visibility();
-    for (std::size_t i = 0; i < entities.size(); ++i) {
-        ids_[i] = entities[i].id;
-        always_sent_[i] = !vis || !pvs_->clusters_of(world.box_of(entities[i]), clusters_[i]);
+    for (std::size_t i = 0; i < count; ++i) {
+        const EntityView e = world.entity(i);
+        ids_[i] = e.id;
+        always_sent_[i] = !vis || !pvs_->clusters_of(e.box, clusters_[i]);
     }
 }
 
-void PvsPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
+void PvsPolicy::select(const WorldView& /*world*/, const Viewer& viewer,
                        std::vector<Interest>& out) {
     out.clear();
     // Per-thread scratch: select() runs concurrently for distinct viewers.
@@ -121,9 +123,9 @@ std::unique_ptr<InterestPolicy> make_policy(const PolicySettings& settings, cons
         stages.table = baked_table(*scene);
         stages.exact = use_exact_stages(settings, *stages.table);
     }
-    return std::make_unique<CullingPolicy>(name_of(settings.policy), settings.dsoc, world,
-                                           make_culler(std::move(scene), stages),
-                                           settings.lookahead_ticks);
+    return std::make_unique<CullingPolicy>(
+        name_of(settings.policy), settings.dsoc, world.map(), world.move_config(),
+        make_culler(std::move(scene), stages), settings.lookahead_ticks);
 }
 
 } // namespace dsoc::interest

@@ -35,17 +35,6 @@ visibility::RegionCullerConfig culler_config(interest::CullerKind culler) {
     return c;
 }
 
-/// The element type of InterestPolicy::select()'s answer (entity ids, or entries
-/// with an id), read off its signature.
-template <class Member>
-struct SelectAnswer;
-template <class Policy, class Entry>
-struct SelectAnswer<void (Policy::*)(const interest::GameWorld&, const interest::Viewer&,
-                                     std::vector<Entry>&)> {
-    using type = std::vector<Entry>;
-};
-using SelectOut = SelectAnswer<decltype(&interest::InterestPolicy::select)>::type;
-
 } // namespace
 
 std::vector<std::string> validate(const LiveOptions& o) {
@@ -112,7 +101,7 @@ void LiveSimulation::advance() {
         viewer.client_id = kClientId;
         viewer.entity_id = options_.viewer_entity;
         viewer.eye = world_->eye_of(*self);
-        SelectOut answer;
+        std::vector<interest::Interest> answer;
         policy_->select(*world_, viewer, answer);
     }
 }

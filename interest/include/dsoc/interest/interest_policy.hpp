@@ -1,7 +1,8 @@
 #pragma once
 // Interest policies decide, per tick and per client, which entities the client
 // should know about. The server turns the answer into enter/update/leave messages;
-// dsoc-inspect draws it.
+// dsoc-inspect draws it; dsoc-eval runs the same policies over its recorded frames
+// (a WorldView) and judges them.
 //
 // Threading: begin_tick(), add_viewer() and remove_viewer() are serialized (the
 // server's tick thread). After begin_tick(), select() may run concurrently for
@@ -10,6 +11,7 @@
 
 #include "dsoc/interest/game_world.hpp"
 #include "dsoc/interest/policy_choices.hpp"
+#include "dsoc/interest/world_view.hpp"
 #include "dsoc/maps/pvs.hpp"
 #include "dsoc/visibility/cell_visibility.hpp"
 #include "dsoc/visibility/dsoc_config.hpp"
@@ -46,16 +48,16 @@ public:
     virtual ~InterestPolicy() = default;
     [[nodiscard]] virtual std::string_view name() const = 0;
     /// Called once per tick after movement, before any select(). Serial.
-    virtual void begin_tick(const GameWorld& /*world*/, std::uint64_t /*tick*/) {}
+    virtual void begin_tick(const WorldView& /*world*/, std::uint64_t /*tick*/) {}
     /// Fills `out` (cleared first) with the entities `viewer` should know, in
     /// increasing id order. The server adds the viewer's own entity itself. Call at most
     /// once per viewer per tick; concurrent calls for distinct viewers are safe.
-    virtual void select(const GameWorld& world, const Viewer& viewer,
+    virtual void select(const WorldView& world, const Viewer& viewer,
                         std::vector<Interest>& out) = 0;
     /// select() at the least CPU the policy can answer with, still conservative for
     /// policies that are (a tick over its culling budget). The same call rules as
     /// select(), which it replaces for that viewer and tick. Default: select().
-    virtual void select_cheapest(const GameWorld& world, const Viewer& viewer,
+    virtual void select_cheapest(const WorldView& world, const Viewer& viewer,
                                  std::vector<Interest>& out) {
         select(world, viewer, out);
     }
@@ -86,7 +88,7 @@ public:
 class BroadcastPolicy final : public InterestPolicy {
 public:
     [[nodiscard]] std::string_view name() const override { return "broadcast"; }
-    void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
+    void select(const WorldView& world, const Viewer& viewer, std::vector<Interest>& out) override;
 };
 
 /// Entities whose box comes within `radius` of the viewer's eye (ring culling, as in
@@ -95,7 +97,7 @@ class DistancePolicy final : public InterestPolicy {
 public:
     explicit DistancePolicy(float radius) : radius_(radius) {}
     [[nodiscard]] std::string_view name() const override { return "distance"; }
-    void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
+    void select(const WorldView& world, const Viewer& viewer, std::vector<Interest>& out) override;
 
 private:
     float radius_;
@@ -110,8 +112,8 @@ class PvsPolicy final : public InterestPolicy {
 public:
     explicit PvsPolicy(std::shared_ptr<const maps::Pvs> pvs) : pvs_(std::move(pvs)) {}
     [[nodiscard]] std::string_view name() const override { return "pvs"; }
-    void begin_tick(const GameWorld& world, std::uint64_t tick) override;
-    void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
+    void begin_tick(const WorldView& world, std::uint64_t tick) override;
+    void select(const WorldView& world, const Viewer& viewer, std::vector<Interest>& out) override;
 
 private:
     std::shared_ptr<const maps::Pvs> pvs_; ///< read-only after construction
