@@ -122,7 +122,7 @@ int main(int argc, char** argv) {
     env.scene = visibility::OccluderScene::build(map.occluders);
 
     struct Run {
-        std::unique_ptr<eval::Policy> policy;
+        std::unique_ptr<eval::EvalPolicy> policy;
         std::vector<eval::ClientReplication> replication;
         std::vector<std::vector<std::uint32_t>> sets;
         std::vector<eval::SnapshotCost> costs;

@@ -6,10 +6,10 @@
 
 #include "dsoc/visibility/bsp_tree.hpp"
 #include "dsoc/visibility/loose_octree.hpp"
-#include "dsoc/visibility/occlusion_beams.hpp"
-#include "dsoc/visibility/occlusion_buffer.hpp"
 #include "dsoc/visibility/reference_visibility.hpp"
-#include "dsoc/visibility/test_worlds.hpp"
+#include "dsoc/visibility/seeds/occlusion_beams.hpp"
+#include "dsoc/visibility/seeds/occlusion_buffer.hpp"
+#include "dsoc/visibility/seeds/test_worlds.hpp"
 
 #include <benchmark/benchmark.h>
 

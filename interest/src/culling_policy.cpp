@@ -6,27 +6,26 @@
 namespace dsoc::interest {
 
 CullingPolicy::CullingPolicy(std::string_view name, const visibility::DSOCConfig& config,
-                             const GameWorld& world,
+                             const maps::Map& map, const sim::MoveConfig& move,
                              visibility::RegionVisibilityFactory make_visibility,
                              int lookahead_ticks)
-    : name_(name), interest_(config, world.map(), world.move_config(), std::move(make_visibility),
-                             lookahead_ticks) {}
+    : name_(name), interest_(config, map, move, std::move(make_visibility), lookahead_ticks) {}
 
-void CullingPolicy::sync_entities(const GameWorld& world) {
+void CullingPolicy::sync_entities(const WorldView& world) {
     // Entities are kept in increasing id order by the world; diff against ours.
     scratch_.clear();
     std::size_t k = 0;
-    for (const Entity& e : world.entities()) {
+    for (std::size_t i = 0; i < world.entity_count(); ++i) {
+        const EntityView e = world.entity(i);
         while (k < known_entities_.size() && known_entities_[k] < e.id) {
             manager().remove_entity(known_entities_[k++]);
         }
-        const visibility::Aabb box = world.box_of(e);
         if (k < known_entities_.size() && known_entities_[k] == e.id) {
             ++k;
         } else {
-            interest_.add_walker(e.id, box);
+            interest_.add_walker(e.id, e.box);
         }
-        manager().set_entity_box(e.id, box, e.move.velocity);
+        manager().set_entity_box(e.id, e.box, e.velocity);
         scratch_.push_back(e.id);
     }
     while (k < known_entities_.size()) {
@@ -35,7 +34,7 @@ void CullingPolicy::sync_entities(const GameWorld& world) {
     known_entities_.swap(scratch_);
 }
 
-void CullingPolicy::begin_tick(const GameWorld& world, std::uint64_t tick) {
+void CullingPolicy::begin_tick(const WorldView& world, std::uint64_t tick) {
     interest_.begin_tick(tick, [&](visibility::InterestManager&) { sync_entities(world); });
     client_index_.clear();
     for (std::size_t i = 0; i < manager().client_count(); ++i) {
@@ -43,12 +42,12 @@ void CullingPolicy::begin_tick(const GameWorld& world, std::uint64_t tick) {
     }
 }
 
-void CullingPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
+void CullingPolicy::select(const WorldView& /*world*/, const Viewer& viewer,
                            std::vector<Interest>& out) {
     select_with(viewer, visibility::UpdateEffort::full, out);
 }
 
-void CullingPolicy::select_cheapest(const GameWorld& /*world*/, const Viewer& viewer,
+void CullingPolicy::select_cheapest(const WorldView& /*world*/, const Viewer& viewer,
                                     std::vector<Interest>& out) {
     select_with(viewer, visibility::UpdateEffort::cheapest, out);
 }

@@ -20,39 +20,41 @@ bool eye_pvs_rows(const maps::Pvs* pvs, glm::vec3 eye, std::vector<std::int32_t>
     return true;
 }
 
-void BroadcastPolicy::select(const GameWorld& world, const Viewer& /*viewer*/,
+void BroadcastPolicy::select(const WorldView& world, const Viewer& /*viewer*/,
                              std::vector<Interest>& out) {
     out.clear();
-    for (const Entity& e : world.entities()) {
-        out.push_back({e.id, 0});
+    for (std::size_t i = 0; i < world.entity_count(); ++i) {
+        out.push_back({world.entity(i).id, 0});
     }
 }
 
-void DistancePolicy::select(const GameWorld& world, const Viewer& viewer,
+void DistancePolicy::select(const WorldView& world, const Viewer& viewer,
                             std::vector<Interest>& out) {
     out.clear();
-    for (const Entity& e : world.entities()) {
-        if (within_radius(world.box_of(e), viewer.eye, radius_)) {
+    for (std::size_t i = 0; i < world.entity_count(); ++i) {
+        const EntityView e = world.entity(i);
+        if (within_radius(e.box, viewer.eye, radius_)) {
             out.push_back({e.id, 0});
         }
     }
 }
 
-void PvsPolicy::begin_tick(const GameWorld& world, std::uint64_t /*tick*/) {
-    const auto& entities = world.entities();
-    ids_.resize(entities.size());
-    always_sent_.resize(entities.size());
-    if (clusters_.size() < entities.size()) {
-        clusters_.resize(entities.size());
+void PvsPolicy::begin_tick(const WorldView& world, std::uint64_t /*tick*/) {
+    const std::size_t count = world.entity_count();
+    ids_.resize(count);
+    always_sent_.resize(count);
+    if (clusters_.size() < count) {
+        clusters_.resize(count);
     }
     const bool vis = pvs_ != nullptr && pvs_->has_visibility();
-    for (std::size_t i = 0; i < entities.size(); ++i) {
-        ids_[i] = entities[i].id;
-        always_sent_[i] = !vis || !pvs_->clusters_of(world.box_of(entities[i]), clusters_[i]);
+    for (std::size_t i = 0; i < count; ++i) {
+        const EntityView e = world.entity(i);
+        ids_[i] = e.id;
+        always_sent_[i] = !vis || !pvs_->clusters_of(e.box, clusters_[i]);
     }
 }
 
-void PvsPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
+void PvsPolicy::select(const WorldView& /*world*/, const Viewer& viewer,
                        std::vector<Interest>& out) {
     out.clear();
     // Per-thread scratch: select() runs concurrently for distinct viewers.
@@ -66,8 +68,8 @@ void PvsPolicy::select(const GameWorld& /*world*/, const Viewer& viewer,
     }
 }
 
-void apply_policy_presets(std::string_view policy, visibility::DSOCConfig& config) {
-    if (policy == "occlusion") { // every entity's current box, every tick
+void apply_policy_presets(PolicyKind policy, visibility::DSOCConfig& config) {
+    if (policy == PolicyKind::occlusion) { // every entity's current box, every tick
         config.tbvs_enabled = false;
         config.reuse_buffers = false;
         config.full_test_interval = 1;
@@ -75,9 +77,9 @@ void apply_policy_presets(std::string_view policy, visibility::DSOCConfig& confi
     }
 }
 
-void set_culler_stages(std::string_view culler, visibility::RegionCullerConfig& config) {
-    config.pyramid = culler != "shaft";
-    config.shaft = culler != "pyramid";
+void set_culler_stages(CullerKind culler, visibility::RegionCullerConfig& config) {
+    config.pyramid = culler != CullerKind::shaft;
+    config.shaft = culler != CullerKind::pyramid;
 }
 
 int lookahead_ticks(int latency_allowance_ms, int tick_rate) {
@@ -86,8 +88,8 @@ int lookahead_ticks(int latency_allowance_ms, int tick_rate) {
 
 bool use_exact_stages(const PolicySettings& settings,
                       const visibility::CellVisibilityTable& table) {
-    if (settings.exact_stages != "auto") {
-        return settings.exact_stages == "true";
+    if (settings.exact_stages != ExactStages::when_coarse) {
+        return settings.exact_stages == ExactStages::always;
     }
     // The bake grows cells by 1.25x steps until the table fits its budget: a grown
     // table was made coarse by the map's size, not chosen.
@@ -96,14 +98,16 @@ bool use_exact_stages(const PolicySettings& settings,
 
 std::unique_ptr<InterestPolicy> make_policy(const PolicySettings& settings, const GameWorld& world,
                                             const BakedTableSource& baked_table) {
-    if (settings.policy == "broadcast") {
+    switch (settings.policy) {
+    case PolicyKind::broadcast:
         return std::make_unique<BroadcastPolicy>();
-    }
-    if (settings.policy == "distance") {
+    case PolicyKind::distance:
         return std::make_unique<DistancePolicy>(settings.distance_radius);
-    }
-    if (settings.policy == "pvs") {
+    case PolicyKind::pvs:
         return std::make_unique<PvsPolicy>(world.map().pvs);
+    case PolicyKind::dsoc:
+    case PolicyKind::occlusion:
+        break; // the culling policies, below
     }
     CullerStages stages;
     set_culler_stages(settings.culler, stages.exact_config);
@@ -119,9 +123,9 @@ std::unique_ptr<InterestPolicy> make_policy(const PolicySettings& settings, cons
         stages.table = baked_table(*scene);
         stages.exact = use_exact_stages(settings, *stages.table);
     }
-    return std::make_unique<CullingPolicy>(settings.policy, settings.dsoc, world,
-                                           make_culler(std::move(scene), stages),
-                                           settings.lookahead_ticks);
+    return std::make_unique<CullingPolicy>(
+        name_of(settings.policy), settings.dsoc, world.map(), world.move_config(),
+        make_culler(std::move(scene), stages), settings.lookahead_ticks);
 }
 
 } // namespace dsoc::interest

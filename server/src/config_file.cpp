@@ -1,6 +1,7 @@
 #include "dsoc/server/config_file.hpp"
 
 #include "dsoc/common/read_file.hpp"
+#include "dsoc/interest/policy_choices.hpp"
 
 #include "dsoc/server/config_fields.hpp"
 #include "dsoc/server/dsoc_settings.hpp"
@@ -51,6 +52,18 @@ std::string read_value(const toml::node& node, T& field) {
             return {};
         }
         return std::string("expected a string, got ") + type_name(node.type());
+    } else if constexpr (interest::NamedChoice<T>) {
+        const auto* s = node.as_string();
+        if (s == nullptr) {
+            return "expected one of " + interest::choice_names<T>() + " (a string), got " +
+                   type_name(node.type());
+        }
+        const auto choice = interest::parse_choice<T>(s->get());
+        if (!choice) {
+            return interest::not_a_choice<T>(s->get());
+        }
+        field = *choice;
+        return {};
     } else if constexpr (std::is_same_v<T, bool>) {
         if (const auto* b = node.as_boolean()) {
             field = b->get();
@@ -225,6 +238,8 @@ std::string format_config_toml(const ServerConfig& config,
             return; // a table: after every flat key (below)
         } else if constexpr (std::is_same_v<T, std::string> || std::is_same_v<T, bool>) {
             line.insert(name, field);
+        } else if constexpr (interest::NamedChoice<T>) {
+            line.insert(name, std::string(interest::name_of(field)));
         } else if constexpr (std::is_floating_point_v<T>) {
             line.insert(name, static_cast<double>(field));
         } else {

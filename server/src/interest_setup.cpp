@@ -70,7 +70,7 @@ std::unique_ptr<interest::InterestPolicy> make_policy(const ServerConfig& config
                      interest::use_exact_stages(settings, *table)
                          ? "the table, then the exact stages"
                          : "the table alone (the exact stages where it does not cover)",
-                     config.exact_stages);
+                     interest::name_of(config.exact_stages));
         return table;
     });
 }

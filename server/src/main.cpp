@@ -76,8 +76,8 @@ void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
     dsoc::server::add_policy_options(app, config);
     app.add_option("--tbv-strategy", config.tbv_strategy, "dsoc TBVs: adaptive | explicit | fuzzy")
         ->capture_default_str();
-    app.add_option("--culler", config.culler, "Occlusion culler stages: shaft | pyramid | both")
-        ->capture_default_str();
+    dsoc::cli::add_choice_option(app, "--culler", config.culler,
+                                 "Occlusion culler stages: shaft | pyramid | both");
     app.add_option("--culling-budget", config.culling_budget,
                    "Share of the tick period for culling; clients after it get the cheapest "
                    "conservative answer (0 = off)")
@@ -284,7 +284,8 @@ int check_config(const ServerConfig& config, std::vector<std::string> problems) 
         return exit_usage;
     }
     std::printf("dsoc-server: the settings are good: map %s (%zu occluders), policy %s, port %u\n",
-                checked.map->name.c_str(), checked.map->occluders.size(), config.policy.c_str(),
+                checked.map->name.c_str(), checked.map->occluders.size(),
+                std::string(dsoc::interest::name_of(config.policy)).c_str(),
                 static_cast<unsigned>(config.port));
     return exit_ok;
 }

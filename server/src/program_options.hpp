@@ -1,8 +1,9 @@
 #pragma once
 // The command-line flags dsoc-server and dsoc-tick-bench share, bound to ServerConfig
-// fields: each setting's flag and help text written once. Header-only over the CLI11
-// App type, so that only the programs link CLI11, not dsoc_server_core.
+// fields: each setting's flag and help text written once. Header-only, for the
+// programs: only they link CLI11 (through dsoc::cli), not dsoc_server_core.
 
+#include "dsoc/cli/choice_option.hpp"
 #include "dsoc/server/server_config.hpp"
 
 namespace dsoc::server {
@@ -22,9 +23,8 @@ void add_world_options(App& app, ServerConfig& config) {
 /// The interest policy and its culler's stages.
 template <class App>
 void add_policy_options(App& app, ServerConfig& config) {
-    app.add_option("--policy", config.policy,
-                   "Interest policy: dsoc | occlusion | pvs | distance | broadcast")
-        ->capture_default_str();
+    cli::add_choice_option(app, "--policy", config.policy,
+                           "Interest policy: dsoc | occlusion | pvs | distance | broadcast");
     app.add_option("--portal-depth", config.portal_depth,
                    "Levels of portal tests in the culler (0 = off; 2 = tightest, ~4x CPU)")
         ->capture_default_str();
@@ -35,11 +35,10 @@ void add_policy_options(App& app, ServerConfig& config) {
     app.add_option("--bake-cell-size", config.bake_cell_size, "Cell edge of the baked table")
         ->capture_default_str();
     app.add_option("--bake-dir", config.bake_dir, "Cache of baked tables");
-    app.add_option("--exact-stages", config.exact_stages,
-                   "With the baked stage: true runs the PVS and shaft tests after the table "
-                   "(tighter, dearer); false is the table alone; auto: alone unless the map "
-                   "needed cells coarser than --bake-cell-size")
-        ->capture_default_str();
+    cli::add_choice_option(app, "--exact-stages", config.exact_stages,
+                           "With the baked stage: true runs the PVS and shaft tests after the "
+                           "table (tighter, dearer); false is the table alone; auto: alone unless "
+                           "the map needed cells coarser than --bake-cell-size");
 }
 
 } // namespace dsoc::server

@@ -1,5 +1,7 @@
 #include "dsoc/server/replication_state.hpp"
 
+#include "dsoc/protocol/interest_merge.hpp"
+
 #include <cassert>
 
 namespace dsoc::server {
@@ -49,10 +51,10 @@ void ReplicationState::build_snapshot(const interest::GameWorld& world,
     encoder_.begin(tick, snapshot);
     next_known_.clear();
 
-    // Merge two increasing id lists: old knowledge and the new interest set. The
-    // world's entities are in increasing id order too, so each wanted entity is found
-    // by walking forward (no per-entity lookup: this loop runs for every entity of
-    // every client every tick).
+    // Merge two increasing id lists (protocol::merge_interest): old knowledge and the
+    // new interest set. The world's entities are in increasing id order too, so each wanted entity
+    // is found by walking forward (no per-entity lookup: this loop runs for every entity of every
+    // client every tick).
     const std::vector<interest::Entity>& entities = world.entities();
     std::size_t next_entity = 0;
     const auto find_entity = [&](std::uint32_t id) -> const interest::Entity* {
@@ -63,42 +65,30 @@ void ReplicationState::build_snapshot(const interest::GameWorld& world,
                    ? &entities[next_entity]
                    : nullptr;
     };
-    std::size_t i = 0;
-    std::size_t j = 0;
-    while (i < known_.size() || j < interest.size()) {
-        const bool take_old =
-            j == interest.size() || (i < known_.size() && known_[i] < interest[j].id);
-        const bool take_new =
-            i == known_.size() || (j < interest.size() && interest[j].id < known_[i]);
-        if (take_old) { // known, no longer of interest (or gone from the world)
-            encoder_.leave(known_[i], snapshot);
-            ++i;
-            continue;
-        }
+    const auto leave = [&](std::uint32_t id) { // no longer of interest (or gone from the world)
+        encoder_.leave(id, snapshot);
+    };
+    const auto send = [&](std::size_t j, bool was_known) {
         const interest::Interest wanted = interest[j];
         if (j + kPrefetchAhead < interest.size()) {
             encoder_.prefetch(interest[j + kPrefetchAhead].id);
         }
         const interest::Entity* e = find_entity(wanted.id);
-        ++j;
-        if (!take_new) {
-            ++i; // known and still of interest
-        }
         if (e == nullptr) { // contract breach: never leave a stale id known
-            if (!take_new) {
+            if (was_known) {
                 encoder_.leave(wanted.id, snapshot);
             }
-            continue;
+            return;
         }
         next_known_.push_back(wanted.id);
-        if (take_new) {
+        if (!was_known) {
             const glm::vec3 half = world.box_of(*e).half_extents();
             encoder_.enter(wanted.id, pose_of(*e), {half.x, half.y, half.z},
                            static_cast<std::uint32_t>(e->kind), wanted.tier, snapshot);
         } else {
             const std::uint64_t interval = std::uint64_t{1} << wanted.tier;
             if ((tick + wanted.id) % interval != 0) {
-                continue; // deferred: this coarse-tier entity is not due this tick
+                return; // deferred: this coarse-tier entity is not due this tick
             }
             if (poses != nullptr) {
                 encoder_.update_quantized(wanted.id, poses->at(next_entity, wanted.tier),
@@ -110,7 +100,9 @@ void ReplicationState::build_snapshot(const interest::GameWorld& world,
         if (audit) {
             add_audit(*e, snapshot);
         }
-    }
+    };
+    protocol::merge_interest(
+        known_, interest, [](const interest::Interest& w) { return w.id; }, leave, send);
     known_.swap(next_known_);
 }
 

@@ -28,23 +28,14 @@ std::vector<std::string> validate(const ServerConfig& c) {
     check(p, c.bots >= 0 && c.bots <= 100000, "bots",
           "must be 0..100000, got " + std::to_string(c.bots));
     check(p,
-          c.policy == "broadcast" || c.policy == "distance" || c.policy == "occlusion" ||
-              c.policy == "dsoc" || c.policy == "pvs",
-          "policy",
-          "must be one of dsoc, occlusion, pvs, distance, broadcast; got '" + c.policy + "'");
-    check(p,
           c.tbv_strategy == "adaptive" || c.tbv_strategy == "explicit" || c.tbv_strategy == "fuzzy",
           "tbv_strategy", "must be one of adaptive, explicit, fuzzy; got '" + c.tbv_strategy + "'");
-    check(p, c.culler == "shaft" || c.culler == "pyramid" || c.culler == "both", "culler",
-          "must be one of shaft, pyramid, both; got '" + c.culler + "'");
     check(p, c.portal_depth >= 0 && c.portal_depth <= visibility::ShaftOcclusion::kMaxPortalDepth,
           "portal_depth", "must be 0..4, got " + std::to_string(c.portal_depth));
     check(p,
           std::isfinite(c.bake_cell_size) && c.bake_cell_size >= 4.0f &&
               c.bake_cell_size <= 1024.0f,
           "bake_cell_size", "must be 4..1024 units");
-    check(p, c.exact_stages == "auto" || c.exact_stages == "true" || c.exact_stages == "false",
-          "exact_stages", "must be one of auto, true, false; got '" + c.exact_stages + "'");
     check(p, std::isfinite(c.culling_budget) && c.culling_budget >= 0.0 && c.culling_budget <= 1.0,
           "culling_budget", "must be 0..1 (a share of the tick period; 0 = off)");
     check(p,

@@ -15,10 +15,10 @@ std::string format_summary(const ServerStats& stats, const ServerConfig& config)
         "  tick cost        p50 {:.1f} us  p99 {:.1f} us  max {:.1f} us  (budget {:.0f} us)\n"
         "  sent             {} bytes, {} snapshots, {} entity updates\n"
         "  received         {} bytes from {} client(s)\n",
-        config.policy, config.bots, config.tick_rate, stats.ticks, stats.late_ticks,
-        stats.skipped_ticks, stats.cheapest_client_ticks, cost.p50, cost.p99, cost.max,
-        1e6 / config.tick_rate, stats.bytes_sent, stats.snapshots_sent, stats.entity_updates_sent,
-        stats.bytes_received, stats.clients_accepted);
+        interest::name_of(config.policy), config.bots, config.tick_rate, stats.ticks,
+        stats.late_ticks, stats.skipped_ticks, stats.cheapest_client_ticks, cost.p50, cost.p99,
+        cost.max, 1e6 / config.tick_rate, stats.bytes_sent, stats.snapshots_sent,
+        stats.entity_updates_sent, stats.bytes_received, stats.clients_accepted);
     out += "  disconnects     ";
     if (stats.disconnects.empty()) {
         out += " none";
@@ -33,7 +33,7 @@ std::string format_summary(const ServerStats& stats, const ServerConfig& config)
 std::string format_json(const ServerStats& stats, const ServerConfig& config) {
     const auto cost = common::summarize(stats.tick_cost_us);
     nlohmann::json j;
-    j["policy"] = config.policy;
+    j["policy"] = std::string(interest::name_of(config.policy));
     j["bots"] = config.bots;
     j["tick_rate"] = config.tick_rate;
     j["ticks"] = stats.ticks;

@@ -198,8 +198,8 @@ int main(int argc, char** argv) {
     const double client_tick = static_cast<double>(clients.size()) * n;
     fmt::print("dsoc-tick-bench: map {} policy {} bots {} players {} tick rate {} Hz, {} ticks "
                "measured after {}\n",
-               map->name, config.policy, config.bots, clients.size(), config.tick_rate, ticks,
-               warm_up);
+               map->name, dsoc::interest::name_of(config.policy), config.bots, clients.size(),
+               config.tick_rate, ticks, warm_up);
     fmt::print("  server CPU per tick  {:8.2f} ms (one thread; budget {:.1f} ms per core)\n",
                server_ms, 1000.0 / config.tick_rate);
     const auto row = [&](const char* name, double ms) {

@@ -84,7 +84,7 @@ TEST(LiveSource, RoomsMapStatesAreConsistentAndDrawnInTheirColours) {
 
 TEST(LiveSource, RefusesOptionsItCannotRun) {
     LiveOptions bad;
-    bad.policy = "distance";
+    bad.policy = interest::PolicyKind::distance;
     bad.viewer_entity = 0;
     const auto problems = validate(bad);
     ASSERT_EQ(problems.size(), 2u);

@@ -15,7 +15,7 @@ TEST(EndToEnd, EightClientsGetHelloSnapshotsAndTheirOwnEntity) {
     server::ServerConfig sc;
     sc.bots = 60;
     sc.tick_rate = 30;
-    sc.policy = "distance";
+    sc.policy = interest::PolicyKind::distance;
     testing::RunningServer server(sc);
 
     const simclient::LoadConfig lc = testing::load_config(server, 8, 2.0, 0.2);
@@ -79,7 +79,7 @@ TEST(EndToEnd, ClientsPastTheCullingBudgetGetTheCheapestAnswerAndAreCounted) {
     server::ServerConfig sc;
     sc.bots = 60;
     sc.tick_rate = 30;
-    sc.policy = "dsoc";
+    sc.policy = interest::PolicyKind::dsoc;
     sc.culling_budget = 1e-9;
     testing::RunningServer server(sc);
 

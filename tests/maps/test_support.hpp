@@ -5,7 +5,7 @@
 
 #include "dsoc/maps/map.hpp"
 #include "dsoc/maps/q3_bsp.hpp"
-#include "dsoc/visibility/test_worlds.hpp"
+#include "dsoc/visibility/seeds/test_worlds.hpp"
 #include "support/openarena.hpp"
 
 #include <gtest/gtest.h>

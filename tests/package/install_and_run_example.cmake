@@ -13,12 +13,13 @@ file(REMOVE_RECURSE ${root})
 run_step("installing ${DSOC_BUILD_DIR}"
   COMMAND ${CMAKE_COMMAND} --install ${DSOC_BUILD_DIR} --prefix ${prefix})
 
-# The package holds libraries, public headers and CMake files: no programs, no
-# private headers (src/), no paths into the build or source tree.
+# The package holds libraries, public headers (dsoc::visibility's seeds in seeds/) and
+# CMake files: no programs, no private headers (src/), no paths into the build or
+# source tree.
 file(GLOB_RECURSE installed RELATIVE ${prefix} ${prefix}/*)
 set(config_dir "")
 foreach(file ${installed})
-  if(file MATCHES "^include/dsoc/[a-z]+/[a-z0-9_]+\\.(hpp|pb\\.h)$"
+  if(file MATCHES "^include/dsoc/[a-z]+/(seeds/)?[a-z0-9_]+\\.(hpp|pb\\.h)$"
      OR file MATCHES "^lib[^/]*/(.+/)?libdsoc_[a-z]+\\.(a|so.*)$")
     continue()
   elseif(file MATCHES "^(lib[^/]*/(.+/)?cmake/dsoc)/[A-Za-z-]+\\.cmake$")

@@ -80,8 +80,8 @@ private:
 TEST(ClientAbuse, SlowReaderHasSnapshotsDroppedStaysBoundedAndIsDisconnected) {
     auto c = base_config();
     c.bots = 150;
-    c.policy = "broadcast";            // large snapshots: every bot moves every tick
-    c.socket_send_buffer_bytes = 4096; // small kernel buffers: the backlog shows at once
+    c.policy = interest::PolicyKind::broadcast; // large snapshots: every bot moves every tick
+    c.socket_send_buffer_bytes = 4096;          // small kernel buffers: the backlog shows at once
     c.slow_client_timeout_ms = 800;
     RunningServer server(c);
     GoodClients good(server.port(), kGoodSeconds + 1.0);
@@ -109,7 +109,7 @@ TEST(ClientAbuse, SlowReaderHasSnapshotsDroppedStaysBoundedAndIsDisconnected) {
 TEST(ClientAbuse, StalledReaderThatReadsAgainLateReceivesTooSlowThenEndOfFile) {
     auto c = base_config();
     c.bots = 150;
-    c.policy = "broadcast";
+    c.policy = interest::PolicyKind::broadcast;
     c.socket_send_buffer_bytes = 4096;
     c.slow_client_timeout_ms = 300;
     RunningServer server(c);
@@ -139,9 +139,9 @@ TEST(ClientAbuse, SnapshotsTheKernelTakesInPartArriveWhole) {
     // buffers on both sides, and the reader is slow.
     auto c = base_config();
     c.bots = 400;
-    c.policy = "broadcast";            // every bot in every snapshot
-    c.socket_send_buffer_bytes = 4096; // small kernel buffers
-    c.slow_client_timeout_ms = 10'000; // slow, but never dropped here
+    c.policy = interest::PolicyKind::broadcast; // every bot in every snapshot
+    c.socket_send_buffer_bytes = 4096;          // small kernel buffers
+    c.slow_client_timeout_ms = 10'000;          // slow, but never dropped here
     RunningServer server(c);
 
     RawClient reader(server.port(), 4096);

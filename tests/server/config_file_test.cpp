@@ -31,6 +31,8 @@ ServerConfig all_changed() {
             field.push_back({"tbv_merge_distance", "80.5", "test"});
         } else if constexpr (std::is_same_v<T, std::string>) {
             field += "-x";
+        } else if constexpr (interest::NamedChoice<T>) {
+            field = interest::names_of(field).back().value; // each default is the first
         } else if constexpr (std::is_same_v<T, bool>) {
             field = !field;
         } else if constexpr (std::is_floating_point_v<T>) {
@@ -109,8 +111,28 @@ TEST(ConfigFile, KeysAbsentFromTheFileKeepTheirValues) {
     c.bots = 7;
     ASSERT_TRUE(apply_config_toml("tick_rate = 60\npolicy = \"pvs\"\n", "t.toml", c).empty());
     EXPECT_EQ(c.tick_rate, 60);
-    EXPECT_EQ(c.policy, "pvs");
+    EXPECT_EQ(c.policy, interest::PolicyKind::pvs);
     EXPECT_EQ(c.bots, 7);
+}
+
+TEST(ConfigFile, ChoicesAreReadByNameAndAWrongNameListsTheAllowedOnes) {
+    ServerConfig c;
+    ASSERT_TRUE(apply_config_toml("culler = \"both\"\n", "server.toml", c).empty());
+    EXPECT_EQ(c.culler, interest::CullerKind::both);
+    using Problems = std::vector<std::string>;
+    EXPECT_EQ(apply_config_toml("policy = \"psychic\"\n", "server.toml", c),
+              Problems{"server.toml:1:10: policy: must be one of dsoc, occlusion, pvs, distance, "
+                       "broadcast; got 'psychic'"});
+    EXPECT_EQ(apply_config_toml("exact_stages = true\n", "server.toml", c),
+              Problems{"server.toml:1:16: exact_stages: expected one of auto, true, false (a "
+                       "string), got a boolean"});
+    EXPECT_EQ(c.policy, ServerConfig{}.policy);
+    // Printed by the same names.
+    const std::string text = format_config_toml(c);
+    for (const char* line :
+         {"\npolicy = 'dsoc'\n", "\nculler = 'both'\n", "\nexact_stages = 'auto'\n"}) {
+        EXPECT_NE(text.find(line), std::string::npos) << line << text;
+    }
 }
 
 TEST(ConfigFile, ProblemsNameTheFileLineFieldAndReason) {

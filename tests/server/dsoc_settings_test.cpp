@@ -164,15 +164,17 @@ TEST(DsocSettings, ServerTickRateIsTheOneRate) {
 
 TEST(DsocSettings, PrintedConfigListsEveryFieldAndReadsBack) {
     ServerConfig c = insecure();
-    c.policy = "occlusion";
+    c.policy = interest::PolicyKind::occlusion;
     ASSERT_EQ(set_dsoc_setting(c.dsoc, "tbv_expansion_factor", "1.35", "test"), "");
     ASSERT_EQ(set_dsoc_setting(c.dsoc, "strategy", "fuzzy", "test"), "");
     const std::string printed = format_config_toml(c);
     const auto table = printed.substr(printed.find("\n[dsoc]\n"));
     std::size_t listed = 0;
     visit_dsoc_fields(visibility::DSOCConfig{}, [&](const char* name, auto) {
-        listed += table.find("\n" + std::string(name) + " = ") != std::string::npos ||
-                  table.find("\n# " + std::string(name) + " = ") != std::string::npos;
+        // std::string first: GCC 12 warns falsely (-Wrestrict) on "\n" + std::string.
+        const std::string key = std::string(name) + " = ";
+        listed += table.find('\n' + key) != std::string::npos ||
+                  table.find(std::string("\n# ") + key) != std::string::npos;
     });
     EXPECT_EQ(listed, aggregate_field_count<visibility::DSOCConfig>() - 1) // all but tick_rate
         << table;

@@ -223,7 +223,7 @@ TEST(IoDuringTick, PingsHellosAndMetricsAreAnsweredWhileTheParallelPhaseRuns) {
     config.port = 0;
     config.insecure = true;
     config.map = "oa_dm4";
-    config.policy = "dsoc";
+    config.policy = interest::PolicyKind::dsoc;
     config.baked_stage = false;  // the exact stages: long phases, no bake
     config.culling_budget = 0.0; // and no fail-open to shorten them
     config.bots = 300;

@@ -42,7 +42,7 @@ std::vector<std::string> run_server_ticks(const std::string& policy, int threads
                                           std::uint64_t& updates) {
     ServerConfig config;
     config.bots = 120;
-    config.policy = policy;
+    config.policy = *interest::parse_choice<interest::PolicyKind>(policy);
     config.baked_stage = false; // the exact stages (no bake in this test)
     config.threads = threads;
     config.seed = 9;

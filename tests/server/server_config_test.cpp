@@ -24,13 +24,13 @@ TEST(ServerConfig, EachProblemNamesItsField) {
     ServerConfig c;
     c.insecure = true;
     c.tick_rate = 0;
-    c.policy = "psychic";
+    c.bots = -1;
     c.max_speed = std::nanf("");
     const auto problems = validate(c);
     ASSERT_EQ(problems.size(), 3u);
     EXPECT_NE(problems[0].find("tick_rate"), std::string::npos);
-    EXPECT_NE(problems[1].find("policy"), std::string::npos);
-    EXPECT_NE(problems[1].find("psychic"), std::string::npos);
+    EXPECT_NE(problems[1].find("bots"), std::string::npos);
+    EXPECT_NE(problems[1].find("-1"), std::string::npos);
     EXPECT_NE(problems[2].find("max_speed"), std::string::npos);
 }
 

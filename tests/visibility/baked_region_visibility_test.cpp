@@ -7,7 +7,7 @@
 #include "dsoc/visibility/cell_bake.hpp"
 #include "dsoc/visibility/interest_manager.hpp"
 #include "dsoc/visibility/reference_visibility.hpp"
-#include "dsoc/visibility/test_worlds.hpp"
+#include "dsoc/visibility/seeds/test_worlds.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 #include "dsoc/visibility/bsp_tree.hpp"
 #include "dsoc/visibility/reference_visibility.hpp"
-#include "dsoc/visibility/test_worlds.hpp"
+#include "dsoc/visibility/seeds/test_worlds.hpp"
 
 #include <gtest/gtest.h>
 

@@ -675,6 +675,16 @@ bool visible_from_the_left(const Aabb& box) {
     return box.min.x < WallVisibility::kWall;
 }
 
+/// Client 100, viewing from entity 1 left of the wall (x = -500) with its present eye
+/// alone covered (lookahead 0), added to `m`.
+void add_viewer_left_of_the_wall(InterestManager& m) {
+    ASSERT_TRUE(m.add_entity(1, EntityDesc{kHalf, {}}, box_at({-500, 0, 0})));
+    ClientDesc d;
+    d.viewer = 1;
+    d.lookahead_ticks = 0;
+    ASSERT_TRUE(m.add_client(100, d));
+}
+
 bool sent(const InterestManager& m, EntityId id) {
     const auto ids = replicated_ids(m, 100);
     return std::find(ids.begin(), ids.end(), id) != ids.end();
@@ -688,11 +698,7 @@ TEST(FuzzyTbvs, AnEntityOutsideItsPredictedTbvIsCaughtCountedAndTestedThatTick) 
     int builds = 0;
     InterestManager m(c, Aabb{glm::vec3(-4096.0f), glm::vec3(4096.0f)},
                       [&] { return std::make_unique<WallVisibility>(&builds); });
-    ASSERT_TRUE(m.add_entity(1, EntityDesc{kHalf, {}}, box_at({-500, 0, 0})));
-    ClientDesc d;
-    d.viewer = 1;
-    d.lookahead_ticks = 0;
-    ASSERT_TRUE(m.add_client(100, d));
+    add_viewer_left_of_the_wall(m);
     // Entity 2 strolls away from the wall behind it at 1 unit per tick, slow enough
     // for the longest TBVs, which the fuzzy strategy predicts along that stroll; then
     // it turns and runs back through the wall at 10 units per tick (within its 320 u/s,
@@ -732,11 +738,7 @@ TEST(OscillatingEntity, IsSentExactlyWhileVisibleAndItsFailedTbvsBackOff) {
     int builds = 0;
     InterestManager m(c, Aabb{glm::vec3(-4096.0f), glm::vec3(4096.0f)},
                       [&] { return std::make_unique<WallVisibility>(&builds); });
-    ASSERT_TRUE(m.add_entity(1, EntityDesc{kHalf, {}}, box_at({-500, 0, 0})));
-    ClientDesc d;
-    d.viewer = 1;
-    d.lookahead_ticks = 0;
-    ASSERT_TRUE(m.add_client(100, d));
+    add_viewer_left_of_the_wall(m);
     ASSERT_TRUE(m.add_entity(2, EntityDesc{kHalf, {}}, box_at({20, 0, 0})));
     constexpr std::uint64_t kTicks = 64;
     for (std::uint64_t tick = 1; tick <= kTicks; ++tick) {

@@ -1,5 +1,5 @@
 #include "dsoc/visibility/loose_octree.hpp"
-#include "dsoc/visibility/occlusion_buffer.hpp"
+#include "dsoc/visibility/seeds/occlusion_buffer.hpp"
 
 #include "test_scene.hpp"
 

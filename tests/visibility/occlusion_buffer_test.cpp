@@ -1,5 +1,5 @@
-#include "dsoc/visibility/occlusion_buffer.hpp"
-#include "dsoc/visibility/test_worlds.hpp"
+#include "dsoc/visibility/seeds/occlusion_buffer.hpp"
+#include "dsoc/visibility/seeds/test_worlds.hpp"
 
 #include "test_scene.hpp"
 

@@ -3,8 +3,8 @@
 
 #include "dsoc/visibility/cut_plane_fusion.hpp"
 #include "dsoc/visibility/reference_visibility.hpp"
+#include "dsoc/visibility/seeds/test_worlds.hpp"
 #include "dsoc/visibility/shaft_occlusion.hpp"
-#include "dsoc/visibility/test_worlds.hpp"
 #include "region_test_support.hpp"
 
 #include <gtest/gtest.h>

@@ -4,11 +4,11 @@
 // must cull a stated minimum share of the boxes the reference finds hidden, so the
 // test cannot pass by answering `visible` always.
 
-#include "dsoc/visibility/combined_tester.hpp"
-#include "dsoc/visibility/occlusion_beams.hpp"
-#include "dsoc/visibility/occlusion_buffer.hpp"
 #include "dsoc/visibility/reference_visibility.hpp"
-#include "dsoc/visibility/test_worlds.hpp"
+#include "dsoc/visibility/seeds/combined_tester.hpp"
+#include "dsoc/visibility/seeds/occlusion_beams.hpp"
+#include "dsoc/visibility/seeds/occlusion_buffer.hpp"
+#include "dsoc/visibility/seeds/test_worlds.hpp"
 
 #include "test_scene.hpp"
 

@@ -1,5 +1,5 @@
 #include "dsoc/visibility/reference_visibility.hpp"
-#include "dsoc/visibility/test_worlds.hpp"
+#include "dsoc/visibility/seeds/test_worlds.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,10 +1,10 @@
 // From-region occlusion buffer: hand-made cases, the pyramid, and a randomized
 // property test against the exact segment reference with many eyes per region.
 
-#include "dsoc/visibility/occlusion_buffer.hpp"
 #include "dsoc/visibility/reference_visibility.hpp"
 #include "dsoc/visibility/region_occlusion_buffer.hpp"
-#include "dsoc/visibility/test_worlds.hpp"
+#include "dsoc/visibility/seeds/occlusion_buffer.hpp"
+#include "dsoc/visibility/seeds/test_worlds.hpp"
 
 #include "test_scene.hpp"
 

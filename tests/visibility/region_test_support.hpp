@@ -4,7 +4,7 @@
 // built from many brushes.
 
 #include "dsoc/visibility/reference_visibility.hpp"
-#include "dsoc/visibility/test_worlds.hpp"
+#include "dsoc/visibility/seeds/test_worlds.hpp"
 
 #include <random>
 

@@ -2,8 +2,8 @@
 
 #include "dsoc/visibility/occluder_region_visibility.hpp"
 #include "dsoc/visibility/reference_visibility.hpp"
+#include "dsoc/visibility/seeds/test_worlds.hpp"
 #include "dsoc/visibility/shaft_occlusion.hpp"
-#include "dsoc/visibility/test_worlds.hpp"
 #include "region_test_support.hpp"
 
 #include <gtest/gtest.h>

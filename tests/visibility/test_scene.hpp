@@ -6,7 +6,7 @@
 #include "dsoc/visibility/convex_polyhedron.hpp"
 #include "dsoc/visibility/geometry.hpp"
 #include "dsoc/visibility/occluder_world.hpp"
-#include "dsoc/visibility/test_worlds.hpp"
+#include "dsoc/visibility/seeds/test_worlds.hpp"
 
 #include <gtest/gtest.h>
 

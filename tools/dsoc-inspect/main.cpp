@@ -14,6 +14,7 @@
 // Exit status (dsoc/cli/program.hpp): 0 written, 1 a trace or file failed (message on
 // stderr), 2 bad usage or a --map that does not load.
 
+#include "dsoc/cli/choice_option.hpp"
 #include "dsoc/cli/program.hpp"
 #include "dsoc/inspect/captioned.hpp"
 #include "dsoc/inspect/depth_view.hpp"
@@ -151,11 +152,12 @@ public:
     }
     [[nodiscard]] visibility::Aabb bounds() const override { return map_->bounds; }
     [[nodiscard]] inspect::RunInfo run() const override {
-        return {name_, options_.policy, options_.tick_rate, false,
+        return {name_, std::string(interest::name_of(options_.policy)), options_.tick_rate, false,
                 "live: " + std::to_string(options_.bots) + " bots, " +
                     std::to_string(options_.tick_rate) + " Hz, " +
                     std::to_string(options_.latency_allowance_ms) +
-                    " ms latency allowance, culler " + options_.culler + ", seed " +
+                    " ms latency allowance, culler " +
+                    std::string(interest::name_of(options_.culler)) + ", seed " +
                     std::to_string(options_.seed)};
     }
 
@@ -378,15 +380,14 @@ int main(int argc, char** argv) {
     app.add_option("--sheet-columns", o.sheet_columns, "frames per row of frames/sheet.png")
         ->capture_default_str()
         ->check(CLI::Range(1, 100));
-    app.add_option("--policy", o.live.policy, "live: dsoc or occlusion")->capture_default_str();
+    cli::add_choice_option(app, "--policy", o.live.policy, "live: dsoc or occlusion");
     app.add_option("--bots", o.live.bots, "live: wandering entities (arena-64: 576)")
         ->capture_default_str();
     app.add_option("--tick-rate", o.live.tick_rate, "live: [Hz]")->capture_default_str();
     app.add_option("--latency-ms", o.live.latency_allowance_ms,
                    "live: round trip + interpolation covered [ms]")
         ->capture_default_str();
-    app.add_option("--culler", o.live.culler, "live: shaft, pyramid or both")
-        ->capture_default_str();
+    cli::add_choice_option(app, "--culler", o.live.culler, "live: shaft, pyramid or both");
     app.add_option("--seed", o.live.seed, "live: bots' seed")->capture_default_str();
     app.add_option("--units-per-pixel", o.plan.units_per_pixel, "plan scale [world units]")
         ->capture_default_str()

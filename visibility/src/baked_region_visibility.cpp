@@ -179,8 +179,8 @@ void BakedRegionVisibility::prepare(const Aabb& box, PreparedBox& out) const {
     }
 }
 
-// The next stage gets its own preparation of the box when it has one (same box).
-Visibility BakedRegionVisibility::test_prepared(const PreparedBox& p) const {
+template <class AskNext>
+Visibility BakedRegionVisibility::table_then(const PreparedBox& p, AskNext&& ask_next) const {
     const bool hidden = prepared_hidden(p);
     if (!next_) { // the table alone: no branch on the answer
         return hidden ? Visibility::occluded : Visibility::visible;
@@ -191,38 +191,29 @@ Visibility BakedRegionVisibility::test_prepared(const PreparedBox& p) const {
     if (hidden) {
         return Visibility::occluded;
     }
-    return p.inner.empty() ? next_->test_box(p.box) : next_->test_prepared(p.inner.front());
+    return ask_next(*next_);
+}
+
+// The next stage gets its own preparation of the box when it has one (same box).
+Visibility BakedRegionVisibility::test_prepared(const PreparedBox& p) const {
+    return table_then(p, [&p](const RegionVisibility& next) {
+        return p.inner.empty() ? next.test_box(p.box) : next.test_prepared(p.inner.front());
+    });
 }
 
 Visibility BakedRegionVisibility::test_prepared_quick(const PreparedBox& p) const {
-    const bool hidden = prepared_hidden(p);
-    if (!next_) {
-        return hidden ? Visibility::occluded : Visibility::visible;
-    }
-    if (next_for_ == NextFor::where_uncovered) {
-        return test_prepared_coarse(p); // every prepared test is the coarse one
-    }
-    if (hidden) {
-        return Visibility::occluded;
-    }
-    return p.inner.empty() ? next_->test_box_quick(p.box)
-                           : next_->test_prepared_quick(p.inner.front());
+    return table_then(p, [&p](const RegionVisibility& next) {
+        return p.inner.empty() ? next.test_box_quick(p.box)
+                               : next.test_prepared_quick(p.inner.front());
+    });
 }
 
 Visibility BakedRegionVisibility::test_prepared_hinted(const PreparedBox& p,
                                                        std::uint32_t& hint) const {
-    const bool hidden = prepared_hidden(p);
-    if (!next_) {
-        return hidden ? Visibility::occluded : Visibility::visible;
-    }
-    if (next_for_ == NextFor::where_uncovered) {
-        return test_prepared_coarse(p); // every prepared test is the coarse one
-    }
-    if (hidden) {
-        return Visibility::occluded;
-    }
-    return p.inner.empty() ? next_->test_box_hinted(p.box, hint)
-                           : next_->test_prepared_hinted(p.inner.front(), hint);
+    return table_then(p, [&p, &hint](const RegionVisibility& next) {
+        return p.inner.empty() ? next.test_box_hinted(p.box, hint)
+                               : next.test_prepared_hinted(p.inner.front(), hint);
+    });
 }
 
 Visibility BakedRegionVisibility::test_prepared_coarse(const PreparedBox& p) const {

@@ -59,7 +59,7 @@ baked_table(const maps::Map& map, const visibility::OccluderScene& scene,
 }
 
 struct PolicyRun {
-    std::unique_ptr<Policy> policy;
+    std::unique_ptr<EvalPolicy> policy;
     std::vector<ClientReplication> replication;
     std::vector<std::vector<std::uint32_t>> sets; ///< this tick's interest set per client
     std::vector<SnapshotCost> costs;

@@ -1,6 +1,7 @@
 #include "dsoc/eval/replication.hpp"
 
 #include "dsoc/protocol/codec.hpp"
+#include "dsoc/protocol/interest_merge.hpp"
 
 namespace dsoc::eval {
 
@@ -26,32 +27,21 @@ SnapshotCost ClientReplication::send(const WorldFrame& frame,
     constexpr std::uint32_t kPositionFields =
         protocol::kFieldX | protocol::kFieldY | protocol::kFieldZ | protocol::kFieldRebase;
 
-    // Merge two increasing id lists: old knowledge and the new interest set.
-    std::size_t i = 0;
-    std::size_t j = 0;
-    while (i < known_.size() || j < interest.size()) {
-        const bool take_old =
-            j == interest.size() || (i < known_.size() && known_[i] < interest[j]);
-        const bool take_new =
-            i == known_.size() || (j < interest.size() && interest[j] < known_[i]);
-        if (take_old) {
-            encoder_.leave(known_[i], snapshot);
-            ++cost.leaves;
-            ++i;
-            continue;
-        }
-        const std::uint32_t id = interest[j++];
-        if (!take_new) {
-            ++i;
-        }
+    // The server's rule (protocol::merge_interest): old knowledge against the new set.
+    const auto leave = [&](std::uint32_t id) {
+        encoder_.leave(id, snapshot);
+        ++cost.leaves;
+    };
+    const auto send = [&](std::size_t j, bool was_known) {
+        const std::uint32_t id = interest[j];
         const EntityFrame& e = frame.entities[id];
         next_known_.push_back(id);
-        if (take_new) {
+        if (!was_known) {
             const glm::vec3 half = e.box.half_extents();
             encoder_.enter(id, pose_of(e), {half.x, half.y, half.z},
                            id < players_ ? kKindPlayer : kKindBot, 0, snapshot);
             ++cost.enters;
-            continue;
+            return;
         }
         if (encoder_.update(id, pose_of(e), 0, snapshot)) {
             ++cost.updates;
@@ -60,7 +50,9 @@ SnapshotCost ClientReplication::send(const WorldFrame& frame,
                 ++cost.moving_updates;
             }
         }
-    }
+    };
+    protocol::merge_interest(
+        known_, interest, [](std::uint32_t id) { return id; }, leave, send);
     known_.swap(next_known_);
     cost.update_bytes = static_cast<std::uint32_t>(protocol::update_column_bytes(snapshot));
     buffer.clear();

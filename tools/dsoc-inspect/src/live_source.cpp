@@ -29,29 +29,18 @@ interest::PolicySettings policy_settings(const LiveOptions& o) {
     return s;
 }
 
-visibility::RegionCullerConfig culler_config(const std::string& culler) {
+visibility::RegionCullerConfig culler_config(interest::CullerKind culler) {
     visibility::RegionCullerConfig c;
     interest::set_culler_stages(culler, c); // as interest::make_policy reads it
     return c;
 }
 
-/// The element type of InterestPolicy::select()'s answer (entity ids, or entries
-/// with an id), read off its signature.
-template <class Member>
-struct SelectAnswer;
-template <class Policy, class Entry>
-struct SelectAnswer<void (Policy::*)(const interest::GameWorld&, const interest::Viewer&,
-                                     std::vector<Entry>&)> {
-    using type = std::vector<Entry>;
-};
-using SelectOut = SelectAnswer<decltype(&interest::InterestPolicy::select)>::type;
-
 } // namespace
 
 std::vector<std::string> validate(const LiveOptions& o) {
     std::vector<std::string> problems;
-    if (o.policy != "dsoc" && o.policy != "occlusion") {
-        problems.push_back("policy '" + o.policy +
+    if (o.policy != interest::PolicyKind::dsoc && o.policy != interest::PolicyKind::occlusion) {
+        problems.push_back("policy '" + std::string(interest::name_of(o.policy)) +
                            "': the inspector shows the culling policies, dsoc or occlusion");
     }
     // The settings interest::make_policy and GameWorld read, with the server's limits
@@ -65,9 +54,6 @@ std::vector<std::string> validate(const LiveOptions& o) {
     if (o.latency_allowance_ms < 0 || o.latency_allowance_ms > 2000) {
         problems.push_back("latency allowance " + std::to_string(o.latency_allowance_ms) +
                            ": must be 0..2000 ms");
-    }
-    if (o.culler != "shaft" && o.culler != "pyramid" && o.culler != "both") {
-        problems.push_back("culler '" + o.culler + "': must be shaft, pyramid or both");
     }
     if (o.viewer_entity < 1 || o.bots < 1 || o.viewer_entity > static_cast<std::uint32_t>(o.bots)) {
         problems.push_back("client " + std::to_string(o.viewer_entity) +
@@ -93,7 +79,7 @@ LiveSimulation::LiveSimulation(std::shared_ptr<const maps::Map> map, const LiveO
     culling_ = dynamic_cast<const interest::CullingPolicy*>(policy_.get());
     if (culling_ == nullptr) {
         throw std::logic_error("interest::make_policy did not return a CullingPolicy for " +
-                               options.policy);
+                               std::string(interest::name_of(options.policy)));
     }
     policy_->add_viewer(kClientId, options.viewer_entity);
     scene_ = visibility::OccluderScene::build(map_->occluders);
@@ -115,7 +101,7 @@ void LiveSimulation::advance() {
         viewer.client_id = kClientId;
         viewer.entity_id = options_.viewer_entity;
         viewer.eye = world_->eye_of(*self);
-        SelectOut answer;
+        std::vector<interest::Interest> answer;
         policy_->select(*world_, viewer, answer);
     }
 }

@@ -19,17 +19,18 @@ namespace dsoc::interest {
 
 class CullingPolicy final : public InterestPolicy {
 public:
-    /// `name` is reported by name(); `config` must have passed validate();
-    /// `lookahead_ticks` is the client latency allowance in ticks.
-    CullingPolicy(std::string_view name, const visibility::DSOCConfig& config,
-                  const GameWorld& world, visibility::RegionVisibilityFactory make_visibility,
+    /// `name` is reported by name(); `config` must have passed validate(); `map` (which
+    /// must outlive the policy) and `move` are the world's, whose entities all walk by
+    /// `move`; `lookahead_ticks` is the client latency allowance in ticks.
+    CullingPolicy(std::string_view name, const visibility::DSOCConfig& config, const maps::Map& map,
+                  const sim::MoveConfig& move, visibility::RegionVisibilityFactory make_visibility,
                   int lookahead_ticks);
 
     [[nodiscard]] std::string_view name() const override { return name_; }
-    void begin_tick(const GameWorld& world, std::uint64_t tick) override;
-    void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
+    void begin_tick(const WorldView& world, std::uint64_t tick) override;
+    void select(const WorldView& world, const Viewer& viewer, std::vector<Interest>& out) override;
     /// The culler's prepared stage alone (visibility::UpdateEffort::cheapest).
-    void select_cheapest(const GameWorld& world, const Viewer& viewer,
+    void select_cheapest(const WorldView& world, const Viewer& viewer,
                          std::vector<Interest>& out) override;
     void add_viewer(std::uint32_t client_id, std::uint32_t entity_id) override;
     void remove_viewer(std::uint32_t client_id) override;
@@ -38,7 +39,7 @@ public:
     [[nodiscard]] const visibility::InterestManager& manager() const { return interest_.manager(); }
 
 private:
-    void sync_entities(const GameWorld& world);
+    void sync_entities(const WorldView& world);
     void select_with(const Viewer& viewer, visibility::UpdateEffort effort,
                      std::vector<Interest>& out);
 

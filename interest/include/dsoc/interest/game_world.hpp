@@ -6,6 +6,7 @@
 // TBVs rely on. A bot or player whose box touches a hazard (a pit, lava) respawns at a
 // spawn point (a teleport, flagged for that tick).
 
+#include "dsoc/interest/world_view.hpp"
 #include "dsoc/maps/map.hpp"
 #include "dsoc/sim/collision_world.hpp"
 #include "dsoc/sim/player_move.hpp"
@@ -46,7 +47,7 @@ struct Entity {
     bool teleported = false; ///< respawned during the last step()
 };
 
-class GameWorld {
+class GameWorld final : public WorldView {
 public:
     /// `map` must outlive the world and have at least one spawn point.
     GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::Map> map);
@@ -81,6 +82,12 @@ public:
 
     /// All entities in increasing id order.
     [[nodiscard]] const std::vector<Entity>& entities() const { return entities_; }
+    /// WorldView: entities()[index] with its box_of() and velocity.
+    [[nodiscard]] std::size_t entity_count() const override { return entities_.size(); }
+    [[nodiscard]] EntityView entity(std::size_t index) const override {
+        const Entity& e = entities_[index];
+        return {e.id, box_of(e), e.move.velocity};
+    }
     [[nodiscard]] const Entity* find(std::uint32_t id) const;
     /// The entity's collision box in world space.
     [[nodiscard]] visibility::Aabb box_of(const Entity& e) const;

@@ -1,7 +1,8 @@
 #pragma once
 // Interest policies decide, per tick and per client, which entities the client
 // should know about. The server turns the answer into enter/update/leave messages;
-// dsoc-inspect draws it.
+// dsoc-inspect draws it; dsoc-eval runs the same policies over its recorded frames
+// (a WorldView) and judges them.
 //
 // Threading: begin_tick(), add_viewer() and remove_viewer() are serialized (the
 // server's tick thread). After begin_tick(), select() may run concurrently for
@@ -9,6 +10,8 @@
 // on the world, the tick and that viewer, never on the order or the thread.
 
 #include "dsoc/interest/game_world.hpp"
+#include "dsoc/interest/policy_choices.hpp"
+#include "dsoc/interest/world_view.hpp"
 #include "dsoc/maps/pvs.hpp"
 #include "dsoc/visibility/cell_visibility.hpp"
 #include "dsoc/visibility/dsoc_config.hpp"
@@ -45,16 +48,16 @@ public:
     virtual ~InterestPolicy() = default;
     [[nodiscard]] virtual std::string_view name() const = 0;
     /// Called once per tick after movement, before any select(). Serial.
-    virtual void begin_tick(const GameWorld& /*world*/, std::uint64_t /*tick*/) {}
+    virtual void begin_tick(const WorldView& /*world*/, std::uint64_t /*tick*/) {}
     /// Fills `out` (cleared first) with the entities `viewer` should know, in
     /// increasing id order. The server adds the viewer's own entity itself. Call at most
     /// once per viewer per tick; concurrent calls for distinct viewers are safe.
-    virtual void select(const GameWorld& world, const Viewer& viewer,
+    virtual void select(const WorldView& world, const Viewer& viewer,
                         std::vector<Interest>& out) = 0;
     /// select() at the least CPU the policy can answer with, still conservative for
     /// policies that are (a tick over its culling budget). The same call rules as
     /// select(), which it replaces for that viewer and tick. Default: select().
-    virtual void select_cheapest(const GameWorld& world, const Viewer& viewer,
+    virtual void select_cheapest(const WorldView& world, const Viewer& viewer,
                                  std::vector<Interest>& out) {
         select(world, viewer, out);
     }
@@ -85,7 +88,7 @@ public:
 class BroadcastPolicy final : public InterestPolicy {
 public:
     [[nodiscard]] std::string_view name() const override { return "broadcast"; }
-    void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
+    void select(const WorldView& world, const Viewer& viewer, std::vector<Interest>& out) override;
 };
 
 /// Entities whose box comes within `radius` of the viewer's eye (ring culling, as in
@@ -94,7 +97,7 @@ class DistancePolicy final : public InterestPolicy {
 public:
     explicit DistancePolicy(float radius) : radius_(radius) {}
     [[nodiscard]] std::string_view name() const override { return "distance"; }
-    void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
+    void select(const WorldView& world, const Viewer& viewer, std::vector<Interest>& out) override;
 
 private:
     float radius_;
@@ -109,8 +112,8 @@ class PvsPolicy final : public InterestPolicy {
 public:
     explicit PvsPolicy(std::shared_ptr<const maps::Pvs> pvs) : pvs_(std::move(pvs)) {}
     [[nodiscard]] std::string_view name() const override { return "pvs"; }
-    void begin_tick(const GameWorld& world, std::uint64_t tick) override;
-    void select(const GameWorld& world, const Viewer& viewer, std::vector<Interest>& out) override;
+    void begin_tick(const WorldView& world, std::uint64_t tick) override;
+    void select(const WorldView& world, const Viewer& viewer, std::vector<Interest>& out) override;
 
 private:
     std::shared_ptr<const maps::Pvs> pvs_; ///< read-only after construction
@@ -127,17 +130,15 @@ private:
 /// the server builds it from its own settings in one place
 /// (dsoc::server::policy_settings()).
 struct PolicySettings {
-    /// "dsoc" (occlusion culling with TBVs, latency-safe), "occlusion" (the same
-    /// culler, every entity tested every tick, no TBVs), "pvs", "distance" or
-    /// "broadcast".
-    std::string policy = "dsoc";
+    /// Which policy (its names: kPolicyNames).
+    PolicyKind policy = PolicyKind::dsoc;
     /// distance: the radius from the viewer's eye. [Units: world units] [Limit: > 0]
     float distance_radius = 1500.0f;
     /// dsoc and occlusion: the InterestManager's settings, the policy's presets
     /// included. Must pass visibility::validate().
     visibility::DSOCConfig dsoc;
-    /// dsoc and occlusion: the exact occluder stage, "shaft", "pyramid" or "both".
-    std::string culler = "shaft";
+    /// dsoc and occlusion: the exact occluder stages (their names: kCullerNames).
+    CullerKind culler = CullerKind::shaft;
     /// Levels of portal tests in the shaft stage. [Limit: 0..4]
     int portal_depth = 0;
     /// The map's PVS over the reachable clusters before the exact stage.
@@ -146,20 +147,20 @@ struct PolicySettings {
     bool baked_stage = true;
     /// The cell edge the baked table was asked for. [Units: world units]
     float bake_cell_size = 32.0f;
-    /// With baked_stage: "true", "false" or "auto" (use_exact_stages()).
-    std::string exact_stages = "auto";
+    /// With baked_stage: whether the exact stages follow the table (use_exact_stages();
+    /// the names "auto", "true", "false": kExactStagesNames).
+    ExactStages exact_stages = ExactStages::when_coarse;
     /// The client latency allowance. [Units: ticks] [Limit: >= 0]
     int lookahead_ticks = 5;
 };
 
-/// PolicySettings::culler ("shaft", "pyramid" or "both") as the exact stages of
-/// `config`.
-void set_culler_stages(std::string_view culler, visibility::RegionCullerConfig& config);
+/// PolicySettings::culler as the exact stages of `config`.
+void set_culler_stages(CullerKind culler, visibility::RegionCullerConfig& config);
 
-/// The occlusion policy's presets over `config` when `policy` is "occlusion" (every
+/// The occlusion policy's presets over `config` when `policy` is occlusion (every
 /// entity's current box every tick: no TBVs, no culler reuse, no temporal coherence,
 /// no blocker hints); other policies leave it as it is.
-void apply_policy_presets(std::string_view policy, visibility::DSOCConfig& config);
+void apply_policy_presets(PolicyKind policy, visibility::DSOCConfig& config);
 
 /// A latency allowance in whole ticks at `tick_rate`, rounded up: how far ahead a
 /// client's own movement is covered (PolicySettings::lookahead_ticks).
@@ -177,8 +178,8 @@ using BakedTableSource = std::function<std::shared_ptr<const visibility::CellVis
 std::unique_ptr<InterestPolicy> make_policy(const PolicySettings& settings, const GameWorld& world,
                                             const BakedTableSource& baked_table = {});
 
-/// Whether the exact stages follow `table` (PolicySettings::exact_stages; "auto": when
-/// the bake had to make its cells coarser than settings.bake_cell_size).
+/// Whether the exact stages follow `table` (PolicySettings::exact_stages; when_coarse:
+/// when the bake had to make its cells coarser than settings.bake_cell_size).
 [[nodiscard]] bool use_exact_stages(const PolicySettings& settings,
                                     const visibility::CellVisibilityTable& table);
 

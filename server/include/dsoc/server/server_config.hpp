@@ -38,14 +38,16 @@ struct ServerConfig {
     /// Interest policy: "dsoc" (occlusion culling with TBVs, latency-safe),
     /// "occlusion" (the same culler, every entity tested every tick, no TBVs),
     /// "pvs" (the map's PVS from the eye's cluster, as the Quake 3 server does),
-    /// "distance" (radius) or "broadcast" (everything).
-    std::string policy = interest::PolicySettings{}.policy;
+    /// "distance" (radius) or "broadcast" (everything). Read and printed by these names
+    /// (interest::kPolicyNames).
+    interest::PolicyKind policy = interest::PolicySettings{}.policy;
     /// TBV strategy of the dsoc policy: "adaptive", "explicit" or "fuzzy" (not
     /// conservative: for evaluation only).
     std::string tbv_strategy = visibility::to_string(visibility::DSOCConfig{}.strategy);
     /// Stages of the occlusion culler: "shaft" (exact single-occluder test, no
-    /// per-region build), "pyramid" (extended-projection z-pyramid) or "both".
-    std::string culler = interest::PolicySettings{}.culler;
+    /// per-region build), "pyramid" (extended-projection z-pyramid) or "both"
+    /// (interest::kCullerNames).
+    interest::CullerKind culler = interest::PolicySettings{}.culler;
     /// Levels of portal tests in the culler's shaft stage (RegionCullerConfig::
     /// portal_depth): 2 sends about 15% fewer entities on oa_dm4 for about 4x the
     /// culling CPU, so the server defaults to 0 (capacity) where the library and the
@@ -70,7 +72,8 @@ struct ServerConfig {
     /// fine as bake_cell_size, the exact stages too when the map needed coarser cells to
     /// fit the table's memory budget (open and large maps, where a coarse table hides
     /// little). Without baked_stage the exact stages always run. See docs/operations.md.
-    std::string exact_stages = interest::PolicySettings{}.exact_stages;
+    /// (interest::kExactStagesNames).
+    interest::ExactStages exact_stages = interest::PolicySettings{}.exact_stages;
     /// Fail-open: clients whose culling has not started this share of the tick period
     /// after the tick began get the policy's cheapest conservative answer (the baked
     /// table or the PVS alone, no exact stage) instead of making the tick late; counted

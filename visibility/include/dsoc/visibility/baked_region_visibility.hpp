@@ -77,6 +77,10 @@ private:
     [[nodiscard]] bool box_hidden(const Aabb& box) const;
     /// The table proves a box prepared by this stage hidden from the built region.
     [[nodiscard]] bool prepared_hidden(const PreparedBox& p) const;
+    /// A prepared test, in the stages' order: the table's answer where it settles `p`,
+    /// else `ask_next(next stage)` (the next stage's test of the same kind).
+    template <class AskNext>
+    [[nodiscard]] Visibility table_then(const PreparedBox& p, AskNext&& ask_next) const;
     /// With `where_uncovered`: the next stage, built for the last region first.
     [[nodiscard]] const RegionVisibility& fallback() const;
     /// With `where_uncovered`, every test of `box`: the table's answer where it covers

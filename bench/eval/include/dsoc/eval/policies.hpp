@@ -1,5 +1,8 @@
 #pragma once
-// The interest policies dsoc-eval compares, all fed the identical world frames:
+// The interest policies dsoc-eval compares, all fed the identical world frames; each
+// is an interest::InterestPolicy, the server's own where the server has it (broadcast,
+// distance, pvs, and the culling policies: interest::CullingPolicy with the eval's
+// TBV strategies and culler stages):
 //   broadcast      every entity
 //   distance       entities whose box comes within a radius of the eye (ring culling)
 //   occlusion      the from-region z-pyramid rebuilt every tick, every box tested
@@ -11,13 +14,11 @@
 //                  its velocity x latency (SMAC-style) to the target box's 8 corners
 //                  and centre; not conservative (docs/evaluation.md)
 //   occlusion-k0   diagnostic, only when named: occlusion from the present eye alone
-//
-// Threading: begin_tick() is serial; select() may then run concurrently for
-// distinct clients.
 
 #include "dsoc/eval/ray_oracle.hpp"
 #include "dsoc/eval/scenario.hpp"
 #include "dsoc/eval/world_sim.hpp"
+#include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/visibility/cell_visibility.hpp"
 #include "dsoc/visibility/dsoc_config.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
@@ -27,6 +28,10 @@
 #include <string>
 #include <string_view>
 #include <vector>
+
+namespace dsoc::interest {
+class CullingPolicy;
+}
 
 namespace dsoc::eval {
 
@@ -72,21 +77,46 @@ struct TbvSummary {
     std::uint64_t fuzzy_escapes = 0;    ///< entities caught outside their fuzzy TBV
 };
 
-class Policy {
+/// A policy as dsoc-eval runs it: an interest::InterestPolicy (the server's own, or
+/// the evaluation's raycast) over the evaluation's frames, client i viewing from
+/// entity i, its own entity left out of its set.
+///
+/// Threading: begin_tick() is serial; select() may then run concurrently for
+/// distinct clients.
+class EvalPolicy {
 public:
-    virtual ~Policy() = default;
-    [[nodiscard]] virtual std::string_view name() const = 0;
-    /// Ticks of the viewer's own movement the policy promises to cover (trace header).
-    [[nodiscard]] virtual int lookahead_ticks() const { return 0; }
-    /// Serial part of a tick: the world is now `frame`.
-    virtual void begin_tick(const WorldFrame& /*frame*/) {}
+    /// `policy` over `world`'s frames (`world` must outlive it). `lookahead_ticks`: the
+    /// ticks of the viewer's own movement it promises to cover (trace header; 0 for the
+    /// policies without a latency allowance). `cheapest_share`: the share of client-ticks,
+    /// chosen by a hash, answered by select_cheapest() (an emulated overload). [Limit: 0..1]
+    EvalPolicy(std::unique_ptr<interest::InterestPolicy> policy, const WorldSim& world,
+               int lookahead_ticks, double cheapest_share = 0.0);
+
+    [[nodiscard]] std::string_view name() const { return policy_->name(); }
+    [[nodiscard]] int lookahead_ticks() const { return lookahead_ticks_; }
+    /// Serial part of a tick: the world is now `frame`. The first call adds every viewer.
+    void begin_tick(const WorldFrame& frame);
     /// Client `client`'s interest set in `out` (cleared first): increasing entity ids,
-    /// its own entity left out. Concurrent for distinct clients after begin_tick().
-    virtual void select(std::size_t client, const WorldFrame& frame,
-                        std::vector<std::uint32_t>& out) = 0;
-    [[nodiscard]] virtual TbvSummary tbv_summary() const { return {}; }
+    /// its own entity left out.
+    void select(std::size_t client, const WorldFrame& frame, std::vector<std::uint32_t>& out);
+    /// The InterestManager's counters for the culling policies (available = false for
+    /// the others).
+    [[nodiscard]] TbvSummary tbv_summary() const;
     /// Live TBV groups summed over clients (0 for policies without TBVs).
-    [[nodiscard]] virtual std::uint64_t live_tbvs() const { return 0; }
+    [[nodiscard]] std::uint64_t live_tbvs() const { return policy_->tbvs_alive(); }
+
+private:
+    /// Whether this client-tick is one of the emulated overload's (cheapest_share_ of
+    /// them, chosen by a hash: the same in every run and at any thread count).
+    [[nodiscard]] bool over_budget(std::size_t client, std::uint64_t tick) const;
+
+    std::unique_ptr<interest::InterestPolicy> policy_;
+    const interest::CullingPolicy* culling_ = nullptr; ///< policy_, when it culls
+    const WorldSim* world_;
+    int lookahead_ticks_;
+    double cheapest_share_;
+    bool started_ = false;
+    std::vector<std::vector<interest::Interest>> answers_; ///< per client, reused
 };
 
 /// The dsoc policies over a baked cell table (EvalOptions::bake_cell_size):
@@ -102,6 +132,6 @@ const std::vector<std::string>& baked_policy_names();
 [[nodiscard]] const std::vector<std::string>& diagnostic_policy_names();
 
 /// The policy `name` over `env` (which must outlive it); nullptr for an unknown name.
-[[nodiscard]] std::unique_ptr<Policy> make_policy(std::string_view name, const PolicyEnv& env);
+[[nodiscard]] std::unique_ptr<EvalPolicy> make_policy(std::string_view name, const PolicyEnv& env);
 
 } // namespace dsoc::eval

@@ -6,8 +6,9 @@
 // server uses and sized by the real protocol encoder. Every entity is sent on the
 // near tier (updated every tick, finest quantum): the eval's policies give no
 // level-of-detail hint, so all of them are measured with the same precision.
-// dsoc-eval does not link the server (and Asio); the merge below re-states
-// dsoc::server::ReplicationState over the evaluation's frames.
+// dsoc-eval does not link the server (and Asio); it walks the server's rule
+// (protocol::merge_interest, as dsoc::server::ReplicationState does) over the
+// evaluation's frames.
 
 #include "dsoc/eval/world_sim.hpp"
 #include "dsoc/protocol/compact_snapshot.hpp"

@@ -11,8 +11,8 @@
 
 #include "dsoc/inspect/caption.hpp"
 #include "dsoc/inspect/image.hpp"
-#include "dsoc/visibility/occlusion_buffer.hpp"
 #include "dsoc/visibility/region_occlusion_buffer.hpp"
+#include "dsoc/visibility/seeds/occlusion_buffer.hpp"
 
 #include <array>
 #include <functional>

@@ -26,16 +26,16 @@ class CullingPolicy;
 namespace dsoc::inspect {
 
 struct LiveOptions {
-    /// "dsoc" (TBVs) or "occlusion" (every box every tick, no TBVs).
-    std::string policy = "dsoc";
+    /// dsoc (TBVs) or occlusion (every box every tick, no TBVs).
+    interest::PolicyKind policy = interest::PolicyKind::dsoc;
     /// Wandering entities (arena-64 has 64 viewers + 512 bots = 576). [Limit: 1..100000]
     int bots = 576;
     /// [Units: Hz] [Limit: 1..240]
     int tick_rate = 30;
     /// Round trip + interpolation the server covers. [Units: ms] [Limit: 0..2000]
     int latency_allowance_ms = 150;
-    /// Culler stages: "shaft" (the server's default), "pyramid" or "both".
-    std::string culler = "shaft";
+    /// Culler stages: shaft (the server's default), pyramid or both.
+    interest::CullerKind culler = interest::CullerKind::shaft;
     std::uint64_t seed = 1;
     /// The bot the inspected client views from. [Limit: 1..bots]
     std::uint32_t viewer_entity = 1;

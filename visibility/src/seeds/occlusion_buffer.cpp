@@ -12,7 +12,7 @@
 //  * Margins: hits need min_front w > max_back w * (1 + 1e-4); written depths are
 //    scaled up by 1 + 1e-4 and tested depths down by 1 - 1e-5, all toward `visible`.
 
-#include "dsoc/visibility/occlusion_buffer.hpp"
+#include "dsoc/visibility/seeds/occlusion_buffer.hpp"
 
 #include <algorithm>
 #include <cmath>

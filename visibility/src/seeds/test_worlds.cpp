@@ -1,4 +1,4 @@
-#include "dsoc/visibility/test_worlds.hpp"
+#include "dsoc/visibility/seeds/test_worlds.hpp"
 
 #include <glm/geometric.hpp>
 

@@ -6,7 +6,7 @@
 // that hit O, and is not in front of O's entry point (it is inside every front
 // plane), so the segment E->P crosses O's interior. See docs/visibility.md.
 
-#include "dsoc/visibility/occlusion_beams.hpp"
+#include "dsoc/visibility/seeds/occlusion_beams.hpp"
 
 #include <glm/geometric.hpp>
 

@@ -1,0 +1,24 @@
+#pragma once
+// One of the evaluation's frames as the interest layer's policies read a world
+// (interest::WorldView): entity i is frames' entity i, with its box and velocity.
+
+#include "dsoc/eval/world_sim.hpp"
+#include "dsoc/interest/world_view.hpp"
+
+namespace dsoc::eval {
+
+class FrameView final : public interest::WorldView {
+public:
+    /// `frame` must outlive the view.
+    explicit FrameView(const WorldFrame& frame) : frame_(&frame) {}
+    [[nodiscard]] std::size_t entity_count() const override { return frame_->entities.size(); }
+    [[nodiscard]] interest::EntityView entity(std::size_t index) const override {
+        const EntityFrame& e = frame_->entities[index];
+        return {static_cast<std::uint32_t>(index), e.box, e.velocity};
+    }
+
+private:
+    const WorldFrame* frame_;
+};
+
+} // namespace dsoc::eval
