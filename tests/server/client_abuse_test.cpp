@@ -162,6 +162,33 @@ TEST(ClientAbuse, SnapshotsTheKernelTakesInPartArriveWhole) {
     EXPECT_EQ(server.stats().disconnects.count("too_slow"), 0u);
 }
 
+TEST(ClientAbuse, GoodClientsGetEveryFrameWholeAndATicksPartsAddUp) {
+    // The other side of the hand-over's direct writes: clients that keep up have every
+    // frame taken whole by the kernel (nothing queued), every byte they receive was
+    // counted as sent, and the three parts of a tick in /metrics add up to its cost.
+    auto c = base_config();
+    c.policy = interest::PolicyKind::broadcast;
+    RunningServer server(c);
+    GoodClients good(server.port(), 1.5, std::nullopt, 4);
+    const auto report = good.finish();
+    server.stop();
+
+    EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
+    const auto& stats = server.stats();
+    EXPECT_GE(stats.snapshots_sent, 4u * 30u);
+    EXPECT_EQ(stats.snapshot_writes_queued, 0u);
+    EXPECT_GT(report.bytes_down, 0u);
+    EXPECT_LE(report.bytes_down, stats.bytes_sent) << "a client received bytes never counted";
+    const std::uint64_t ticks = stats.tick_duration.count();
+    EXPECT_GE(ticks, 30u);
+    EXPECT_EQ(stats.prepare_duration.count(), ticks);
+    EXPECT_EQ(stats.culling_duration.count(), ticks);
+    EXPECT_EQ(stats.handover_duration.count(), ticks);
+    const double parts =
+        stats.prepare_duration.sum() + stats.culling_duration.sum() + stats.handover_duration.sum();
+    EXPECT_NEAR(parts, stats.tick_duration.sum(), 1e-6 * static_cast<double>(ticks));
+}
+
 TEST(ClientAbuse, ConnectionsWithoutHelloAreClosedAtTheDeadline) {
     RunningServer server(base_config());
     GoodClients good(server.port(), kGoodSeconds);
