@@ -20,21 +20,37 @@ bool eye_pvs_rows(const maps::Pvs* pvs, glm::vec3 eye, std::vector<std::int32_t>
     return true;
 }
 
-void BroadcastPolicy::select(const WorldView& world, const Viewer& /*viewer*/,
-                             std::vector<Interest>& out) {
-    out.clear();
-    for (std::size_t i = 0; i < world.entity_count(); ++i) {
-        out.push_back({world.entity(i).id, 0});
+void BroadcastPolicy::begin_tick(const WorldView& world, std::uint64_t /*tick*/) {
+    ids_.resize(world.entity_count());
+    for (std::size_t i = 0; i < ids_.size(); ++i) {
+        ids_[i] = world.entity(i).id;
     }
 }
 
-void DistancePolicy::select(const WorldView& world, const Viewer& viewer,
+void BroadcastPolicy::select(const WorldView& /*world*/, const Viewer& /*viewer*/,
+                             std::vector<Interest>& out) {
+    out.clear();
+    for (const std::uint32_t id : ids_) {
+        out.push_back({id, 0});
+    }
+}
+
+void DistancePolicy::begin_tick(const WorldView& world, std::uint64_t /*tick*/) {
+    ids_.resize(world.entity_count());
+    boxes_.resize(ids_.size());
+    for (std::size_t i = 0; i < ids_.size(); ++i) {
+        const EntityView e = world.entity(i);
+        ids_[i] = e.id;
+        boxes_[i] = e.box;
+    }
+}
+
+void DistancePolicy::select(const WorldView& /*world*/, const Viewer& viewer,
                             std::vector<Interest>& out) {
     out.clear();
-    for (std::size_t i = 0; i < world.entity_count(); ++i) {
-        const EntityView e = world.entity(i);
-        if (within_radius(e.box, viewer.eye, radius_)) {
-            out.push_back({e.id, 0});
+    for (std::size_t i = 0; i < ids_.size(); ++i) {
+        if (within_radius(boxes_[i], viewer.eye, radius_)) {
+            out.push_back({ids_[i], 0});
         }
     }
 }

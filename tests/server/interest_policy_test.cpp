@@ -39,6 +39,7 @@ TEST(InterestPolicy, BroadcastSelectsEverything) {
     GameWorld world(world_settings(bots(25)), testing::rooms_map());
     BroadcastPolicy policy;
     std::vector<Interest> out;
+    policy.begin_tick(world, 1);
     policy.select(world, Viewer{1, 1, {0, 0, 0}}, out);
     EXPECT_EQ(out.size(), 25u);
     EXPECT_TRUE(std::is_sorted(out.begin(), out.end(),
@@ -54,6 +55,7 @@ TEST(InterestPolicy, DistanceKeepsExactlyTheEntitiesWithinRadius) {
     DistancePolicy policy(radius);
     std::vector<Interest> out;
     const glm::vec3 eye = world.eye_of(world.entities().front());
+    policy.begin_tick(world, 60);
     policy.select(world, Viewer{1, 0, eye}, out);
     std::size_t expected = 0;
     for (const Entity& e : world.entities()) {

@@ -85,22 +85,31 @@ public:
                                 std::vector<std::uint8_t>& rows);
 
 /// Every entity, always.
+/// The entity ids are taken once per tick (begin_tick) for all clients.
 class BroadcastPolicy final : public InterestPolicy {
 public:
     [[nodiscard]] std::string_view name() const override { return "broadcast"; }
+    void begin_tick(const WorldView& world, std::uint64_t tick) override;
     void select(const WorldView& world, const Viewer& viewer, std::vector<Interest>& out) override;
+
+private:
+    std::vector<std::uint32_t> ids_; // this tick's entities, increasing
 };
 
 /// Entities whose box comes within `radius` of the viewer's eye (ring culling, as in
-/// Unreal's replication graph grid or Mirror's distance interest management).
+/// Unreal's replication graph grid or Mirror's distance interest management). The
+/// entities' ids and boxes are taken once per tick (begin_tick) for all clients.
 class DistancePolicy final : public InterestPolicy {
 public:
     explicit DistancePolicy(float radius) : radius_(radius) {}
     [[nodiscard]] std::string_view name() const override { return "distance"; }
+    void begin_tick(const WorldView& world, std::uint64_t tick) override;
     void select(const WorldView& world, const Viewer& viewer, std::vector<Interest>& out) override;
 
 private:
     float radius_;
+    std::vector<std::uint32_t> ids_; // this tick's entities, increasing
+    std::vector<visibility::Aabb> boxes_;
 };
 
 /// What the Quake 3 server does: an entity is sent when its box touches a leaf whose
