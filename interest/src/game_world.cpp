@@ -24,6 +24,8 @@ float wrap_degrees(float deg) {
 GameWorld::GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::Map> map)
     : map_(std::move(map)), collision_(map_->collision_brushes) {
     move_.max_speed = settings.max_speed;
+    wander_.respawn_delay_ticks = settings.respawn_delay_ticks;
+    respawn_delay_ticks_ = settings.respawn_delay_ticks;
     entities_.reserve(static_cast<std::size_t>(settings.bots) + 64);
     bots_ = sim::spawn_wander_bots(collision_, move_, map_->spawn_points,
                                    static_cast<std::size_t>(settings.bots), settings.seed);
@@ -100,6 +102,13 @@ glm::vec3 GameWorld::eye_of(const Entity& e) const {
     return e.move.position + glm::vec3(0.0f, 0.0f, move_.eye_height);
 }
 
+std::optional<glm::vec3> GameWorld::arrival_eye_of(const Entity& e) const {
+    if (!e.respawn) {
+        return std::nullopt;
+    }
+    return e.respawn->arrival.position + glm::vec3(0.0f, 0.0f, move_.eye_height);
+}
+
 void GameWorld::set_player_input(std::uint32_t id, glm::vec3 wish, bool jump, float yaw_deg,
                                  float pitch_deg) {
     const auto it = index_.find(id);
@@ -116,6 +125,7 @@ void GameWorld::set_player_input(std::uint32_t id, glm::vec3 wish, bool jump, fl
 }
 
 void GameWorld::step(float dt, const ParallelFor& parallel) {
+    died_.assign(entities_.size(), 0);
     const auto move_one = [this, dt](std::size_t i) {
         Entity& e = entities_[i];
         if (e.bot >= 0) {
@@ -124,15 +134,23 @@ void GameWorld::step(float dt, const ParallelFor& parallel) {
                              dt);
             e.move = brain.state;
             e.teleported = brain.respawned;
+            e.respawn = brain.respawn;
             const glm::vec3 v = e.move.velocity;
             if (v.x * v.x + v.y * v.y > 1.0f) {
                 e.yaw_deg = glm::degrees(std::atan2(v.y, v.x));
             }
+        } else if (e.respawn) {
+            e.teleported = sim::step_dead(*e.respawn, e.move);
+            if (e.teleported) {
+                e.yaw_deg = wrap_degrees(e.respawn->yaw_degrees);
+                e.respawn.reset();
+            }
         } else {
             sim::player_move(collision_, move_, e.input, dt, e.move);
-            // A player who touches a hazard dies (put back at a spawn point below).
-            e.teleported =
-                !map_->spawn_points.empty() && sim::touches_hazard(move_, e.move, map_->hazards);
+            e.teleported = false;
+            // A player who touches a hazard dies (its spawn point is picked below).
+            died_[i] = static_cast<std::uint8_t>(!map_->spawn_points.empty() &&
+                                                 sim::touches_hazard(move_, e.move, map_->hazards));
         }
     };
     if (parallel) {
@@ -142,12 +160,21 @@ void GameWorld::step(float dt, const ParallelFor& parallel) {
             move_one(i);
         }
     }
-    // The dead players go to the next spawn points in id order (as bots do: a teleport).
-    for (Entity& e : entities_) {
-        if (e.bot < 0 && e.teleported) {
-            const auto& spawn = map_->spawn_points[next_spawn_++ % map_->spawn_points.size()];
-            e.move = sim::spawn_state(collision_, move_, spawn.origin);
+    // The dead players get the next spawn points in id order; they are put there
+    // respawn_delay_ticks steps later (at once without a delay, as bots are).
+    for (std::size_t i = 0; i < entities_.size(); ++i) {
+        if (died_[i] == 0) {
+            continue;
+        }
+        Entity& e = entities_[i];
+        const auto& spawn = map_->spawn_points[next_spawn_++ % map_->spawn_points.size()];
+        sim::PendingRespawn pending{sim::spawn_state(collision_, move_, spawn.origin),
+                                    spawn.yaw_degrees, respawn_delay_ticks_ + 1};
+        e.teleported = sim::step_dead(pending, e.move);
+        if (e.teleported) {
             e.yaw_deg = wrap_degrees(spawn.yaw_degrees);
+        } else {
+            e.respawn = pending;
         }
     }
 }

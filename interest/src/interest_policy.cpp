@@ -20,6 +20,24 @@ bool eye_pvs_rows(const maps::Pvs* pvs, glm::vec3 eye, std::vector<std::int32_t>
     return true;
 }
 
+bool viewer_pvs_rows(const maps::Pvs* pvs, const Viewer& viewer,
+                     std::vector<std::int32_t>& clusters, std::vector<std::uint8_t>& rows,
+                     std::vector<std::uint8_t>& scratch) {
+    if (!eye_pvs_rows(pvs, viewer.eye, clusters, rows)) {
+        return false;
+    }
+    if (!viewer.arrival_eye) {
+        return true;
+    }
+    if (!eye_pvs_rows(pvs, *viewer.arrival_eye, clusters, scratch)) {
+        return false;
+    }
+    for (std::size_t i = 0; i < rows.size() && i < scratch.size(); ++i) {
+        rows[i] |= scratch[i];
+    }
+    return true;
+}
+
 void BroadcastPolicy::begin_tick(const WorldView& world, std::uint64_t /*tick*/) {
     ids_.resize(world.entity_count());
     for (std::size_t i = 0; i < ids_.size(); ++i) {
@@ -49,7 +67,7 @@ void DistancePolicy::select(const WorldView& /*world*/, const Viewer& viewer,
                             std::vector<Interest>& out) {
     out.clear();
     for (std::size_t i = 0; i < ids_.size(); ++i) {
-        if (within_radius(boxes_[i], viewer.eye, radius_)) {
+        if (within_radius(boxes_[i], viewer, radius_)) {
             out.push_back({ids_[i], 0});
         }
     }
@@ -76,7 +94,8 @@ void PvsPolicy::select(const WorldView& /*world*/, const Viewer& viewer,
     // Per-thread scratch: select() runs concurrently for distinct viewers.
     thread_local std::vector<std::int32_t> eye_clusters;
     thread_local std::vector<std::uint8_t> rows;
-    const bool known = eye_pvs_rows(pvs_.get(), viewer.eye, eye_clusters, rows);
+    thread_local std::vector<std::uint8_t> arrival_rows;
+    const bool known = viewer_pvs_rows(pvs_.get(), viewer, eye_clusters, rows, arrival_rows);
     for (std::size_t i = 0; i < ids_.size(); ++i) {
         if (!known || always_sent_[i] || pvs_->may_see_clusters(rows, clusters_[i])) {
             out.push_back({ids_[i], 0});

@@ -17,6 +17,8 @@ interest::WorldSettings world_settings(const ServerConfig& config) {
     s.bots = config.bots;
     s.max_speed = config.max_speed;
     s.seed = config.seed;
+    // The shortest delay that keeps respawns from popping entities in (sim/respawn.hpp).
+    s.respawn_delay_ticks = lookahead_ticks(config);
     return s;
 }
 

@@ -251,7 +251,7 @@ void Server::prepare_client_ticks() {
             continue;
         }
         ClientTick job;
-        job.viewer = interest::Viewer{id, session.entity_id(), world_.eye_of(*self)};
+        job.viewer = interest::viewer_of(world_, id, *self);
         job.replication = &client.replication;
         job.interest = &client.interest;
         job.envelope = &client.envelope;
@@ -334,8 +334,8 @@ void Server::write_trace_tick() {
         if (!session.active() || self == nullptr) {
             continue;
         }
-        t.clients.push_back(
-            {id, session.entity_id(), world_.eye_of(*self), client.replication.known()});
+        t.clients.push_back({id, session.entity_id(), world_.eye_of(*self),
+                             client.replication.known(), world_.arrival_eye_of(*self)});
     }
     trace_->write_tick(t);
 }

@@ -165,7 +165,7 @@ int main(int argc, char** argv) {
         lap(p.snapshot);
         for (auto& c : clients) {
             const interest::Entity* self = world.find(c->entity_id);
-            const interest::Viewer viewer{c->client_id, c->entity_id, world.eye_of(*self)};
+            const interest::Viewer viewer = interest::viewer_of(world, c->client_id, *self);
             // As run_client_ticks: the policy's set plus the viewer's own entity.
             policy->select(world, viewer, c->interest);
             server::add_own_entity(c->interest, c->entity_id);

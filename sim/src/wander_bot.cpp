@@ -108,15 +108,28 @@ MoveInput wander_think(WanderBot& bot, const WanderConfig& config, const MoveCon
 void wander_step(WanderBot& bot, const CollisionWorld& world, const WanderConfig& config,
                  const MoveConfig& move, std::span<const maps::SpawnPoint> spawns,
                  std::span<const maps::Hazard> hazards, float dt) {
+    bot.respawned = false;
+    if (bot.respawn) {
+        if (step_dead(*bot.respawn, bot.state)) {
+            bot.respawn.reset();
+            bot.respawned = true;
+            pick_goal(bot, config, spawns);
+        }
+        return;
+    }
     const MoveInput input = wander_think(bot, config, move, spawns, dt);
     player_move(world, move, input, dt, bot.state);
-    bot.respawned = false;
     if (!spawns.empty() && touches_hazard(move, bot.state, hazards)) {
         ++bot.deaths;
-        bot.respawned = true;
-        bot.state =
-            spawn_state(world, move, spawns[next_random(bot.random_state) % spawns.size()].origin);
-        pick_goal(bot, config, spawns);
+        const maps::SpawnPoint& spawn = spawns[next_random(bot.random_state) % spawns.size()];
+        PendingRespawn pending{spawn_state(world, move, spawn.origin), spawn.yaw_degrees,
+                               config.respawn_delay_ticks + 1};
+        if (step_dead(pending, bot.state)) { // no delay
+            bot.respawned = true;
+            pick_goal(bot, config, spawns);
+        } else {
+            bot.respawn = pending;
+        }
     }
 }
 

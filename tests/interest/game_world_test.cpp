@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <functional>
+#include <memory>
+#include <optional>
 #include <random>
 #include <thread>
 
@@ -52,32 +54,79 @@ TEST(GameWorld, ReservedPlayersSpawnInIdOrderWhateverOrderTheySpawnIn) {
     EXPECT_TRUE(ids_increasing(world));
 }
 
+/// The rooms map with a pit under the first spawn point, and a player put there: it
+/// dies on its first step (`respawn_delay_ticks` as given; no bots).
+struct DyingPlayer {
+    std::shared_ptr<maps::Map> map = std::make_shared<maps::Map>(*testing::rooms_map());
+    glm::vec3 pit{0.0f};
+    std::unique_ptr<GameWorld> world;
+    std::uint32_t id = 0;
+
+    explicit DyingPlayer(int respawn_delay_ticks) {
+        WorldSettings settings;
+        settings.bots = 0;
+        settings.respawn_delay_ticks = respawn_delay_ticks;
+        // The world hands out spawn points round robin from seed % count.
+        pit = testing::add_pit_at_spawn(*map, settings.seed % map->spawn_points.size());
+        world = std::make_unique<GameWorld>(settings, map);
+        id = world->spawn_player();
+    }
+};
+
 TEST(GameWorld, APlayerWhoTouchesAHazardRespawnsAtTheNextSpawnPoint) {
-    // A pit under the first spawn point: the player put there dies on its first step
-    // and is back at the next spawn point, flagged as a teleport for that tick only.
-    auto map = std::make_shared<maps::Map>(*testing::rooms_map());
-    ASSERT_GE(map->spawn_points.size(), 2u);
-    WorldSettings settings;
-    settings.bots = 0;
-    // The world hands out spawn points round robin from seed % count.
-    const std::size_t first = settings.seed % map->spawn_points.size();
-    const glm::vec3 pit = map->spawn_points[first].origin;
-    map->hazards.push_back(
-        {visibility::Aabb{pit - glm::vec3(40.0f), pit + glm::vec3(40.0f)}, "test pit"});
-    for (std::size_t i = 0; i < map->spawn_points.size(); ++i) {
-        if (i != first) {
-            ASSERT_GT(glm::length(map->spawn_points[i].origin - pit), 200.0f);
+    // Without a delay the player is back at the next spawn point at once, flagged as a
+    // teleport for that tick only.
+    DyingPlayer dying(0);
+    for (const auto& spawn : dying.map->spawn_points) {
+        if (spawn.origin != dying.pit) {
+            ASSERT_GT(glm::length(spawn.origin - dying.pit), 200.0f);
         }
     }
-    GameWorld world(settings, map);
-    const std::uint32_t id = world.spawn_player();
+    GameWorld& world = *dying.world;
+    world.step(1.0f / 30.0f);
+    const Entity* e = world.find(dying.id);
+    ASSERT_NE(e, nullptr);
+    EXPECT_TRUE(e->teleported);
+    EXPECT_FALSE(e->respawn.has_value());
+    EXPECT_GT(glm::length(e->move.position - dying.pit), 150.0f);
+    world.step(1.0f / 30.0f);
+    EXPECT_FALSE(world.find(dying.id)->teleported);
+}
+
+TEST(GameWorld, ADeadPlayerIsPutAtItsSpawnPointOnlyAfterTheRespawnDelay) {
+    // With a delay the spawn point is picked at death and shown as the entity's arrival
+    // eye; the player lies where it died, at rest, until it is put there.
+    constexpr int kDelay = 4;
+    DyingPlayer dying(kDelay);
+    GameWorld& world = *dying.world;
+    const std::uint32_t id = dying.id;
+    const glm::vec3 pit = dying.pit;
     world.step(1.0f / 30.0f);
     const Entity* e = world.find(id);
     ASSERT_NE(e, nullptr);
+    EXPECT_FALSE(e->teleported);
+    ASSERT_TRUE(e->respawn.has_value());
+    const glm::vec3 died_at = e->move.position;
+    const glm::vec3 arrival = e->respawn->arrival.position;
+    EXPECT_LT(glm::length(died_at - pit), 80.0f);
+    EXPECT_GT(glm::length(arrival - pit), 150.0f);
+    const glm::vec3 arrival_eye = arrival + glm::vec3(0.0f, 0.0f, world.move_config().eye_height);
+    for (int step = 1; step <= kDelay; ++step) {
+        e = world.find(id);
+        EXPECT_EQ(e->move.position, died_at) << "step " << step;
+        EXPECT_EQ(e->move.velocity, glm::vec3(0.0f));
+        EXPECT_EQ(world.arrival_eye_of(*e), std::optional<glm::vec3>(arrival_eye));
+        const std::size_t index = static_cast<std::size_t>(e - world.entities().data());
+        EXPECT_EQ(world.entity(index).arrival_eye, std::optional<glm::vec3>(arrival_eye));
+        world.set_player_input(id, glm::vec3(1.0f, 0.0f, 0.0f), true, 0.0f, 0.0f); // ignored
+        world.step(1.0f / 30.0f);
+        EXPECT_EQ(world.find(id)->teleported, step == kDelay) << "step " << step;
+    }
+    e = world.find(id);
     EXPECT_TRUE(e->teleported);
-    EXPECT_GT(glm::length(e->move.position - pit), 150.0f);
-    world.step(1.0f / 30.0f);
-    EXPECT_FALSE(world.find(id)->teleported);
+    EXPECT_EQ(e->move.position, arrival);
+    EXPECT_FALSE(e->respawn.has_value());
+    EXPECT_FALSE(world.arrival_eye_of(*e).has_value());
 }
 
 TEST(GameWorld, MovesThroughAParallelForGiveTheSameWorldAsOneByOne) {
@@ -85,12 +134,11 @@ TEST(GameWorld, MovesThroughAParallelForGiveTheSameWorldAsOneByOne) {
     // is not per entity); the parallel world's moves run on four threads, in blocks.
     auto map = std::make_shared<maps::Map>(*testing::rooms_map());
     for (std::size_t i = 0; i < map->spawn_points.size(); i += 2) {
-        const glm::vec3 at = map->spawn_points[i].origin;
-        map->hazards.push_back(
-            {visibility::Aabb{at - glm::vec3(40.0f), at + glm::vec3(40.0f)}, "test pit"});
+        testing::add_pit_at_spawn(*map, i);
     }
     WorldSettings settings;
     settings.bots = 40;
+    settings.respawn_delay_ticks = 3;
     GameWorld serial(settings, map);
     GameWorld parallel(settings, map);
     std::vector<std::uint32_t> players;
@@ -134,7 +182,9 @@ TEST(GameWorld, MovesThroughAParallelForGiveTheSameWorldAsOneByOne) {
             ASSERT_EQ(a.id, b.id);
             ASSERT_TRUE(a.move.position == b.move.position && a.move.velocity == b.move.velocity &&
                         a.move.on_ground == b.move.on_ground && a.yaw_deg == b.yaw_deg &&
-                        a.teleported == b.teleported)
+                        a.teleported == b.teleported &&
+                        a.respawn.has_value() == b.respawn.has_value() &&
+                        (!a.respawn || a.respawn->arrival.position == b.respawn->arrival.position))
                 << "tick " << tick << " entity " << a.id;
             teleports += a.teleported ? 1 : 0;
         }

@@ -1,3 +1,4 @@
+#include "dsoc/interest/culling_policy.hpp"
 #include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/server/interest_setup.hpp"
 #include "support/test_maps.hpp"
@@ -11,7 +12,10 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <iterator>
 #include <memory>
+#include <optional>
+#include <string>
 
 namespace dsoc::server {
 namespace {
@@ -242,6 +246,126 @@ TEST(GameWorld, EntitiesNeverExceedMaxSpeedHorizontally) {
     EXPECT_GE(p->yaw_deg, -180.0f);
     EXPECT_LT(p->yaw_deg, 180.0f);
     EXPECT_EQ(p->pitch_deg, 90.0f);
+}
+
+} // namespace
+} // namespace dsoc::server
+
+namespace dsoc::server {
+namespace {
+
+std::vector<std::uint32_t> ids_of(const std::vector<Interest>& set) {
+    std::vector<std::uint32_t> ids;
+    for (const Interest& i : set) {
+        ids.push_back(i.id);
+    }
+    return ids;
+}
+
+std::vector<std::uint32_t> union_of(const std::vector<std::uint32_t>& a,
+                                    const std::vector<std::uint32_t>& b) {
+    std::vector<std::uint32_t> out;
+    std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out));
+    return out;
+}
+
+/// oa_dm4 with a pit under the first player's spawn point: the player dies on its
+/// first step, bound for the next spawn point (the world's respawn delay is the
+/// latency allowance: world_settings()).
+struct DyingViewer {
+    std::shared_ptr<const maps::Map> map;
+    std::unique_ptr<GameWorld> world;
+    std::uint32_t player = 0;
+};
+
+std::optional<DyingViewer> dying_viewer_on_oa_dm4() {
+    auto loaded = maps::load_map("oa_dm4", maps::MapSearch::from_environment());
+    if (!loaded) {
+        return std::nullopt;
+    }
+    auto map = std::make_shared<maps::Map>(std::move(loaded).value());
+    const interest::WorldSettings settings = world_settings(bots(200));
+    testing::add_pit_at_spawn(*map, settings.seed % map->spawn_points.size());
+    DyingViewer d;
+    d.map = map;
+    d.world = std::make_unique<GameWorld>(settings, map);
+    d.player = d.world->spawn_player();
+    return d;
+}
+
+TEST(InterestPolicyWhileRespawning, EveryPolicyAnswersForTheEyeNowAndTheArrivalEye) {
+    for (const auto kind :
+         {interest::PolicyKind::distance, interest::PolicyKind::pvs, interest::PolicyKind::dsoc}) {
+        SCOPED_TRACE(std::string(interest::name_of(kind)));
+        auto dying = dying_viewer_on_oa_dm4();
+        if (!dying) {
+            GTEST_SKIP() << "oa_dm4 not available (scripts/setup installs openarena-081-maps)";
+        }
+        GameWorld& world = *dying->world;
+        ServerConfig config = bots(200);
+        config.policy = kind;
+        config.distance_radius = 600.0f;
+        auto policy = make_policy(config, world);
+        constexpr std::uint32_t kClient = 3;
+        policy->add_viewer(kClient, dying->player);
+        const int delay = lookahead_ticks(config);
+        ASSERT_GE(delay, 1);
+        for (int tick = 1; tick <= delay + 1; ++tick) {
+            world.step(1.0f / 30.0f);
+            policy->begin_tick(world, static_cast<std::uint64_t>(tick));
+            const Entity& self = *world.find(dying->player);
+            const Viewer viewer = interest::viewer_of(world, kClient, self);
+            std::vector<Interest> both;
+            policy->select(world, viewer, both);
+            ASSERT_TRUE(std::is_sorted(both.begin(), both.end(),
+                                       [](const auto& a, const auto& b) { return a.id < b.id; }));
+            if (tick > delay) { // put at its spawn point: one eye again
+                EXPECT_TRUE(self.teleported);
+                EXPECT_FALSE(viewer.arrival_eye.has_value());
+                if (kind == interest::PolicyKind::dsoc) {
+                    const auto& manager =
+                        dynamic_cast<const interest::CullingPolicy&>(*policy).manager();
+                    EXPECT_EQ(
+                        manager.decisions(kClient | interest::CullingPolicy::kArrivalClientBit),
+                        nullptr);
+                }
+                continue;
+            }
+            ASSERT_TRUE(viewer.arrival_eye.has_value()) << "tick " << tick;
+            // What the viewer is sent for each eye alone.
+            std::vector<std::uint32_t> now;
+            std::vector<std::uint32_t> arrival;
+            if (kind == interest::PolicyKind::dsoc) {
+                const auto& manager =
+                    dynamic_cast<const interest::CullingPolicy&>(*policy).manager();
+                const auto* spectator =
+                    manager.decisions(kClient | interest::CullingPolicy::kArrivalClientBit);
+                ASSERT_NE(spectator, nullptr);
+                EXPECT_TRUE(manager.eye_region(kClient | interest::CullingPolicy::kArrivalClientBit)
+                                .contains(*viewer.arrival_eye));
+                for (const auto& r : manager.decisions(kClient)->replicated) {
+                    now.push_back(r.id);
+                }
+                for (const auto& r : spectator->replicated) {
+                    arrival.push_back(r.id);
+                }
+            } else {
+                std::vector<Interest> one;
+                Viewer eye_only = viewer;
+                eye_only.arrival_eye.reset();
+                policy->select(world, eye_only, one);
+                now = ids_of(one);
+                Viewer arrival_only = viewer;
+                arrival_only.eye = *viewer.arrival_eye;
+                arrival_only.arrival_eye.reset();
+                policy->select(world, arrival_only, one);
+                arrival = ids_of(one);
+            }
+            EXPECT_EQ(ids_of(both), union_of(now, arrival)) << "tick " << tick;
+            // The arrival matters here: the two spawn points see different entities.
+            EXPECT_GT(ids_of(both).size(), now.size()) << "tick " << tick;
+        }
+    }
 }
 
 } // namespace

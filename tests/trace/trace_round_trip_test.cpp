@@ -39,8 +39,8 @@ TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
             tick.t = t;
             tick.entities.push_back({42, {{-15, -15, -24}, {15.5f, 15, 32}}});
             tick.entities.push_back({43, {{100, 0, 0}, {130, 30, 56}}});
-            tick.clients.push_back({7, 42u, {0.1f, 0.2f, 26}, {43}});
-            tick.clients.push_back({8, std::nullopt, {5, 5, 5}, {}});
+            tick.clients.push_back({7, 42u, {0.1f, 0.2f, 26}, {43}, std::nullopt});
+            tick.clients.push_back({8, std::nullopt, {5, 5, 5}, {}, glm::vec3(900, -4, 26.5f)});
             ASSERT_TRUE(w.write_tick(tick));
         }
         TraceTick backwards;
@@ -65,7 +65,11 @@ TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
         << tick_line;
     EXPECT_NE(tick_line.find(R"({"id":7,"entity":42,"eye":[0.1,0.2,26],"replicated":[43]})"),
               std::string::npos);
-    EXPECT_NE(tick_line.find(R"("entity":null)"), std::string::npos);
+    EXPECT_NE(
+        tick_line.find(
+            R"({"id":8,"entity":null,"eye":[5,5,5],"arrival":[900,-4,26.5],"replicated":[]})"),
+        std::string::npos)
+        << tick_line;
 
     TraceReader r;
     ASSERT_TRUE(r.open(path)) << r.error();
@@ -85,6 +89,8 @@ TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
         EXPECT_EQ(tick.clients[0].eye.x, 0.1f);
         EXPECT_EQ(tick.clients[0].replicated, std::vector<std::uint32_t>{43});
         EXPECT_FALSE(tick.clients[1].entity.has_value());
+        EXPECT_FALSE(tick.clients[0].arrival.has_value());
+        EXPECT_EQ(tick.clients[1].arrival, std::optional<glm::vec3>(glm::vec3(900, -4, 26.5f)));
     }
     EXPECT_TRUE(r.error().empty()) << r.error();
     EXPECT_TRUE(r.finished());
@@ -106,6 +112,20 @@ TEST(Trace, ReaderNamesTheLineAndTheProblem) {
     TraceTick tick;
     EXPECT_FALSE(r.next(tick));
     EXPECT_NE(r.error().find(":2: tick: an entity must be"), std::string::npos) << r.error();
+
+    {
+        std::ofstream out(path);
+        out << R"({"type":"header","version":1,"map":"m","tick_rate":30,"policy":"p","lookahead_ticks":0,"occluders":[]})"
+            << "\n"
+            << R"({"type":"tick","t":5,"entities":[],"clients":[{"id":3,"eye":[0,0,0],"arrival":[1,2],"replicated":[]}]})"
+            << "\n";
+    }
+    TraceReader bad_arrival;
+    ASSERT_TRUE(bad_arrival.open(path)) << bad_arrival.error();
+    EXPECT_FALSE(bad_arrival.next(tick));
+    EXPECT_NE(bad_arrival.error().find(":2: tick: client 3: arrival must be [x,y,z]"),
+              std::string::npos)
+        << bad_arrival.error();
 
     {
         std::ofstream out(path);

@@ -162,6 +162,13 @@ bool TraceReader::next(TraceTick& tick) {
             }
             tc.entity = entity;
         }
+        if (c.contains("arrival") && !c["arrival"].is_null()) {
+            glm::vec3 arrival{0.0f};
+            if (!get_vec3(c["arrival"], arrival)) {
+                return fail("tick: client " + std::to_string(tc.id) + ": arrival must be [x,y,z]");
+            }
+            tc.arrival = arrival;
+        }
         for (const auto& r : c["replicated"]) {
             std::uint32_t id = 0;
             if (!get_u32(r, id)) {

@@ -93,6 +93,10 @@ bool TraceWriter::write_tick(const TraceTick& tick) {
         }
         out += R"(,"eye":)";
         append_vec(out, c.eye);
+        if (c.arrival) {
+            out += R"(,"arrival":)";
+            append_vec(out, *c.arrival);
+        }
         out += R"(,"replicated":[)";
         for (std::size_t k = 0; k < c.replicated.size(); ++k) {
             fmt::format_to(std::back_inserter(out), "{}{}", k ? "," : "", c.replicated[k]);

@@ -342,6 +342,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
                 client.id = static_cast<std::uint32_t>(c);
                 client.entity = static_cast<std::uint32_t>(c);
                 client.eye = world.eye(frame, c);
+                client.arrival = frame.entities[c].arrival_eye;
                 client.replicated = runs[trace_run].sets[c];
                 line.clients.push_back(std::move(client));
             }

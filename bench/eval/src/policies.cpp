@@ -127,6 +127,7 @@ void EvalPolicy::select(std::size_t client, const WorldFrame& frame,
     viewer.client_id = static_cast<std::uint32_t>(client);
     viewer.entity_id = static_cast<std::uint32_t>(client);
     viewer.eye = world_->eye(frame, client);
+    viewer.arrival_eye = frame.entities[client].arrival_eye;
     std::vector<interest::Interest>& answer = answers_[client];
     const FrameView view(frame);
     if (over_budget(client, frame.tick)) {

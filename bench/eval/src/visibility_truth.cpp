@@ -17,11 +17,9 @@ void VisibilityTruth::judge(const WorldSim& world, int lookahead, int threads, i
         const std::size_t c = j * stride;
         std::vector<glm::vec3> my_eyes;
         my_eyes.push_back(world.eye(world.ahead(0), c));
+        // Every eye, after a respawn too: the world decides a respawn at least
+        // `lookahead` ticks ahead (WorldSim), so the policies were told of it.
         for (int k = 1; k <= lookahead; ++k) {
-            // A respawn teleports the viewer: no movement rule covers the eyes after it.
-            if (world.ahead(k).entities[c].respawned) {
-                break;
-            }
             my_eyes.push_back(world.eye(world.ahead(k), c));
         }
         std::vector<glm::vec3> lattice;

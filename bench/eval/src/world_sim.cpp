@@ -29,6 +29,7 @@ WorldSim::WorldSim(const maps::Map& map, const Scenario& scenario, int lookahead
     : map_(&map), collision_(map.collision_brushes),
       viewers_(static_cast<std::size_t>(scenario.viewers)),
       dt_(1.0f / static_cast<float>(scenario.tick_rate)) {
+    wander_.respawn_delay_ticks = lookahead;
     if (map.spawn_points.empty()) {
         throw std::runtime_error("map " + map.name + " has no spawn points");
     }
@@ -65,6 +66,10 @@ WorldFrame WorldSim::snapshot(std::uint64_t tick, const WorldFrame* previous) co
         e.velocity = s.velocity;
         e.box = {s.position + move_.mins, s.position + move_.maxs};
         e.respawned = bots_[i].respawned;
+        if (bots_[i].respawn) {
+            e.arrival_eye =
+                bots_[i].respawn->arrival.position + glm::vec3(0.0f, 0.0f, move_.eye_height);
+        }
         const float speed2 = s.velocity.x * s.velocity.x + s.velocity.y * s.velocity.y;
         if (speed2 > 1.0f) {
             e.yaw_deg = std::atan2(s.velocity.y, s.velocity.x) * 57.2957795f;

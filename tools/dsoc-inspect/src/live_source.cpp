@@ -12,6 +12,8 @@ interest::WorldSettings world_settings(const LiveOptions& o) {
     interest::WorldSettings s;
     s.bots = o.bots;
     s.seed = o.seed;
+    // As the server: the shortest delay that keeps respawns from popping entities in.
+    s.respawn_delay_ticks = interest::lookahead_ticks(o.latency_allowance_ms, o.tick_rate);
     return s;
 }
 
@@ -97,10 +99,7 @@ void LiveSimulation::advance() {
     // The policy decides for a viewer in begin_tick() or in select(), depending on how
     // the server spreads per-client work; ask, as the server does, so both hold.
     if (const interest::Entity* self = world_->find(options_.viewer_entity)) {
-        interest::Viewer viewer;
-        viewer.client_id = kClientId;
-        viewer.entity_id = options_.viewer_entity;
-        viewer.eye = world_->eye_of(*self);
+        const interest::Viewer viewer = interest::viewer_of(*world_, kClientId, *self);
         std::vector<interest::Interest> answer;
         policy_->select(*world_, viewer, answer);
     }

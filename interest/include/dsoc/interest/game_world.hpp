@@ -3,13 +3,16 @@
 // Quake 3 style movement (dsoc::sim): the server's world, and the one dsoc-inspect
 // runs in-process. Clients only send intent; the world moves every entity, so every
 // entity obeys sim::motion_bound() — the speed contract that interest policies and
-// TBVs rely on. A bot or player whose box touches a hazard (a pit, lava) respawns at a
-// spawn point (a teleport, flagged for that tick).
+// TBVs rely on. A bot or player whose box touches a hazard (a pit, lava) dies and
+// respawns at a spawn point (a teleport, flagged for that tick) respawn_delay_ticks
+// steps later; the spawn point is picked at death (sim/respawn.hpp), so a client's
+// interest can cover where it will be (EntityView::arrival_eye).
 
 #include "dsoc/interest/world_view.hpp"
 #include "dsoc/maps/map.hpp"
 #include "dsoc/sim/collision_world.hpp"
 #include "dsoc/sim/player_move.hpp"
+#include "dsoc/sim/respawn.hpp"
 #include "dsoc/sim/wander_bot.hpp"
 #include "dsoc/visibility/geometry.hpp"
 
@@ -18,6 +21,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <random>
 #include <unordered_map>
 #include <vector>
@@ -32,6 +36,10 @@ struct WorldSettings {
     float max_speed = 320.0f;
     /// Seed for bots and spawn positions; the same seed gives the same bot motion.
     std::uint64_t seed = 1;
+    /// World steps between a death and the respawn. At least the clients' latency
+    /// allowance in ticks, or a respawn inside it pops entities in (sim/respawn.hpp).
+    /// [Units: ticks] [Limit: >= 0]
+    int respawn_delay_ticks = 0;
 };
 
 enum class EntityKind : std::uint8_t { bot = 0, player = 1 };
@@ -39,12 +47,13 @@ enum class EntityKind : std::uint8_t { bot = 0, player = 1 };
 struct Entity {
     std::uint32_t id = 0;
     EntityKind kind = EntityKind::bot;
-    sim::MoveState move;     ///< position is the origin (feet + 24), world units
-    float yaw_deg = 0.0f;    ///< [-180, 180)
-    float pitch_deg = 0.0f;  ///< [-90, 90]
-    sim::MoveInput input;    ///< players: this tick's intent
-    std::int32_t bot = -1;   ///< index into the bot brains, or -1
-    bool teleported = false; ///< respawned during the last step()
+    sim::MoveState move;                        ///< position is the origin (feet + 24), world units
+    float yaw_deg = 0.0f;                       ///< [-180, 180)
+    float pitch_deg = 0.0f;                     ///< [-90, 90]
+    sim::MoveInput input;                       ///< players: this tick's intent
+    std::int32_t bot = -1;                      ///< index into the bot brains, or -1
+    bool teleported = false;                    ///< respawned during the last step()
+    std::optional<sim::PendingRespawn> respawn; ///< dead, waiting to be put at a spawn point
 };
 
 class GameWorld final : public WorldView {
@@ -86,13 +95,16 @@ public:
     [[nodiscard]] std::size_t entity_count() const override { return entities_.size(); }
     [[nodiscard]] EntityView entity(std::size_t index) const override {
         const Entity& e = entities_[index];
-        return {e.id, box_of(e), e.move.velocity};
+        return {e.id, box_of(e), e.move.velocity, arrival_eye_of(e)};
     }
     [[nodiscard]] const Entity* find(std::uint32_t id) const;
     /// The entity's collision box in world space.
     [[nodiscard]] visibility::Aabb box_of(const Entity& e) const;
     /// Where an entity's view is taken from.
     [[nodiscard]] glm::vec3 eye_of(const Entity& e) const;
+    /// Where its view will be taken from once a pending respawn puts it at its spawn
+    /// point (within respawn_delay_ticks steps); nothing while it lives.
+    [[nodiscard]] std::optional<glm::vec3> arrival_eye_of(const Entity& e) const;
     [[nodiscard]] float max_speed() const { return move_.max_speed; }
     [[nodiscard]] const sim::MoveConfig& move_config() const { return move_; }
     [[nodiscard]] const maps::Map& map() const { return *map_; }
@@ -111,6 +123,8 @@ private:
     std::unordered_map<std::uint32_t, std::size_t> index_;
     std::uint32_t next_id_ = 1;
     std::uint32_t next_spawn_ = 0;
+    int respawn_delay_ticks_ = 0;
+    std::vector<std::uint8_t> died_; ///< step(): players who touched a hazard, by index
 };
 
 } // namespace dsoc::interest

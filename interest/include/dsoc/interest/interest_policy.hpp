@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -41,7 +42,18 @@ struct Viewer {
     std::uint32_t client_id = 0;
     std::uint32_t entity_id = 0; ///< the entity the client controls
     glm::vec3 eye{0.0f};
+    /// Where a respawn the world has decided will put the eye, within the client's
+    /// latency allowance (EntityView::arrival_eye of its entity); nothing while it
+    /// lives. Every policy answers for both eyes, so what the client sees on arrival
+    /// is known before it gets there.
+    std::optional<glm::vec3> arrival_eye;
 };
+
+/// Client `client_id`'s point of view from its entity `self` of `world` this tick.
+[[nodiscard]] inline Viewer viewer_of(const GameWorld& world, std::uint32_t client_id,
+                                      const Entity& self) {
+    return {client_id, self.id, world.eye_of(self), world.arrival_eye_of(self)};
+}
 
 class InterestPolicy {
 public:
@@ -75,6 +87,12 @@ public:
 [[nodiscard]] inline bool within_radius(const visibility::Aabb& box, glm::vec3 eye, float radius) {
     return visibility::distance_squared(box, eye) <= radius * radius;
 }
+/// within_radius() of the viewer's eye or of its arrival eye.
+[[nodiscard]] inline bool within_radius(const visibility::Aabb& box, const Viewer& viewer,
+                                        float radius) {
+    return within_radius(box, viewer.eye, radius) ||
+           (viewer.arrival_eye && within_radius(box, *viewer.arrival_eye, radius));
+}
 
 /// The pvs policy's rule for the eye: `rows` becomes the union of the PVS rows of the
 /// clusters `eye` is in (`clusters` is scratch), and an entity is sent when its box
@@ -83,6 +101,12 @@ public:
 [[nodiscard]] bool eye_pvs_rows(const maps::Pvs* pvs, glm::vec3 eye,
                                 std::vector<std::int32_t>& clusters,
                                 std::vector<std::uint8_t>& rows);
+/// eye_pvs_rows() of the viewer's eye, ORed with those of its arrival eye when it has
+/// one (`scratch` is scratch). False when either says nothing.
+[[nodiscard]] bool viewer_pvs_rows(const maps::Pvs* pvs, const Viewer& viewer,
+                                   std::vector<std::int32_t>& clusters,
+                                   std::vector<std::uint8_t>& rows,
+                                   std::vector<std::uint8_t>& scratch);
 
 /// Every entity, always.
 /// The entity ids are taken once per tick (begin_tick) for all clients.

@@ -1,8 +1,8 @@
 #pragma once
 // What an interest policy reads of the world each tick: the entities, in increasing id
-// order, each with its box and velocity. GameWorld (the server's and dsoc-inspect's
-// world) is one; dsoc-eval's recorded frames are another, so that the evaluation runs
-// the very policies the server runs.
+// order, each with its box, velocity and pending respawn. GameWorld (the server's and
+// dsoc-inspect's world) is one; dsoc-eval's recorded frames are another, so that the evaluation
+// runs the very policies the server runs.
 
 #include "dsoc/visibility/geometry.hpp"
 
@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 
 namespace dsoc::interest {
 
@@ -18,6 +19,9 @@ struct EntityView {
     std::uint32_t id = 0;
     visibility::Aabb box;     ///< its collision box in world space
     glm::vec3 velocity{0.0f}; ///< [Units: world units / s]
+    /// Where its eye will be once a respawn the world has decided puts it at a spawn
+    /// point (sim/respawn.hpp); nothing while it lives.
+    std::optional<glm::vec3> arrival_eye;
 };
 
 class WorldView {

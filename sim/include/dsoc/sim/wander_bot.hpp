@@ -4,13 +4,17 @@
 // picks a new goal when it arrives or stops making progress. A bot whose box touches a
 // hazard (a pit's trigger_hurt, lava) dies and respawns at a spawn point: a teleport,
 // flagged in WanderBot::respawned for that tick, outside the motion_bound() contract.
-// Deterministic given the seed. Bots do not collide with each other.
+// The spawn point is picked at death and the bot is put there respawn_delay_ticks steps
+// later (sim/respawn.hpp: WanderBot::respawn in between). Deterministic given the seed.
+// Bots do not collide with each other.
 
 #include "dsoc/maps/map.hpp"
 #include "dsoc/sim/collision_world.hpp"
 #include "dsoc/sim/player_move.hpp"
+#include "dsoc/sim/respawn.hpp"
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -31,6 +35,10 @@ struct WanderConfig {
     std::uint32_t max_remembered = 32;
     /// Chance a new goal is a spawn point rather than a remembered place. [Limit: 0..1]
     float spawn_goal_chance = 0.5f;
+    /// World steps between a death and the respawn (0: at once). Interest management
+    /// needs at least the clients' latency allowance in ticks (sim/respawn.hpp).
+    /// [Units: ticks] [Limit: >= 0]
+    int respawn_delay_ticks = 0;
 };
 
 struct WanderBot {
@@ -46,7 +54,8 @@ struct WanderBot {
     std::uint32_t goals_reached = 0;
     std::uint32_t goals_abandoned = 0;
     std::uint32_t deaths = 0;
-    bool respawned = false; ///< the last wander_step teleported it to a spawn point
+    bool respawned = false;                ///< the last wander_step teleported it to a spawn point
+    std::optional<PendingRespawn> respawn; ///< dead, waiting to be put at a spawn point
 };
 
 /// Makes `count` bots, bot i at spawn point (i + seed) % spawns.size() with its own
@@ -61,7 +70,9 @@ struct WanderBot {
                                      const MoveConfig& move,
                                      std::span<const maps::SpawnPoint> spawns, float dt);
 
-/// wander_think, player_move, then respawn if the box touches a hazard.
+/// A dead bot: step_dead() (and a new goal when it arrives). A live one: wander_think,
+/// player_move, then death if the box touches a hazard (respawned at once when
+/// config.respawn_delay_ticks is 0, else `respawn` is set).
 void wander_step(WanderBot& bot, const CollisionWorld& world, const WanderConfig& config,
                  const MoveConfig& move, std::span<const maps::SpawnPoint> spawns,
                  std::span<const maps::Hazard> hazards, float dt);

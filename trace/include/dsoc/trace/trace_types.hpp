@@ -38,6 +38,9 @@ struct TraceClient {
     std::optional<std::uint32_t> entity; ///< the entity it controls, if any
     glm::vec3 eye{0.0f};
     std::vector<std::uint32_t> replicated;
+    /// Where a respawn the server has decided will put the eye (within the lookahead):
+    /// the replicated set covers it too. Absent while the client's entity lives.
+    std::optional<glm::vec3> arrival;
 };
 
 struct TraceTick {

@@ -2,9 +2,10 @@
 // Ground truth for one tick from the ray oracle: for every (client, entity) pair,
 // whether the entity's box at tick t is visible from the client's eye at t (the
 // present eye), and whether it is visible from any of the eyes the client really has
-// at t .. t + lookahead (the latency allowance of replication-trace.md). Eyes from a
-// respawn of the viewer on are left out: a teleport is outside the movement rules the
-// allowance covers (the spec's K guarantee assumes clients move within them).
+// at t .. t + lookahead (the latency allowance of replication-trace.md). Eyes after a
+// respawn of the viewer count too: the world decides a respawn `lookahead` ticks
+// before it puts the viewer at its spawn point (WorldSim), and tells the policies
+// where (interest::Viewer::arrival_eye), so a respawn is no excuse for pop-in.
 
 #include "dsoc/eval/ray_oracle.hpp"
 #include "dsoc/eval/world_sim.hpp"

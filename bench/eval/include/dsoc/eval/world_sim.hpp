@@ -5,6 +5,9 @@
 //
 // The simulation runs `lookahead` ticks ahead of the policies, so that the oracle
 // can judge tick t against the eyes the viewer really has at t .. t + lookahead.
+// Entities respawn `lookahead` ticks after they die, as on the server (the spawn point
+// is picked at death: sim/respawn.hpp), so every respawn within a tick's lookahead
+// was decided by that tick and the policies are told where it goes.
 
 #include "dsoc/eval/scenario.hpp"
 #include "dsoc/maps/map.hpp"
@@ -16,6 +19,7 @@
 #include <cstdint>
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,6 +31,9 @@ struct EntityFrame {
     glm::vec3 velocity{0.0f}; ///< [Units: world units / s]
     float yaw_deg = 0.0f;     ///< facing, from the horizontal velocity
     bool respawned = false;   ///< teleported to a spawn point this tick
+    /// Dead, and where its eye will be when its pending respawn puts it at a spawn
+    /// point (within the lookahead: sim/respawn.hpp); nothing while it lives.
+    std::optional<glm::vec3> arrival_eye;
 };
 
 struct WorldFrame {
