@@ -15,6 +15,7 @@ CullingPolicy::CullingPolicy(std::string_view name, const visibility::DSOCConfig
 void CullingPolicy::sync_entities(const WorldView& world) {
     // Entities are kept in increasing id order by the world; diff against ours.
     scratch_.clear();
+    entity_teams_.clear();
     arrivals_.clear();
     std::size_t k = 0;
     for (std::size_t i = 0; i < world.entity_count(); ++i) {
@@ -28,7 +29,9 @@ void CullingPolicy::sync_entities(const WorldView& world) {
             interest_.add_walker(e.id, e.box);
         }
         manager().set_entity_box(e.id, e.box, e.velocity);
+        manager().set_entity_team(e.id, e.team);
         scratch_.push_back(e.id);
+        entity_teams_.push_back(e.team);
         if (e.arrival_eye) {
             arrivals_.emplace_back(e.id, *e.arrival_eye);
         }
@@ -41,6 +44,14 @@ void CullingPolicy::sync_entities(const WorldView& world) {
 
 void CullingPolicy::sync_arrivals() {
     for (auto& [client, viewer] : viewers_) {
+        // The viewer's team is its entity's (known_entities_ is this tick's, increasing).
+        const auto self =
+            std::lower_bound(known_entities_.begin(), known_entities_.end(), viewer.entity_id);
+        const visibility::TeamId team =
+            self != known_entities_.end() && *self == viewer.entity_id
+                ? entity_teams_[static_cast<std::size_t>(self - known_entities_.begin())]
+                : visibility::kNoTeam;
+        manager().set_client_team(client, team);
         const auto arrival = std::lower_bound(arrivals_.begin(), arrivals_.end(), viewer.entity_id,
                                               [](const std::pair<std::uint32_t, glm::vec3>& a,
                                                  std::uint32_t id) { return a.first < id; });
@@ -55,6 +66,7 @@ void CullingPolicy::sync_arrivals() {
         }
         if (arriving) {
             manager().set_client_eye(spectator, arrival->second);
+            manager().set_client_team(spectator, team);
         }
         viewer.arriving = arriving;
     }

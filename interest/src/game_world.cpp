@@ -26,6 +26,7 @@ GameWorld::GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::
     move_.max_speed = settings.max_speed;
     wander_.respawn_delay_ticks = settings.respawn_delay_ticks;
     respawn_delay_ticks_ = settings.respawn_delay_ticks;
+    teams_ = settings.teams;
     entities_.reserve(static_cast<std::size_t>(settings.bots) + 64);
     bots_ = sim::spawn_wander_bots(collision_, move_, map_->spawn_points,
                                    static_cast<std::size_t>(settings.bots), settings.seed);
@@ -33,6 +34,9 @@ GameWorld::GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::
         Entity& bot = add(EntityKind::bot, next_id_++);
         bot.bot = static_cast<std::int32_t>(i);
         bot.move = bots_[i].state;
+        if (teams_ > 0) {
+            bot.team = static_cast<visibility::TeamId>(i % static_cast<std::size_t>(teams_) + 1);
+        }
     }
     next_spawn_ = static_cast<std::uint32_t>(settings.seed % map_->spawn_points.size());
 }
@@ -71,6 +75,17 @@ void GameWorld::spawn_reserved(std::uint32_t id) {
     Entity& p = add(EntityKind::player, id);
     p.move = sim::spawn_state(collision_, move_, spawn.origin);
     p.yaw_deg = wrap_degrees(spawn.yaw_degrees);
+    if (teams_ > 0) {
+        p.team =
+            static_cast<visibility::TeamId>(next_team_++ % static_cast<std::uint32_t>(teams_) + 1);
+    }
+}
+
+void GameWorld::set_team(std::uint32_t id, visibility::TeamId team) {
+    const auto it = index_.find(id);
+    if (it != index_.end()) {
+        entities_[it->second].team = team;
+    }
 }
 
 void GameWorld::rebuild_index() {

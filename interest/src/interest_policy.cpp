@@ -56,10 +56,12 @@ void BroadcastPolicy::select(const WorldView& /*world*/, const Viewer& /*viewer*
 void DistancePolicy::begin_tick(const WorldView& world, std::uint64_t /*tick*/) {
     ids_.resize(world.entity_count());
     boxes_.resize(ids_.size());
+    teams_.resize(ids_.size());
     for (std::size_t i = 0; i < ids_.size(); ++i) {
         const EntityView e = world.entity(i);
         ids_[i] = e.id;
         boxes_[i] = e.box;
+        teams_[i] = e.team;
     }
 }
 
@@ -67,7 +69,8 @@ void DistancePolicy::select(const WorldView& /*world*/, const Viewer& viewer,
                             std::vector<Interest>& out) {
     out.clear();
     for (std::size_t i = 0; i < ids_.size(); ++i) {
-        if (within_radius(boxes_[i], viewer, radius_)) {
+        if (visibility::replicated_under(visibility::team_relevance(viewer.team, teams_[i]),
+                                         within_radius(boxes_[i], viewer, radius_))) {
             out.push_back({ids_[i], 0});
         }
     }
@@ -77,6 +80,7 @@ void PvsPolicy::begin_tick(const WorldView& world, std::uint64_t /*tick*/) {
     const std::size_t count = world.entity_count();
     ids_.resize(count);
     always_sent_.resize(count);
+    teams_.resize(count);
     if (clusters_.size() < count) {
         clusters_.resize(count);
     }
@@ -84,6 +88,7 @@ void PvsPolicy::begin_tick(const WorldView& world, std::uint64_t /*tick*/) {
     for (std::size_t i = 0; i < count; ++i) {
         const EntityView e = world.entity(i);
         ids_[i] = e.id;
+        teams_[i] = e.team;
         always_sent_[i] = !vis || !pvs_->clusters_of(e.box, clusters_[i]);
     }
 }
@@ -97,7 +102,9 @@ void PvsPolicy::select(const WorldView& /*world*/, const Viewer& viewer,
     thread_local std::vector<std::uint8_t> arrival_rows;
     const bool known = viewer_pvs_rows(pvs_.get(), viewer, eye_clusters, rows, arrival_rows);
     for (std::size_t i = 0; i < ids_.size(); ++i) {
-        if (!known || always_sent_[i] || pvs_->may_see_clusters(rows, clusters_[i])) {
+        const bool seen = !known || always_sent_[i] || pvs_->may_see_clusters(rows, clusters_[i]);
+        if (visibility::replicated_under(visibility::team_relevance(viewer.team, teams_[i]),
+                                         seen)) {
             out.push_back({ids_[i], 0});
         }
     }

@@ -15,6 +15,7 @@ namespace dsoc::server {
 interest::WorldSettings world_settings(const ServerConfig& config) {
     interest::WorldSettings s;
     s.bots = config.bots;
+    s.teams = config.teams;
     s.max_speed = config.max_speed;
     s.seed = config.seed;
     // The shortest delay that keeps respawns from popping entities in (sim/respawn.hpp).

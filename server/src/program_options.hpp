@@ -8,7 +8,7 @@
 
 namespace dsoc::server {
 
-/// The world: map, tick rate, bots, seed.
+/// The world: map, tick rate, bots, teams, seed.
 template <class App>
 void add_world_options(App& app, ServerConfig& config) {
     app.add_option("--map", config.map,
@@ -17,6 +17,9 @@ void add_world_options(App& app, ServerConfig& config) {
     app.add_option("--tick-rate", config.tick_rate, "Ticks (snapshots) per second [Hz]")
         ->capture_default_str();
     app.add_option("--bots", config.bots, "Wandering bots")->capture_default_str();
+    app.add_option("--teams", config.teams,
+                   "Teams (0 = none); teammates are sent whatever they see")
+        ->capture_default_str();
     app.add_option("--seed", config.seed, "Seed for bots and spawns")->capture_default_str();
 }
 

@@ -334,8 +334,16 @@ void Server::write_trace_tick() {
         if (!session.active() || self == nullptr) {
             continue;
         }
-        t.clients.push_back({id, session.entity_id(), world_.eye_of(*self),
-                             client.replication.known(), world_.arrival_eye_of(*self)});
+        trace::TraceClient& c = t.clients.emplace_back();
+        c = {id, session.entity_id(), world_.eye_of(*self), client.replication.known(),
+             world_.arrival_eye_of(*self)};
+        if (self->team != visibility::kNoTeam) { // teammates are sent for their team
+            for (const interest::Entity& e : world_.entities()) {
+                if (e.team == self->team && e.id != self->id) {
+                    c.always.push_back(e.id);
+                }
+            }
+        }
     }
     trace_->write_tick(t);
 }

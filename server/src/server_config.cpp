@@ -27,6 +27,8 @@ std::vector<std::string> validate(const ServerConfig& c) {
           "must be 1..240 Hz, got " + std::to_string(c.tick_rate));
     check(p, c.bots >= 0 && c.bots <= 100000, "bots",
           "must be 0..100000, got " + std::to_string(c.bots));
+    check(p, c.teams >= 0 && c.teams <= 1000, "teams",
+          "must be 0..1000, got " + std::to_string(c.teams));
     check(p,
           c.tbv_strategy == "adaptive" || c.tbv_strategy == "explicit" || c.tbv_strategy == "fuzzy",
           "tbv_strategy", "must be one of adaptive, explicit, fuzzy; got '" + c.tbv_strategy + "'");

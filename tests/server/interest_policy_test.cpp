@@ -370,3 +370,67 @@ TEST(InterestPolicyWhileRespawning, EveryPolicyAnswersForTheEyeNowAndTheArrivalE
 
 } // namespace
 } // namespace dsoc::server
+
+namespace dsoc::server {
+namespace {
+
+TEST(InterestPolicyWithTeams, EveryPolicySendsTheViewersTeammatesOverWhatItSees) {
+    // Two worlds alike but for teams; each viewer's set with teams must be its set
+    // without them plus every teammate (relevance.hpp's team rule), and some teammates
+    // must be ones sight alone would not send.
+    auto loaded = maps::load_map("oa_dm4", maps::MapSearch::from_environment());
+    if (!loaded) {
+        GTEST_SKIP() << "oa_dm4 not available (scripts/setup installs openarena-081-maps)";
+    }
+    const auto map = std::make_shared<const maps::Map>(std::move(loaded).value());
+    for (const auto kind : {interest::PolicyKind::distance, interest::PolicyKind::pvs,
+                            interest::PolicyKind::dsoc, interest::PolicyKind::occlusion}) {
+        SCOPED_TRACE(std::string(interest::name_of(kind)));
+        ServerConfig config = bots(200);
+        config.policy = kind;
+        config.distance_radius = 800.0f;
+        ServerConfig teamed = config;
+        teamed.teams = 2;
+        GameWorld plain_world(world_settings(config), map);
+        GameWorld team_world(world_settings(teamed), map);
+        auto plain = make_policy(config, plain_world);
+        auto with_teams = make_policy(teamed, team_world);
+        constexpr std::uint32_t kViewers = 8;
+        for (std::uint32_t v = 0; v < kViewers; ++v) {
+            plain->add_viewer(v, plain_world.entities()[v * 25].id);
+            with_teams->add_viewer(v, team_world.entities()[v * 25].id);
+        }
+        std::size_t teammates_unseen = 0;
+        for (int tick = 1; tick <= 30; ++tick) {
+            plain_world.step(1.0f / 30.0f);
+            team_world.step(1.0f / 30.0f);
+            plain->begin_tick(plain_world, static_cast<std::uint64_t>(tick));
+            with_teams->begin_tick(team_world, static_cast<std::uint64_t>(tick));
+            for (std::uint32_t v = 0; v < kViewers; ++v) {
+                const Entity& self = team_world.entities()[v * 25];
+                ASSERT_NE(self.team, visibility::kNoTeam);
+                std::vector<Interest> seen;
+                std::vector<Interest> sent;
+                plain->select(plain_world,
+                              interest::viewer_of(plain_world, v, plain_world.entities()[v * 25]),
+                              seen);
+                with_teams->select(team_world, interest::viewer_of(team_world, v, self), sent);
+                std::vector<std::uint32_t> expected = ids_of(seen);
+                std::vector<std::uint32_t> teammates;
+                for (const Entity& e : team_world.entities()) {
+                    if (e.team == self.team) {
+                        teammates.push_back(e.id);
+                        teammates_unseen +=
+                            std::binary_search(expected.begin(), expected.end(), e.id) ? 0 : 1;
+                    }
+                }
+                ASSERT_EQ(ids_of(sent), union_of(expected, teammates))
+                    << "tick " << tick << " viewer " << v;
+            }
+        }
+        EXPECT_GT(teammates_unseen, 0u) << "no teammate was sent that sight would not send";
+    }
+}
+
+} // namespace
+} // namespace dsoc::server

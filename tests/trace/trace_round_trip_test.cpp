@@ -39,7 +39,7 @@ TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
             tick.t = t;
             tick.entities.push_back({42, {{-15, -15, -24}, {15.5f, 15, 32}}});
             tick.entities.push_back({43, {{100, 0, 0}, {130, 30, 56}}});
-            tick.clients.push_back({7, 42u, {0.1f, 0.2f, 26}, {43}, std::nullopt});
+            tick.clients.push_back({7, 42u, {0.1f, 0.2f, 26}, {43}, std::nullopt, {43}, {44}});
             tick.clients.push_back({8, std::nullopt, {5, 5, 5}, {}, glm::vec3(900, -4, 26.5f)});
             ASSERT_TRUE(w.write_tick(tick));
         }
@@ -63,8 +63,10 @@ TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
     EXPECT_EQ(
         tick_line.rfind(R"({"type":"tick","t":10,"entities":[[42,-15,-15,-24,15.5,15,32])", 0), 0u)
         << tick_line;
-    EXPECT_NE(tick_line.find(R"({"id":7,"entity":42,"eye":[0.1,0.2,26],"replicated":[43]})"),
-              std::string::npos);
+    EXPECT_NE(
+        tick_line.find(
+            R"({"id":7,"entity":42,"eye":[0.1,0.2,26],"replicated":[43],"always":[43],"never":[44]})"),
+        std::string::npos);
     EXPECT_NE(
         tick_line.find(
             R"({"id":8,"entity":null,"eye":[5,5,5],"arrival":[900,-4,26.5],"replicated":[]})"),
@@ -90,6 +92,9 @@ TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
         EXPECT_EQ(tick.clients[0].replicated, std::vector<std::uint32_t>{43});
         EXPECT_FALSE(tick.clients[1].entity.has_value());
         EXPECT_FALSE(tick.clients[0].arrival.has_value());
+        EXPECT_EQ(tick.clients[0].always, std::vector<std::uint32_t>{43});
+        EXPECT_EQ(tick.clients[0].never, std::vector<std::uint32_t>{44});
+        EXPECT_TRUE(tick.clients[1].always.empty());
         EXPECT_EQ(tick.clients[1].arrival, std::optional<glm::vec3>(glm::vec3(900, -4, 26.5f)));
     }
     EXPECT_TRUE(r.error().empty()) << r.error();

@@ -9,6 +9,9 @@
 
 #include <algorithm>
 #include <array>
+#include <iterator>
+#include <optional>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -754,6 +757,94 @@ TEST(OscillatingEntity, IsSentExactlyWhileVisibleAndItsFailedTbvsBackOff) {
     // It hides 32 times; without the back-off each would try up to 3 TBVs.
     EXPECT_LE(stats.tbv_tests, 3u * (kTicks / 8 + 1));
     EXPECT_EQ(stats.tbvs_created, 0u);
+}
+
+} // namespace
+} // namespace dsoc::visibility
+
+namespace dsoc::visibility {
+namespace {
+
+TEST(Relevance, ASetIsSightUnderTheTeamAndPairRulesAndEnterAndLeaveFollowRuleChanges) {
+    // Two managers see the same world; one also has teams and pair rules, changed at
+    // random ticks. Its set must be, every tick, the rules (the test's own model)
+    // applied to the other's sight set; its enter and leave the change of that set.
+    DSOCConfig c;
+    c.validate_state = true;
+    int builds = 0;
+    const Aabb world{glm::vec3(-4096.0f), glm::vec3(4096.0f)};
+    InterestManager ruled(c, world, [&] { return std::make_unique<WallVisibility>(&builds); });
+    InterestManager plain(c, world, [&] { return std::make_unique<WallVisibility>(&builds); });
+    add_walkers(ruled);
+    add_walkers(plain);
+    std::mt19937 rng(11);
+    std::array<TeamId, 32> team{}; // by entity id; kNoTeam at first
+    std::array<int, 32> own_rule;  // -1: the team rule, else a Relevance
+    own_rule.fill(-1);
+    TeamId client_team = kNoTeam;
+    std::vector<EntityId> previous;
+    std::size_t sent_unseen = 0;
+    std::size_t withheld_seen = 0;
+    for (std::uint64_t tick = 1; tick <= 60; ++tick) {
+        if (tick % 7 == 3) { // new rules
+            client_team = static_cast<TeamId>(rng() % 3);
+            ASSERT_TRUE(ruled.set_client_team(100, client_team));
+            for (EntityId id = 2; id < 32; ++id) {
+                team[id] = static_cast<TeamId>(rng() % 3);
+                ASSERT_TRUE(ruled.set_entity_team(id, team[id]));
+                own_rule[id] = static_cast<int>(rng() % 5) - 1; // 2 in 5: the team rule
+                if (own_rule[id] > 2) {
+                    own_rule[id] = -1;
+                }
+                const auto rule =
+                    own_rule[id] < 0
+                        ? std::nullopt
+                        : std::optional<Relevance>(static_cast<Relevance>(own_rule[id]));
+                ASSERT_TRUE(ruled.set_relevance(100, id, rule));
+            }
+        }
+        move_walkers(ruled, tick);
+        move_walkers(plain, tick);
+        ruled.update(tick);
+        plain.update(tick);
+        const std::vector<EntityId> seen = replicated_ids(plain, 100);
+        std::vector<EntityId> expected{1}; // the viewer's own entity
+        for (EntityId id = 2; id < 32; ++id) {
+            const Relevance rule = own_rule[id] < 0 ? team_relevance(client_team, team[id])
+                                                    : static_cast<Relevance>(own_rule[id]);
+            ASSERT_EQ(ruled.relevance(100, id), rule) << "entity " << id;
+            const bool is_seen = std::find(seen.begin(), seen.end(), id) != seen.end();
+            if (replicated_under(rule, is_seen)) {
+                expected.push_back(id);
+                sent_unseen += is_seen ? 0 : 1;
+            } else {
+                withheld_seen += is_seen ? 1 : 0;
+            }
+        }
+        ASSERT_EQ(replicated_ids(ruled, 100), expected) << "tick " << tick;
+        std::vector<EntityId> enter;
+        std::vector<EntityId> leave;
+        std::set_difference(expected.begin(), expected.end(), previous.begin(), previous.end(),
+                            std::back_inserter(enter));
+        std::set_difference(previous.begin(), previous.end(), expected.begin(), expected.end(),
+                            std::back_inserter(leave));
+        ASSERT_EQ(ruled.decisions(100)->enter, enter) << "tick " << tick;
+        ASSERT_EQ(ruled.decisions(100)->leave, leave) << "tick " << tick;
+        previous = expected;
+    }
+    // The rules did something both ways: unseen entities sent, seen ones withheld.
+    EXPECT_GT(sent_unseen, 0u);
+    EXPECT_GT(withheld_seen, 0u);
+    // The client's own entity takes no pair rule; unknown ids none either.
+    EXPECT_FALSE(ruled.set_relevance(100, 1, Relevance::never));
+    EXPECT_FALSE(ruled.set_relevance(100, 999, Relevance::always));
+    EXPECT_FALSE(ruled.set_entity_team(999, 1));
+    EXPECT_FALSE(ruled.set_client_team(999, 1));
+    // A removed entity's rule is forgotten: its id comes back under the team rule.
+    ASSERT_TRUE(ruled.set_relevance(100, 5, Relevance::never));
+    ASSERT_TRUE(ruled.remove_entity(5));
+    ASSERT_TRUE(ruled.add_entity(5, EntityDesc{kHalf, {}}, box_at({-300, 0, 0})));
+    EXPECT_EQ(ruled.relevance(100, 5), team_relevance(client_team, kNoTeam));
 }
 
 } // namespace

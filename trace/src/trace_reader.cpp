@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace dsoc::trace {
 
@@ -169,12 +170,28 @@ bool TraceReader::next(TraceTick& tick) {
             }
             tc.arrival = arrival;
         }
-        for (const auto& r : c["replicated"]) {
-            std::uint32_t id = 0;
-            if (!get_u32(r, id)) {
-                return fail("tick: client " + std::to_string(tc.id) + ": bad replicated id");
+        const auto read_ids = [&](const char* key, std::vector<std::uint32_t>& ids) {
+            if (!c.contains(key) || c[key].is_null()) {
+                return true; // only `replicated` is required (checked above)
             }
-            tc.replicated.push_back(id);
+            if (!c[key].is_array()) {
+                return false;
+            }
+            for (const auto& r : c[key]) {
+                std::uint32_t id = 0;
+                if (!get_u32(r, id)) {
+                    return false;
+                }
+                ids.push_back(id);
+            }
+            return true;
+        };
+        const std::pair<const char*, std::vector<std::uint32_t>*> lists[] = {
+            {"replicated", &tc.replicated}, {"always", &tc.always}, {"never", &tc.never}};
+        for (const auto& [key, ids] : lists) {
+            if (!read_ids(key, *ids)) {
+                return fail("tick: client " + std::to_string(tc.id) + ": bad " + key + " id");
+            }
         }
         tick.clients.push_back(std::move(tc));
     }

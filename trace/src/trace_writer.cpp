@@ -16,6 +16,15 @@ void append_vec(std::string& out, glm::vec3 v) {
     fmt::format_to(std::back_inserter(out), "[{},{},{}]", v.x, v.y, v.z);
 }
 
+/// `,"key":[id,id,...]`
+void append_ids(std::string& out, const char* key, const std::vector<std::uint32_t>& ids) {
+    fmt::format_to(std::back_inserter(out), R"(,"{}":[)", key);
+    for (std::size_t k = 0; k < ids.size(); ++k) {
+        fmt::format_to(std::back_inserter(out), "{}{}", k ? "," : "", ids[k]);
+    }
+    out += "]";
+}
+
 } // namespace
 
 TraceWriter::~TraceWriter() {
@@ -97,11 +106,14 @@ bool TraceWriter::write_tick(const TraceTick& tick) {
             out += R"(,"arrival":)";
             append_vec(out, *c.arrival);
         }
-        out += R"(,"replicated":[)";
-        for (std::size_t k = 0; k < c.replicated.size(); ++k) {
-            fmt::format_to(std::back_inserter(out), "{}{}", k ? "," : "", c.replicated[k]);
+        append_ids(out, "replicated", c.replicated);
+        if (!c.always.empty()) {
+            append_ids(out, "always", c.always);
         }
-        out += "]}";
+        if (!c.never.empty()) {
+            append_ids(out, "never", c.never);
+        }
+        out += "}";
     }
     out += "]}\n";
     if (!put(out)) {

@@ -65,6 +65,7 @@ bool InterestManager::add_entity(EntityId id, const EntityDesc& desc, const Aabb
         for (auto& c : clients_) {
             c->pairs.resize(entities_.size());
             c->states.resize(entities_.size(), PairState::unknown);
+            c->rules.resize(entities_.size(), 0);
         }
     }
     EntitySlot& e = entities_[slot];
@@ -92,6 +93,7 @@ bool InterestManager::remove_entity(EntityId id) {
         }
         c->pairs[slot] = {};
         c->states[slot] = PairState::unknown;
+        c->rules[slot] = 0;
     }
     entities_[slot].alive = false;
     views_[slot].alive = false;
@@ -125,6 +127,7 @@ bool InterestManager::add_client(ClientId id, const ClientDesc& desc) {
     auto slot = std::make_unique<ClientSlot>(id, desc, tree_config, make_visibility_());
     slot->pairs.resize(entities_.size());
     slot->states.resize(entities_.size(), PairState::unknown);
+    slot->rules.resize(entities_.size(), 0);
     slot->groups.reserve(static_cast<std::size_t>(std::min(config_.max_tbvs_per_client, 1024)));
     client_index_[id] = clients_.size();
     clients_.push_back(std::move(slot));
@@ -162,6 +165,46 @@ bool InterestManager::set_client_eye(ClientId id, glm::vec3 eye) {
     clients_[it->second]->spectator_eye = eye;
     clients_[it->second]->has_spectator_eye = true;
     return true;
+}
+
+bool InterestManager::set_entity_team(EntityId id, TeamId team) {
+    const auto it = entity_slot_.find(id);
+    if (it == entity_slot_.end()) {
+        return false;
+    }
+    views_[it->second].team = team;
+    return true;
+}
+
+bool InterestManager::set_client_team(ClientId id, TeamId team) {
+    const auto it = client_index_.find(id);
+    if (it == client_index_.end()) {
+        return false;
+    }
+    clients_[it->second]->team = team;
+    return true;
+}
+
+bool InterestManager::set_relevance(ClientId client, EntityId entity,
+                                    std::optional<Relevance> rule) {
+    const auto c = client_index_.find(client);
+    const auto e = entity_slot_.find(entity);
+    if (c == client_index_.end() || e == entity_slot_.end() ||
+        clients_[c->second]->desc.viewer == entity) {
+        return false;
+    }
+    clients_[c->second]->rules[e->second] =
+        rule ? static_cast<std::uint8_t>(1 + static_cast<std::uint8_t>(*rule)) : 0;
+    return true;
+}
+
+Relevance InterestManager::relevance(ClientId client, EntityId entity) const {
+    const auto c = client_index_.find(client);
+    const auto e = entity_slot_.find(entity);
+    if (c == client_index_.end() || e == entity_slot_.end()) {
+        return Relevance::sight;
+    }
+    return rule_of(*clients_[c->second], e->second);
 }
 
 ClientId InterestManager::client_at(std::size_t index) const {

@@ -62,6 +62,11 @@ void diff_sets(const std::vector<EntityId>& previous, const std::vector<Replicat
 
 } // namespace
 
+Relevance InterestManager::rule_of(const ClientSlot& c, std::uint32_t slot) const {
+    const std::uint8_t own = c.rules[slot];
+    return own != 0 ? static_cast<Relevance>(own - 1) : team_relevance(c.team, views_[slot].team);
+}
+
 void InterestManager::decide(ClientSlot& c) {
     ClientDecisions& d = c.decisions;
     const float near_squared = config_.lod_near_distance * config_.lod_near_distance;
@@ -75,7 +80,8 @@ void InterestManager::decide(ClientSlot& c) {
     for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
         kept[count] = slot;
         count += static_cast<std::size_t>(views_[slot].alive) *
-                 static_cast<std::size_t>(c.states[slot] == PairState::visible);
+                 static_cast<std::size_t>(
+                     replicated_under(rule_of(c, slot), c.states[slot] == PairState::visible));
     }
     kept.resize(count);
     d.replicated.clear();

@@ -102,6 +102,7 @@ struct InterestManager::EntityView {
     EntityId id = 0;               ///< EntitySlot::id
     bool alive = false;            ///< EntitySlot::alive
     bool prepared_current = false; ///< EntitySlot::prepared_is_current()
+    TeamId team = kNoTeam;         ///< set_entity_team()
 };
 
 struct InterestManager::TbvGroup {
@@ -155,7 +156,10 @@ struct InterestManager::ClientSlot {
     Aabb region;
     std::vector<PairState> states; // by entity slot
     std::vector<Pair> pairs;       // by entity slot
-    LooseOctree tree;              // item id = group index
+    TeamId team = kNoTeam;         // set_client_team()
+    /// By entity slot: 0 for the team rule, else 1 + the pair's own Relevance.
+    std::vector<std::uint8_t> rules;
+    LooseOctree tree; // item id = group index
     std::vector<TbvGroup> groups;
     std::vector<std::uint32_t> free_groups;
     std::size_t live_groups = 0;

@@ -63,6 +63,7 @@ private:
     WalkingInterest interest_;
     std::vector<std::uint32_t> known_entities_; // increasing
     std::vector<std::uint32_t> scratch_;
+    std::vector<visibility::TeamId> entity_teams_; // by known_entities_ index, this tick
     /// This tick's pending arrivals: (entity id, arrival eye), increasing ids.
     std::vector<std::pair<std::uint32_t, glm::vec3>> arrivals_;
     /// Client id -> the entity it views from, and whether it has an arrival spectator.

@@ -15,6 +15,7 @@
 #include "dsoc/sim/respawn.hpp"
 #include "dsoc/sim/wander_bot.hpp"
 #include "dsoc/visibility/geometry.hpp"
+#include "dsoc/visibility/relevance.hpp"
 
 #include <glm/vec3.hpp>
 
@@ -40,6 +41,10 @@ struct WorldSettings {
     /// allowance in ticks, or a respawn inside it pops entities in (sim/respawn.hpp).
     /// [Units: ticks] [Limit: >= 0]
     int respawn_delay_ticks = 0;
+    /// Teams (0: none): bot i joins team i % teams + 1, players join teams 1..teams in
+    /// turn as they spawn. Teammates are always replicated to each other (relevance.hpp).
+    /// [Limit: 0..1000]
+    int teams = 0;
 };
 
 enum class EntityKind : std::uint8_t { bot = 0, player = 1 };
@@ -54,6 +59,7 @@ struct Entity {
     std::int32_t bot = -1;                      ///< index into the bot brains, or -1
     bool teleported = false;                    ///< respawned during the last step()
     std::optional<sim::PendingRespawn> respawn; ///< dead, waiting to be put at a spawn point
+    visibility::TeamId team = visibility::kNoTeam;
 };
 
 class GameWorld final : public WorldView {
@@ -71,6 +77,8 @@ public:
     /// Adds the player entity `id` (from reserve_player(), not spawned yet) at the next
     /// spawn point, keeping entities() in increasing id order.
     void spawn_reserved(std::uint32_t id);
+    /// Moves an entity to `team` (visibility::kNoTeam: none); unknown ids are ignored.
+    void set_team(std::uint32_t id, visibility::TeamId team);
     /// Removes an entity; unknown ids are ignored.
     void remove(std::uint32_t id);
     /// Sets a player's intent: `wish` horizontal, clamped to length <= 1; angles are
@@ -95,7 +103,7 @@ public:
     [[nodiscard]] std::size_t entity_count() const override { return entities_.size(); }
     [[nodiscard]] EntityView entity(std::size_t index) const override {
         const Entity& e = entities_[index];
-        return {e.id, box_of(e), e.move.velocity, arrival_eye_of(e)};
+        return {e.id, box_of(e), e.move.velocity, arrival_eye_of(e), e.team};
     }
     [[nodiscard]] const Entity* find(std::uint32_t id) const;
     /// The entity's collision box in world space.
@@ -124,6 +132,8 @@ private:
     std::uint32_t next_id_ = 1;
     std::uint32_t next_spawn_ = 0;
     int respawn_delay_ticks_ = 0;
+    int teams_ = 0;
+    std::uint32_t next_team_ = 0;    ///< players join teams in turn
     std::vector<std::uint8_t> died_; ///< step(): players who touched a hazard, by index
 };
 

@@ -47,12 +47,15 @@ struct Viewer {
     /// lives. Every policy answers for both eyes, so what the client sees on arrival
     /// is known before it gets there.
     std::optional<glm::vec3> arrival_eye;
+    /// The team of its entity (visibility::kNoTeam: none). Every policy sends the
+    /// entities of the viewer's team whatever it sees (visibility::team_relevance()).
+    visibility::TeamId team = visibility::kNoTeam;
 };
 
 /// Client `client_id`'s point of view from its entity `self` of `world` this tick.
 [[nodiscard]] inline Viewer viewer_of(const GameWorld& world, std::uint32_t client_id,
                                       const Entity& self) {
-    return {client_id, self.id, world.eye_of(self), world.arrival_eye_of(self)};
+    return {client_id, self.id, world.eye_of(self), world.arrival_eye_of(self), self.team};
 }
 
 class InterestPolicy {
@@ -134,6 +137,7 @@ private:
     float radius_;
     std::vector<std::uint32_t> ids_; // this tick's entities, increasing
     std::vector<visibility::Aabb> boxes_;
+    std::vector<visibility::TeamId> teams_;
 };
 
 /// What the Quake 3 server does: an entity is sent when its box touches a leaf whose
@@ -156,6 +160,7 @@ private:
     std::vector<std::uint32_t> ids_;
     std::vector<std::vector<std::int32_t>> clusters_;
     std::vector<bool> always_sent_;
+    std::vector<visibility::TeamId> teams_;
 };
 
 /// What make_policy() reads: which policy, and the settings of the one it makes. The

@@ -1,10 +1,11 @@
 #pragma once
 // What an interest policy reads of the world each tick: the entities, in increasing id
-// order, each with its box, velocity and pending respawn. GameWorld (the server's and
+// order, each with its box, velocity, pending respawn and team. GameWorld (the server's and
 // dsoc-inspect's world) is one; dsoc-eval's recorded frames are another, so that the evaluation
 // runs the very policies the server runs.
 
 #include "dsoc/visibility/geometry.hpp"
+#include "dsoc/visibility/relevance.hpp"
 
 #include <glm/vec3.hpp>
 
@@ -22,6 +23,8 @@ struct EntityView {
     /// Where its eye will be once a respawn the world has decided puts it at a spawn
     /// point (sim/respawn.hpp); nothing while it lives.
     std::optional<glm::vec3> arrival_eye;
+    /// Its team (visibility::kNoTeam: none): teammates are always replicated.
+    visibility::TeamId team = visibility::kNoTeam;
 };
 
 class WorldView {

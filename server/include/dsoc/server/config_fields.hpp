@@ -15,6 +15,7 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("port", config.port);
     visit("tick_rate", config.tick_rate);
     visit("bots", config.bots);
+    visit("teams", config.teams);
     visit("map", config.map);
     visit("policy", config.policy);
     visit("tbv_strategy", config.tbv_strategy);

@@ -32,6 +32,10 @@ struct ServerConfig {
     int tick_rate = visibility::DSOCConfig{}.tick_rate;
     /// Wandering bots. [Limit: 0..100000]
     int bots = interest::WorldSettings{}.bots;
+    /// Teams (0: none): bots and players are dealt into teams 1..teams; every policy
+    /// sends a client its teammates whatever it sees (interest beyond sight).
+    /// [Limit: 0..1000]
+    int teams = interest::WorldSettings{}.teams;
     /// Map: a name looked up in OpenArena's .pk3 archives (and $DSOC_MAP_PATH), a path
     /// to a .bsp or text map, or "gen:city[:seed]" / "gen:rooms[:seed]".
     std::string map = "oa_dm4";

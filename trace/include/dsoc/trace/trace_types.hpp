@@ -41,6 +41,12 @@ struct TraceClient {
     /// Where a respawn the server has decided will put the eye (within the lookahead):
     /// the replicated set covers it too. Absent while the client's entity lives.
     std::optional<glm::vec3> arrival;
+    /// Entities sent by a rule whatever sight says (teammates: visibility::Relevance::
+    /// always), increasing; and entities withheld by a rule, seen or not (never).
+    /// Their reason is the rule, not the culler: a checker leaves `always` out of
+    /// exposure and `never` out of pop-in.
+    std::vector<std::uint32_t> always;
+    std::vector<std::uint32_t> never;
 };
 
 struct TraceTick {

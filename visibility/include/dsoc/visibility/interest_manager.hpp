@@ -25,6 +25,7 @@
 #include "dsoc/visibility/dsoc_config.hpp"
 #include "dsoc/visibility/loose_octree.hpp"
 #include "dsoc/visibility/region_visibility.hpp"
+#include "dsoc/visibility/relevance.hpp"
 #include "dsoc/visibility/tbv.hpp"
 
 #include <atomic>
@@ -33,6 +34,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <queue>
 #include <unordered_map>
 #include <vector>
@@ -165,6 +167,20 @@ public:
     /// Spectators only (no viewer entity): where the eye is this tick.
     bool set_client_eye(ClientId id, glm::vec3 eye);
 
+    // Interest beyond sight (relevance.hpp). Take effect at the next update; false on
+    // an unknown id. The client's own viewer entity is always in its set: no pair rule
+    // may be set on it.
+    /// The entity's team (kNoTeam: none, the default).
+    bool set_entity_team(EntityId id, TeamId team);
+    /// The client's team (kNoTeam: none, the default): entities of its team are
+    /// `always` replicated unless a pair rule says otherwise.
+    bool set_client_team(ClientId id, TeamId team);
+    /// The pair's own rule, over the team rule; nothing: back to the team rule. Forgotten
+    /// when either is removed.
+    bool set_relevance(ClientId client, EntityId entity, std::optional<Relevance> rule);
+    /// The rule the pair is under now (its own, else the team rule); sight for unknown ids.
+    [[nodiscard]] Relevance relevance(ClientId client, EntityId entity) const;
+
     /// Everything for one tick: begin_update, then every client in turn. Ticks should
     /// increase; the time since the last update is the tick difference (1 if not).
     void update(std::uint64_t tick);
@@ -255,6 +271,8 @@ private:
                        bool cheapest);
     /// Step 6: the replication set, its level of detail, enter and leave.
     void decide(ClientSlot& c);
+    /// The rule of the pair (client, entity slot): its own, else the team rule.
+    [[nodiscard]] Relevance rule_of(const ClientSlot& c, std::uint32_t slot) const;
     /// The entity slot of the client's viewer; 0xffffffff for none (a spectator, or a
     /// viewer entity not added).
     [[nodiscard]] std::uint32_t viewer_slot_of(const ClientSlot& c) const;
