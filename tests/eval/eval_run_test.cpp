@@ -144,3 +144,53 @@ TEST(EvalRun, TraceFollowsTheSpecAndDsocHasNoPopIn) {
 
 } // namespace
 } // namespace dsoc::eval
+
+namespace dsoc::eval {
+namespace {
+
+TEST(EvalRun, WithTeamsEveryPolicySendsTeammatesAndTheOracleJudgesTheOtherPairs) {
+    const std::string path =
+        (std::filesystem::temp_directory_path() /
+         ("dsoc-eval-teams-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+          ".jsonl"))
+            .string();
+    EvalOptions options;
+    options.scenario = tiny_scenario();
+    options.scenario.teams = 2;
+    options.scenario.duration_s = 1.0;
+    options.policies = {"distance", "dsoc", "raycast"};
+    options.trace_path = path;
+    options.trace_every = 1;
+    const EvalResult with_teams = run_evaluation(options, nullptr);
+    options.scenario.teams = 0;
+    options.trace_path.clear();
+    const EvalResult without = run_evaluation(options, nullptr);
+    for (const char* name : {"distance", "dsoc", "raycast"}) {
+        const PolicyMetrics& m = find(with_teams, name);
+        EXPECT_GT(m.checked_by_rule, 0u) << name;
+        EXPECT_EQ(m.missed_by_rule, 0u) << name << " left a teammate out";
+        EXPECT_EQ(find(without, name).checked_by_rule, 0u) << name;
+    }
+    EXPECT_EQ(find(with_teams, "dsoc").popin_lookahead, 0u);
+    // The raycast policy hides some teammates by sight alone: with teams it sends more.
+    EXPECT_GT(find(with_teams, "raycast").replicated_pairs,
+              find(without, "raycast").replicated_pairs);
+    // The trace says which entities each client got for its team.
+    trace::TraceReader reader;
+    ASSERT_TRUE(reader.open(path)) << reader.error();
+    trace::TraceTick tick;
+    ASSERT_TRUE(reader.next(tick)) << reader.error();
+    for (const trace::TraceClient& c : tick.clients) {
+        ASSERT_FALSE(c.always.empty()) << "client " << c.id;
+        for (const std::uint32_t id : c.always) {
+            EXPECT_EQ(id % 2, c.id % 2) << "client " << c.id << " entity " << id;
+            EXPECT_NE(id, c.id);
+            EXPECT_TRUE(std::binary_search(c.replicated.begin(), c.replicated.end(), id))
+                << "client " << c.id << " entity " << id;
+        }
+    }
+    std::filesystem::remove(path);
+}
+
+} // namespace
+} // namespace dsoc::eval

@@ -72,10 +72,13 @@ struct WorkerScratch {
     std::vector<std::uint8_t> buffer;
 };
 
-/// Compares one client's interest set with the oracle's flags.
-void judge_client(const VisibilityTruth& truth, std::size_t client, std::size_t entities,
+/// Compares one client's interest set with the oracle's flags. Pairs a rule other than
+/// sight decides (teammates: `frame`'s teams) are counted apart, not judged.
+void judge_client(const VisibilityTruth& truth, const WorldFrame& frame, std::size_t client,
                   const std::vector<std::uint32_t>& set, std::uint64_t tick,
                   std::size_t max_examples, PolicyMetrics& m) {
+    const std::size_t entities = frame.entities.size();
+    const visibility::TeamId team = frame.entities[client].team;
     std::size_t k = 0;
     for (std::size_t e = 0; e < entities; ++e) {
         if (e == client) {
@@ -85,6 +88,12 @@ void judge_client(const VisibilityTruth& truth, std::size_t client, std::size_t 
             ++k;
         }
         const bool replicated = k < set.size() && set[k] == e;
+        if (visibility::team_relevance(team, frame.entities[e].team) !=
+            visibility::Relevance::sight) {
+            m.checked_by_rule += 1;
+            m.missed_by_rule += replicated ? 0 : 1; // an `always` pair must be sent
+            continue;
+        }
         const std::uint8_t f = truth.at(client, e);
         if (replicated) {
             ++m.checked_replicated;
@@ -105,6 +114,24 @@ void judge_client(const VisibilityTruth& truth, std::size_t client, std::size_t 
             }
         }
     }
+}
+
+/// The ideal sends `client`'s teammates too (the team rule), whatever they see: adds
+/// them to `set` (increasing ids), which stays increasing.
+void add_teammates(const WorldFrame& frame, std::size_t client, std::vector<std::uint32_t>& set) {
+    const visibility::TeamId team = frame.entities[client].team;
+    if (team == visibility::kNoTeam) {
+        return;
+    }
+    const std::size_t seen = set.size();
+    for (std::size_t e = 0; e < frame.entities.size(); ++e) {
+        if (e != client && frame.entities[e].team == team &&
+            !std::binary_search(set.begin(), set.begin() + static_cast<std::ptrdiff_t>(seen),
+                                static_cast<std::uint32_t>(e))) {
+            set.push_back(static_cast<std::uint32_t>(e));
+        }
+    }
+    std::inplace_merge(set.begin(), set.begin() + static_cast<std::ptrdiff_t>(seen), set.end());
 }
 
 } // namespace
@@ -306,7 +333,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
             for (auto& run : runs) {
                 run.metrics.checked_client_ticks += judged_clients;
                 for (std::size_t c = 0; c < viewers; c += stride) {
-                    judge_client(truth, c, entities, run.sets[c], tick, options.max_examples,
+                    judge_client(truth, world.current(), c, run.sets[c], tick, options.max_examples,
                                  run.metrics);
                 }
                 run.metrics.live_tbv_sum += run.policy->live_tbvs();
@@ -315,6 +342,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
             WorkerScratch& s = scratch[0];
             for (std::size_t c = 0; c < viewers; c += stride) {
                 truth.ideal_set(c, ideal_set);
+                add_teammates(world.current(), c, ideal_set);
                 result.ideal_visible_pairs += ideal_set.size();
                 for (std::size_t e = 0; options.region_bound && e < entities; ++e) {
                     result.region_visible_pairs +=
@@ -343,6 +371,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
                 client.entity = static_cast<std::uint32_t>(c);
                 client.eye = world.eye(frame, c);
                 client.arrival = frame.entities[c].arrival_eye;
+                add_teammates(frame, c, client.always); // sent for their team
                 client.replicated = runs[trace_run].sets[c];
                 line.clients.push_back(std::move(client));
             }

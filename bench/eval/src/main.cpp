@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
     bool seed_set = false;
     int viewers = 0;
     int bots = 0;
+    int teams = -1;
     int oracle_every = 0;
     int oracle_clients = -1;
     EvalOptions options;
@@ -51,6 +52,9 @@ int main(int argc, char** argv) {
     });
     app.add_option("--viewers", viewers, "override the number of viewers");
     app.add_option("--bots", bots, "override the number of bots");
+    app.add_option("--teams", teams,
+                   "override the number of teams (0 = none; teammates are sent whatever they see "
+                   "and left out of pop-in and exposure)");
     app.add_option("--oracle-every", oracle_every,
                    "the oracle judges every K-th tick (and the one before); 1 = every tick");
     app.add_option("--oracle-clients", oracle_clients,
@@ -143,6 +147,9 @@ int main(int argc, char** argv) {
     }
     if (bots > 0) {
         sc.bots = bots;
+    }
+    if (teams >= 0) {
+        sc.teams = teams;
     }
     if (oracle_every > 0) {
         sc.oracle_every = oracle_every;

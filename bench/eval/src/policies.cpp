@@ -69,7 +69,8 @@ public:
                 continue;
             }
             const visibility::Aabb& box = e.box;
-            if (box.contains(eye)) {
+            if (visibility::team_relevance(viewer.team, e.team) == visibility::Relevance::always ||
+                box.contains(eye)) {
                 out.push_back({e.id, 0});
                 continue;
             }
@@ -128,6 +129,7 @@ void EvalPolicy::select(std::size_t client, const WorldFrame& frame,
     viewer.entity_id = static_cast<std::uint32_t>(client);
     viewer.eye = world_->eye(frame, client);
     viewer.arrival_eye = frame.entities[client].arrival_eye;
+    viewer.team = frame.entities[client].team;
     std::vector<interest::Interest>& answer = answers_[client];
     const FrameView view(frame);
     if (over_budget(client, frame.tick)) {

@@ -134,6 +134,16 @@ void write_markdown(const EvalResult& r, const std::string& command, std::ostrea
             << " | - | - | - | - | 0 | 0 | - | - |\n";
     }
     out << "\n";
+    if (!r.policies.empty() && r.policies.front().checked_by_rule > 0) {
+        // The same pairs for every policy: the judged clients' teammates.
+        out << "*Teams*: " << r.policies.front().checked_by_rule
+            << " judged pairs are teammates, sent for their team whatever they see and left "
+               "out of pop-in and exposure; not sent:";
+        for (const auto& m : r.policies) {
+            out << " " << m.name << " " << m.missed_by_rule;
+        }
+        out << ".\n\n";
+    }
     if (r.region_bound) {
         out << "*Region bound*: entities visible from some eye of a " << r.region_lattice << " x "
             << r.region_lattice << " x " << r.region_lattice
@@ -243,6 +253,8 @@ std::string to_json(const EvalResult& r, const std::string& command) {
                   {"popin_present", m.popin_present},
                   {"popin_lookahead", m.popin_lookahead},
                   {"exposed", m.exposed},
+                  {"checked_by_rule", m.checked_by_rule},
+                  {"missed_by_rule", m.missed_by_rule},
                   {"exposure", d.exposure},
                   {"measured_bytes", m.measured_bytes},
                   {"bytes_vs_ideal", d.bytes_vs_ideal},

@@ -21,6 +21,9 @@ std::vector<std::string> validate(const Scenario& s) {
     if (s.bots < 0) {
         problems.push_back("bots must be >= 0");
     }
+    if (s.teams < 0 || s.teams > 1000) {
+        problems.push_back("teams must be in 0..1000");
+    }
     if (s.tick_rate < 1 || s.tick_rate > 240) {
         problems.push_back("tick_rate must be in 1..240 Hz");
     }
@@ -67,6 +70,7 @@ bool load_scenarios(const std::string& path, std::vector<Scenario>& out, std::st
             s.city_blocks = j.value("city_blocks", s.city_blocks);
             s.viewers = j.value("viewers", s.viewers);
             s.bots = j.value("bots", s.bots);
+            s.teams = j.value("teams", s.teams);
             s.tick_rate = j.value("tick_rate", s.tick_rate);
             s.rtt_ms = j.value("rtt_ms", s.rtt_ms);
             s.interpolation_ms = j.value("interpolation_ms", s.interpolation_ms);

@@ -27,7 +27,7 @@ maps::Map load_scenario_map(const Scenario& scenario) {
 
 WorldSim::WorldSim(const maps::Map& map, const Scenario& scenario, int lookahead)
     : map_(&map), collision_(map.collision_brushes),
-      viewers_(static_cast<std::size_t>(scenario.viewers)),
+      viewers_(static_cast<std::size_t>(scenario.viewers)), teams_(scenario.teams),
       dt_(1.0f / static_cast<float>(scenario.tick_rate)) {
     wander_.respawn_delay_ticks = lookahead;
     if (map.spawn_points.empty()) {
@@ -66,6 +66,9 @@ WorldFrame WorldSim::snapshot(std::uint64_t tick, const WorldFrame* previous) co
         e.velocity = s.velocity;
         e.box = {s.position + move_.mins, s.position + move_.maxs};
         e.respawned = bots_[i].respawned;
+        if (teams_ > 0) {
+            e.team = static_cast<visibility::TeamId>(i % static_cast<std::size_t>(teams_) + 1);
+        }
         if (bots_[i].respawn) {
             e.arrival_eye =
                 bots_[i].respawn->arrival.position + glm::vec3(0.0f, 0.0f, move_.eye_height);

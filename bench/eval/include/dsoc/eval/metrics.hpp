@@ -35,10 +35,14 @@ struct PolicyMetrics {
 
     // Oracle-checked client-ticks.
     std::uint64_t checked_client_ticks = 0;
-    std::uint64_t checked_replicated = 0;   ///< replicated triples on checked ticks
-    std::uint64_t exposed = 0;              ///< replicated, not visible within the allowance
-    std::uint64_t popin_present = 0;        ///< visible from the present eye, not replicated
-    std::uint64_t popin_lookahead = 0;      ///< visible from an eye in t..t+K, not replicated
+    std::uint64_t checked_replicated = 0; ///< replicated triples on checked ticks
+    std::uint64_t exposed = 0;            ///< replicated, not visible within the allowance
+    std::uint64_t popin_present = 0;      ///< visible from the present eye, not replicated
+    std::uint64_t popin_lookahead = 0;    ///< visible from an eye in t..t+K, not replicated
+    /// Pairs a rule other than sight decides (teammates), on checked ticks: left out of
+    /// exposure and pop-in; `missed_by_rule` of them were not sent (must be 0).
+    std::uint64_t checked_by_rule = 0;
+    std::uint64_t missed_by_rule = 0;
     std::vector<ViolationExample> examples; ///< the first few
 
     // Bytes on the ticks where the ideal's bytes are known (see EvalResult).

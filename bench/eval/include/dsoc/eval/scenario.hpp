@@ -19,6 +19,10 @@ struct Scenario {
     int viewers = 64;
     /// Wandering bots. [Limit: >= 0]
     int bots = 512;
+    /// Teams (0: none): entity i (viewers first, then bots) plays for team i % teams + 1,
+    /// and every policy sends a viewer its teammates whatever it sees; the oracle judges
+    /// only the other pairs. [Limit: 0..1000]
+    int teams = 0;
     /// [Units: Hz] [Limit: 1..240]
     int tick_rate = 30;
     /// Client round trip. [Units: ms] [Limit: >= 0]

@@ -15,6 +15,7 @@
 #include "dsoc/sim/player_move.hpp"
 #include "dsoc/sim/wander_bot.hpp"
 #include "dsoc/visibility/geometry.hpp"
+#include "dsoc/visibility/relevance.hpp"
 
 #include <cstdint>
 #include <deque>
@@ -34,6 +35,7 @@ struct EntityFrame {
     /// Dead, and where its eye will be when its pending respawn puts it at a spawn
     /// point (within the lookahead: sim/respawn.hpp); nothing while it lives.
     std::optional<glm::vec3> arrival_eye;
+    visibility::TeamId team = visibility::kNoTeam; ///< Scenario::teams
 };
 
 struct WorldFrame {
@@ -76,6 +78,7 @@ private:
     sim::WanderConfig wander_;
     std::vector<sim::WanderBot> bots_; ///< every entity: viewers first
     std::size_t viewers_;
+    int teams_;
     float dt_;
     std::uint64_t next_tick_ = 0;
     std::deque<WorldFrame> frames_;
