@@ -213,6 +213,7 @@ void Server::apply_joins() {
         const std::uint32_t entity = it->second.session->entity_id();
         world_.spawn_reserved(entity);
         policy_->add_viewer(id, entity);
+        it->second.viewing = entity;
     }
     pending_joins_.clear();
 }
@@ -226,6 +227,7 @@ void Server::apply_inputs() {
             world_.set_player_input(client.session->entity_id(),
                                     glm::vec3(input.move_x(), input.move_y(), input.move_z()),
                                     input.jump(), input.view_yaw(), input.view_pitch());
+            client.watch = input.watch();
             client.input_pending = false;
         }
     }
@@ -250,8 +252,16 @@ void Server::prepare_client_ticks() {
         if (!session.active()) {
             continue;
         }
+        const interest::Entity& viewed = viewed_entity(client, *self);
+        if (viewed.id != client.viewing) { // a spectator switched: before begin_tick()
+            policy_->remove_viewer(id);
+            policy_->add_viewer(id, viewed.id);
+            client.viewing = viewed.id;
+        }
+        stats_.spectating_client_ticks += viewed.id != self->id ? 1 : 0;
         ClientTick job;
-        job.viewer = interest::viewer_of(world_, id, *self);
+        job.viewer = interest::viewer_of(world_, id, viewed);
+        job.viewer.entity_id = self->id; // its own entity, sent whatever it watches
         job.replication = &client.replication;
         job.interest = &client.interest;
         job.envelope = &client.envelope;
@@ -263,6 +273,15 @@ void Server::prepare_client_ticks() {
         client_ticks_.push_back(job);
         tick_clients_.push_back(&client);
     }
+}
+
+const interest::Entity& Server::viewed_entity(const Client& client,
+                                              const interest::Entity& self) const {
+    if (client.watch == 0 || client.watch == self.id) {
+        return self;
+    }
+    const interest::Entity* watched = world_.find(client.watch);
+    return watched != nullptr ? *watched : self;
 }
 
 void Server::send_snapshots() {
@@ -334,12 +353,17 @@ void Server::write_trace_tick() {
         if (!session.active() || self == nullptr) {
             continue;
         }
+        // A spectator's eye (and team) are those of the entity it watches.
+        const interest::Entity* viewed = world_.find(client.viewing);
+        if (viewed == nullptr) {
+            viewed = self;
+        }
         trace::TraceClient& c = t.clients.emplace_back();
-        c = {id, session.entity_id(), world_.eye_of(*self), client.replication.known(),
-             world_.arrival_eye_of(*self)};
-        if (self->team != visibility::kNoTeam) { // teammates are sent for their team
+        c = {id, session.entity_id(), world_.eye_of(*viewed), client.replication.known(),
+             world_.arrival_eye_of(*viewed)};
+        if (viewed->team != visibility::kNoTeam) { // teammates are sent for their team
             for (const interest::Entity& e : world_.entities()) {
-                if (e.team == self->team && e.id != self->id) {
+                if (e.team == viewed->team && e.id != viewed->id) {
                     c.always.push_back(e.id);
                 }
             }

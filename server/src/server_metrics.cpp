@@ -49,6 +49,10 @@ std::string Server::render_metrics() const {
                 "Client-ticks given the policy's cheapest conservative answer because their turn "
                 "came after the tick's culling budget (culling_budget).",
                 d(stats_.cheapest_client_ticks));
+    out.counter("dsoc_spectating_client_ticks_total",
+                "Client-ticks sent the view of another entity than the client's own (spectators, "
+                "ClientInput.watch).",
+                d(stats_.spectating_client_ticks));
     out.gauge("dsoc_clients", "Clients in the game (after a valid hello).", d(clients_.size()));
     out.gauge("dsoc_connections", "Open connections, including those still in the handshake.",
               d(sessions_.size()));

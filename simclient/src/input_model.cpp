@@ -1,5 +1,6 @@
 #include "dsoc/simclient/input_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace dsoc::simclient {
@@ -16,12 +17,38 @@ void set_move(protocol::pb::ClientInput& input, float yaw_deg, float speed) {
 InputModel::InputModel(Behaviour behaviour, std::uint64_t seed)
     : behaviour_(behaviour), rng_(seed) {}
 
-void InputModel::next(protocol::pb::ClientInput& input, int tick_rate) {
+void InputModel::next(protocol::pb::ClientInput& input, int tick_rate,
+                      const protocol::SnapshotDecoder& replica, std::uint32_t own_entity) {
     if (behaviour_ == Behaviour::camper) {
         camp(input, tick_rate);
+    } else if (behaviour_ == Behaviour::spectator) {
+        spectate(input, tick_rate, replica, own_entity);
     } else {
         wander(input, tick_rate);
     }
+}
+
+void InputModel::spectate(protocol::pb::ClientInput& input, int tick_rate,
+                          const protocol::SnapshotDecoder& replica, std::uint32_t own_entity) {
+    if (--ticks_left_ <= 0 || (watch_ != 0 && !replica.knows(watch_))) {
+        players_.clear();
+        replica.entities().for_each([&](std::uint32_t id, const protocol::ReplicaEntity& e) {
+            if (e.kind == 1 && id != own_entity) { // kind 1: a player (EntityState.kind)
+                players_.push_back(id);
+            }
+        });
+        std::sort(players_.begin(), players_.end()); // the map's order is not the seed's
+        watch_ = 0;
+        if (!players_.empty()) {
+            std::uniform_int_distribution<std::size_t> pick(0, players_.size() - 1);
+            watch_ = players_[pick(rng_)];
+        }
+        std::uniform_int_distribution<int> hold(5 * tick_rate, 10 * tick_rate);
+        ticks_left_ = watch_ != 0 ? hold(rng_) : tick_rate; // none known: look again in 1 s
+    }
+    input.set_move_x(0.0f);
+    input.set_move_y(0.0f);
+    input.set_watch(watch_);
 }
 
 void InputModel::wander(protocol::pb::ClientInput& input, int tick_rate) {

@@ -14,12 +14,15 @@ std::string_view to_string(Behaviour behaviour) {
         return "camper";
     case Behaviour::respawner:
         return "respawner";
+    case Behaviour::spectator:
+        return "spectator";
     }
     return "?";
 }
 
 bool behaviour_from_string(std::string_view name, Behaviour& out) {
-    for (const Behaviour b : {Behaviour::wanderer, Behaviour::camper, Behaviour::respawner}) {
+    for (const Behaviour b :
+         {Behaviour::wanderer, Behaviour::camper, Behaviour::respawner, Behaviour::spectator}) {
         if (to_string(b) == name) {
             out = b;
             return true;

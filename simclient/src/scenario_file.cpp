@@ -147,7 +147,8 @@ ClientGroup read_group(const Reader& r, const toml::node& node, const std::strin
             const std::string name = r.string(v, key);
             if (!behaviour_from_string(name, g.behaviour)) {
                 r.fail(v, key,
-                       "unknown behaviour '" + name + "'; known: wanderer, camper, respawner");
+                       "unknown behaviour '" + name +
+                           "'; known: wanderer, camper, respawner, spectator");
             }
         } else if (name_of_key == "weight") {
             g.weight = r.number(v, key);

@@ -315,7 +315,7 @@ void SimClient::send_input() {
     pb::Envelope message;
     auto& input = *message.mutable_client_input();
     input.set_tick(++input_seq_);
-    input_model_.next(input, tick_rate_);
+    input_model_.next(input, tick_rate_, replica_, stats_.entity_id);
     send(message);
     if (input_seq_ % static_cast<std::uint64_t>(tick_rate_) == 0) {
         pb::Envelope ping;

@@ -31,6 +31,13 @@ Scenario tiny_scenario() {
     return s;
 }
 
+/// A trace file's path in the temp directory, unique to this test run.
+std::string temp_trace_path(const std::string& stem) {
+    return (std::filesystem::temp_directory_path() /
+            (stem + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + ".jsonl"))
+        .string();
+}
+
 const PolicyMetrics& find(const EvalResult& r, const std::string& name) {
     for (const auto& m : r.policies) {
         if (m.name == name) {
@@ -41,11 +48,7 @@ const PolicyMetrics& find(const EvalResult& r, const std::string& name) {
 }
 
 TEST(EvalRun, TraceFollowsTheSpecAndDsocHasNoPopIn) {
-    const std::string path =
-        (std::filesystem::temp_directory_path() /
-         ("dsoc-eval-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-          ".jsonl"))
-            .string();
+    const std::string path = temp_trace_path("dsoc-eval-test-");
     EvalOptions options;
     options.scenario = tiny_scenario();
     options.policies = {"broadcast", "occlusion", "dsoc", "raycast"};
@@ -149,11 +152,7 @@ namespace dsoc::eval {
 namespace {
 
 TEST(EvalRun, WithTeamsEveryPolicySendsTeammatesAndTheOracleJudgesTheOtherPairs) {
-    const std::string path =
-        (std::filesystem::temp_directory_path() /
-         ("dsoc-eval-teams-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-          ".jsonl"))
-            .string();
+    const std::string path = temp_trace_path("dsoc-eval-teams-");
     EvalOptions options;
     options.scenario = tiny_scenario();
     options.scenario.teams = 2;

@@ -98,6 +98,8 @@ struct ServerStats {
     /// Client-ticks served the policy's cheapest answer: their turn came after the
     /// tick's culling budget (ServerConfig::culling_budget).
     std::uint64_t cheapest_client_ticks = 0;
+    /// Client-ticks sent another entity's view (spectators: ClientInput.watch).
+    std::uint64_t spectating_client_ticks = 0;
 };
 
 class Server final : private SessionHost {
@@ -143,6 +145,8 @@ private:
         std::vector<std::uint8_t> frame;          // this tick's snapshot frame, written by the job
         protocol::pb::ClientInput input;          // the latest input, for the next tick start
         bool input_pending = false;               // `input` not handed to the world yet
+        std::uint32_t watch = 0;   // ClientInput.watch of the latest input (0: its own view)
+        std::uint32_t viewing = 0; // the entity the policy views from for it (0: not yet)
     };
 
     void accept_next();
@@ -152,6 +156,10 @@ private:
     void apply_joins();
     void apply_inputs();
     void prepare_client_ticks();
+    /// The entity whose view `client` (whose own entity is `self`) is sent: the one it
+    /// watches (ClientInput.watch) while that is in the world, else its own.
+    [[nodiscard]] const interest::Entity& viewed_entity(const Client& client,
+                                                        const interest::Entity& self) const;
     void send_snapshots();
     void apply_leaves();
     void maybe_finish_shutdown();

@@ -24,6 +24,8 @@ enum class Behaviour {
     wanderer,  ///< holds a random heading 1-3 s, then picks another (the default)
     camper,    ///< stands still; now and then a short small step; the view sweeps slowly
     respawner, ///< wanders; every respawn_every_s (+-50%) leaves and reconnects as itself
+    spectator, ///< stands still and watches a player it knows (ClientInput.watch), another every
+               ///< 5-10 s
 };
 
 [[nodiscard]] std::string_view to_string(Behaviour behaviour);
