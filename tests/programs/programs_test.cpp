@@ -6,6 +6,7 @@
 #include "support/child_process.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <fstream>
@@ -163,6 +164,37 @@ TEST(ExitStatus, AScenarioMapThatDoesNotLoadIsAUsageErrorNamingTheScenario) {
               std::string::npos)
         << run.err;
     std::filesystem::remove(scenarios);
+}
+
+} // namespace
+} // namespace dsoc::testing
+
+namespace dsoc::testing {
+namespace {
+
+TEST(BakeProgram, JsonGivesTheSpecTheCpuAndThePeakMemoryAndACachedSecondRun) {
+    // What scripts/bake-all keeps per map: the map as given (to resume by), the bake's
+    // CPU over all cores and the process's peak memory; a second run loads the table.
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / "dsoc-bake-json";
+    std::filesystem::remove_all(dir);
+    const auto bake = [&] {
+        return run_program({program("dsoc-bake"), "--json", "--cell-size", "256", "--cache-dir",
+                            dir.string(), "gen:rooms:1"});
+    };
+    for (const bool cached : {false, true}) {
+        const ProgramRun run = bake();
+        ASSERT_EQ(run.status, 0) << run.err;
+        const auto out = nlohmann::json::parse(run.out, nullptr, false);
+        ASSERT_TRUE(out.is_object()) << run.out;
+        EXPECT_EQ(out["spec"], "gen:rooms:1");
+        EXPECT_EQ(out["from_cache"], cached);
+        EXPECT_GT(out["peak_rss_bytes"].get<double>(), 1e6);
+        if (!cached) {
+            EXPECT_GT(out["cpu_seconds"].get<double>(), 0.0);
+            EXPECT_GT(out["exact_tests"].get<double>(), 0.0);
+        }
+    }
+    std::filesystem::remove_all(dir);
 }
 
 } // namespace

@@ -13,8 +13,31 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <sys/resource.h>
+
 #include <cstdio>
 #include <iostream>
+
+namespace {
+
+/// User and system CPU time of the whole process so far (every thread). [Units: s]
+double process_cpu_seconds() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    const auto seconds = [](const timeval& t) {
+        return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_usec) * 1e-6;
+    };
+    return seconds(usage.ru_utime) + seconds(usage.ru_stime);
+}
+
+/// The process's peak resident memory so far (over every map of the run). [Units: bytes]
+std::uint64_t peak_rss_bytes() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return static_cast<std::uint64_t>(usage.ru_maxrss) * 1024; // ru_maxrss is in KiB
+}
+
+} // namespace
 
 int main(int argc, char** argv) {
     CLI::App app{
@@ -84,8 +107,10 @@ int main(int argc, char** argv) {
         }
         const auto scene = dsoc::visibility::OccluderScene::build(map->occluders);
         dsoc::cli::ProgressLine progress(map->name);
+        const double cpu_before = process_cpu_seconds();
         auto baked = dsoc::maps::load_or_bake(map.value(), *scene, request,
                                               [&](double f, double s) { progress(f, s); });
+        const double cpu_seconds = process_cpu_seconds() - cpu_before;
         if (!baked) {
             std::cerr << "dsoc-bake: " << baked.error().message() << "\n";
             ++failures;
@@ -106,6 +131,7 @@ int main(int argc, char** argv) {
         if (json) {
             nlohmann::json out;
             out["map"] = map->name;
+            out["spec"] = spec; // as given on the command line
             out["file"] = baked->file.string();
             out["from_cache"] = baked->from_cache;
             out["cell_size"] = t.grid().cell_size;
@@ -116,6 +142,8 @@ int main(int argc, char** argv) {
             out["file_bytes"] = ec ? 0 : file_bytes;
             out["memory_bytes"] = t.memory_bytes();
             out["bake_seconds"] = s.seconds;
+            out["cpu_seconds"] = cpu_seconds; // every thread's, loading or baking
+            out["peak_rss_bytes"] = peak_rss_bytes();
             out["exact_tests"] = s.exact_tests;
             out["exact_hidden"] = s.exact_hidden;
             out["pruned"] = s.pruned;
@@ -132,9 +160,9 @@ int main(int argc, char** argv) {
                         ec ? 0.0 : static_cast<double>(file_bytes) / (1 << 20),
                         static_cast<double>(t.memory_bytes()) / (1 << 20));
             if (!baked->from_cache) {
-                std::printf("  bake %.1f s: %llu pair visits, %llu pruned by the PVS, %llu witness "
-                            "rays (%llu clear), %llu exact tests (%llu hidden)\n",
-                            s.seconds, static_cast<unsigned long long>(s.pair_visits),
+                std::printf("  bake %.1f s (%.1f s of CPU): %llu pair visits, %llu pruned by the "
+                            "PVS, %llu witness rays (%llu clear), %llu exact tests (%llu hidden)\n",
+                            s.seconds, cpu_seconds, static_cast<unsigned long long>(s.pair_visits),
                             static_cast<unsigned long long>(s.pruned),
                             static_cast<unsigned long long>(s.witness_rays),
                             static_cast<unsigned long long>(s.witness_clear),
