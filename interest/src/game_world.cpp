@@ -183,13 +183,10 @@ void GameWorld::step(float dt, const ParallelFor& parallel) {
         }
         Entity& e = entities_[i];
         const auto& spawn = map_->spawn_points[next_spawn_++ % map_->spawn_points.size()];
-        sim::PendingRespawn pending{sim::spawn_state(collision_, move_, spawn.origin),
-                                    spawn.yaw_degrees, respawn_delay_ticks_ + 1};
-        e.teleported = sim::step_dead(pending, e.move);
+        e.teleported = sim::die(e.move, sim::spawn_state(collision_, move_, spawn.origin),
+                                spawn.yaw_degrees, respawn_delay_ticks_, e.respawn);
         if (e.teleported) {
             e.yaw_deg = wrap_degrees(spawn.yaw_degrees);
-        } else {
-            e.respawn = pending;
         }
     }
 }

@@ -122,13 +122,10 @@ void wander_step(WanderBot& bot, const CollisionWorld& world, const WanderConfig
     if (!spawns.empty() && touches_hazard(move, bot.state, hazards)) {
         ++bot.deaths;
         const maps::SpawnPoint& spawn = spawns[next_random(bot.random_state) % spawns.size()];
-        PendingRespawn pending{spawn_state(world, move, spawn.origin), spawn.yaw_degrees,
-                               config.respawn_delay_ticks + 1};
-        if (step_dead(pending, bot.state)) { // no delay
+        if (die(bot.state, spawn_state(world, move, spawn.origin), spawn.yaw_degrees,
+                config.respawn_delay_ticks, bot.respawn)) { // no delay
             bot.respawned = true;
             pick_goal(bot, config, spawns);
-        } else {
-            bot.respawn = pending;
         }
     }
 }

@@ -10,6 +10,8 @@
 
 #include "dsoc/sim/player_move.hpp"
 
+#include <optional>
+
 namespace dsoc::sim {
 
 struct PendingRespawn {
@@ -17,6 +19,21 @@ struct PendingRespawn {
     float yaw_degrees = 0.0f; ///< the spawn point's facing
     int ticks_left = 0;       ///< world steps until it is put there; >= 1 while pending
 };
+
+/// A death decided in this step: the entity goes to `arrival` (facing `yaw_degrees`)
+/// `delay_ticks` steps from now. With a delay, `pending` is set and `state` stays where
+/// it died, at rest; returns false. Without one (<= 0), `state` is put at the arrival at
+/// once; returns true (the teleport).
+inline bool die(MoveState& state, const MoveState& arrival, float yaw_degrees, int delay_ticks,
+                std::optional<PendingRespawn>& pending) {
+    if (delay_ticks <= 0) {
+        state = arrival;
+        return true;
+    }
+    pending = PendingRespawn{arrival, yaw_degrees, delay_ticks};
+    state.velocity = glm::vec3(0.0f);
+    return false;
+}
 
 /// One world step of a dead entity: counts `pending` down and, when it reaches 0, puts
 /// `state` at the arrival and returns true (the teleport); otherwise keeps the entity
