@@ -1,7 +1,7 @@
 // dsoc-snapshot-bytes: runs an evaluation scenario's world (the same deterministic
 // motion as dsoc-eval, no oracle) through every named policy and encodes each
 // client's snapshots with the server's compact encoder (dsoc::eval::ClientReplication,
-// protocol version 2, every entity on the near tier). Reports, per policy:
+// protocol version 3, every entity on the near tier). Reports, per policy:
 //   update bytes / update   the update columns (ids, field masks, deltas) per entity
 //                           update; an entity that did not move costs nothing
 //   vs full state           that against kFullStateBytes (24: id + five floats)
@@ -125,6 +125,7 @@ int main(int argc, char** argv) {
         std::unique_ptr<eval::EvalPolicy> policy;
         std::vector<eval::ClientReplication> replication;
         std::vector<std::vector<std::uint32_t>> sets;
+        std::vector<std::vector<std::uint32_t>> heard; ///< of each set, the heard-only ids
         std::vector<eval::SnapshotCost> costs;
         Totals totals;
     };
@@ -142,6 +143,7 @@ int main(int argc, char** argv) {
         }
         run.replication.assign(viewers, eval::ClientReplication(viewers));
         run.sets.resize(viewers);
+        run.heard.resize(viewers);
         run.costs.resize(viewers);
         runs.push_back(std::move(run));
     }
@@ -157,10 +159,11 @@ int main(int argc, char** argv) {
         for (Run& run : runs) {
             run.policy->begin_tick(frame);
             eval::parallel_for(viewers, threads, [&](std::size_t c, int worker) {
-                run.policy->select(c, frame, run.sets[c]);
+                run.policy->select(c, frame, run.sets[c], run.heard[c]);
                 Scratch& s = scratch[static_cast<std::size_t>(worker)];
-                run.costs[c] = run.replication[c].send(
-                    frame, run.sets[c], static_cast<std::uint64_t>(t), s.envelope, s.buffer);
+                run.costs[c] =
+                    run.replication[c].send(frame, run.sets[c], run.heard[c],
+                                            static_cast<std::uint64_t>(t), s.envelope, s.buffer);
             });
             for (std::size_t c = 0; c < viewers; ++c) {
                 const eval::SnapshotCost& cost = run.costs[c];
@@ -182,7 +185,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "\n");
 
     std::printf("dsoc-snapshot-bytes: scenario %s (%s), %d viewers, %zu entities, %d ticks "
-                "(%.0f s at %d Hz); compact snapshots, protocol v2, near tier (0.125 units, "
+                "(%.0f s at %d Hz); compact snapshots, protocol v3, near tier (0.125 units, "
                 "4096 angle steps)\n\n",
                 sc.name.c_str(), sc.map.c_str(), sc.viewers, world.entity_count(), ticks,
                 sc.duration_s, sc.tick_rate);

@@ -27,6 +27,8 @@ GameWorld::GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::
     wander_.respawn_delay_ticks = settings.respawn_delay_ticks;
     respawn_delay_ticks_ = settings.respawn_delay_ticks;
     teams_ = settings.teams;
+    sounds_ = settings.sounds;
+    seed_ = settings.seed;
     entities_.reserve(static_cast<std::size_t>(settings.bots) + 64);
     bots_ = sim::spawn_wander_bots(collision_, move_, map_->spawn_points,
                                    static_cast<std::size_t>(settings.bots), settings.seed);
@@ -34,9 +36,7 @@ GameWorld::GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::
         Entity& bot = add(EntityKind::bot, next_id_++);
         bot.bot = static_cast<std::int32_t>(i);
         bot.move = bots_[i].state;
-        if (teams_ > 0) {
-            bot.team = static_cast<visibility::TeamId>(i % static_cast<std::size_t>(teams_) + 1);
-        }
+        bot.team = team_for(bot.id);
     }
     next_spawn_ = static_cast<std::uint32_t>(settings.seed % map_->spawn_points.size());
 }
@@ -75,10 +75,13 @@ void GameWorld::spawn_reserved(std::uint32_t id) {
     Entity& p = add(EntityKind::player, id);
     p.move = sim::spawn_state(collision_, move_, spawn.origin);
     p.yaw_deg = wrap_degrees(spawn.yaw_degrees);
-    if (teams_ > 0) {
-        p.team =
-            static_cast<visibility::TeamId>(next_team_++ % static_cast<std::uint32_t>(teams_) + 1);
-    }
+    p.team = team_for(id);
+}
+
+visibility::TeamId GameWorld::team_for(std::uint32_t id) const {
+    return teams_ > 0
+               ? static_cast<visibility::TeamId>((id - 1) % static_cast<std::uint32_t>(teams_) + 1)
+               : visibility::kNoTeam;
 }
 
 void GameWorld::set_team(std::uint32_t id, visibility::TeamId team) {
@@ -139,11 +142,19 @@ void GameWorld::set_player_input(std::uint32_t id, glm::vec3 wish, bool jump, fl
     e.pitch_deg = std::clamp(pitch_deg, -90.0f, 90.0f);
 }
 
+void GameWorld::fire(std::uint32_t id) {
+    if (const auto it = index_.find(id); it != index_.end()) {
+        entities_[it->second].firing = true;
+    }
+}
+
 void GameWorld::step(float dt, const ParallelFor& parallel) {
     died_.assign(entities_.size(), 0);
-    const auto move_one = [this, dt](std::size_t i) {
+    const std::uint64_t step = steps_++;
+    const auto move_one = [this, dt, step](std::size_t i) {
         Entity& e = entities_[i];
         if (e.bot >= 0) {
+            e.firing = sim::bot_fires(seed_, e.id, step, sounds_, dt);
             sim::WanderBot& brain = bots_[static_cast<std::size_t>(e.bot)];
             sim::wander_step(brain, collision_, wander_, move_, map_->spawn_points, map_->hazards,
                              dt);
@@ -167,6 +178,9 @@ void GameWorld::step(float dt, const ParallelFor& parallel) {
             died_[i] = static_cast<std::uint8_t>(!map_->spawn_points.empty() &&
                                                  sim::touches_hazard(move_, e.move, map_->hazards));
         }
+        sim::step_sounds(e.audible, e.move, !e.respawn && died_[i] == 0, e.firing, move_.max_speed,
+                         sounds_, dt);
+        e.firing = false;
     };
     if (parallel) {
         parallel(entities_.size(), move_one);

@@ -95,8 +95,8 @@ void SnapshotEncoder::begin(std::uint64_t tick, pb::Snapshot& out) {
 void SnapshotEncoder::enter(std::uint32_t id, const Pose& pose,
                             const std::array<float, 3>& half_extents, std::uint32_t kind,
                             std::uint8_t tier, pb::Snapshot& out) {
-    const float quantum = settings_.position_quantum[tier];
-    const QuantizedPose q = quantize(pose, quantum, settings_.angle_steps);
+    const float quantum = settings_.quantum(tier);
+    const QuantizedPose q = quantize(pose, settings_, tier);
     pb::EntityState& s = *out.add_enter();
     s.set_id(id);
     s.set_tier(tier);
@@ -114,8 +114,7 @@ void SnapshotEncoder::enter(std::uint32_t id, const Pose& pose,
 
 bool SnapshotEncoder::update(std::uint32_t id, const Pose& pose, std::uint8_t tier,
                              pb::Snapshot& out) {
-    return update_quantized(
-        id, quantize(pose, settings_.position_quantum[tier], settings_.angle_steps), tier, out);
+    return update_quantized(id, quantize(pose, settings_, tier), tier, out);
 }
 
 bool SnapshotEncoder::update_quantized(std::uint32_t id, const QuantizedPose& q, std::uint8_t tier,
@@ -168,9 +167,14 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
     std::vector<SnapshotProblem> problems;
     const auto steps = static_cast<std::int64_t>(settings_.angle_steps);
     for (const pb::EntityState& e : s.enter()) {
-        if (e.tier() >= kLodTiers) {
+        if (e.tier() >= kTiers) {
             problems.push_back({"bad_tier", entity(e.id()) + " enters on tier " +
-                                                std::to_string(e.tier()) + "; tiers are 0..2"});
+                                                std::to_string(e.tier()) + "; tiers are 0..3"});
+            continue;
+        }
+        if (e.tier() == kHeardTier && (e.yaw() != 0 || e.pitch() != 0)) {
+            problems.push_back(
+                {"angles_on_heard_tier", entity(e.id()) + " enters heard-only with view angles"});
             continue;
         }
         if (static_cast<std::int64_t>(e.yaw()) >= steps) {
@@ -182,6 +186,7 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
         ReplicaEntity r;
         r.quantized = {e.x(), e.y(), e.z(), static_cast<std::int32_t>(e.yaw()), e.pitch()};
         r.tier = static_cast<std::uint8_t>(e.tier());
+        r.enter_tier = r.tier;
         r.half_extents = {e.half_x(), e.half_y(), e.half_z()};
         r.kind = e.kind();
         if (!replica_.try_emplace(e.id(), r).second) {
@@ -241,9 +246,14 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
             if ((fields & kFieldRebase) != 0) {
                 const std::int32_t tier = values[at];
                 const std::int32_t yaw = values[at + 4];
-                if (tier < 0 || static_cast<std::size_t>(tier) >= kLodTiers) {
+                if (tier < 0 || static_cast<std::size_t>(tier) >= kTiers) {
                     problems.push_back(
                         {"bad_tier", where() + ": rebase to tier " + std::to_string(tier)});
+                    continue;
+                }
+                if (tier == kHeardTier && (yaw != 0 || values[at + 5] != 0)) {
+                    problems.push_back(
+                        {"angles_on_heard_tier", where() + ": rebase to heard with view angles"});
                     continue;
                 }
                 if (yaw < 0 || yaw >= steps) {
@@ -253,6 +263,11 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
                 }
                 r.tier = static_cast<std::uint8_t>(tier);
                 r.quantized = {values[at + 1], values[at + 2], values[at + 3], yaw, values[at + 5]};
+                continue;
+            }
+            if (r.tier == kHeardTier && (fields & (kFieldYaw | kFieldPitch)) != 0) {
+                problems.push_back(
+                    {"angles_on_heard_tier", where() + ": view angles for a heard-only entity"});
                 continue;
             }
             int k = at;
@@ -307,6 +322,11 @@ std::vector<SnapshotProblem> SnapshotDecoder::check_audit(const pb::Snapshot& s,
             problems.push_back({"audit_for_unknown_entity", entity(a.id()) + " is not known"});
             continue;
         }
+        if (known->tier == kHeardTier) {
+            problems.push_back({"audit_of_heard_entity",
+                                entity(a.id()) + " is heard-only; its exact pose was sent"});
+            continue;
+        }
         const float quantum = settings_.position_quantum[known->tier];
         const Pose replica = dequantize(known->quantized, quantum, settings_.angle_steps);
         const Pose exact{a.x(), a.y(), a.z(), a.yaw(), a.pitch()};
@@ -326,8 +346,7 @@ std::optional<Pose> SnapshotDecoder::pose(std::uint32_t id) const {
     if (known == nullptr) {
         return std::nullopt;
     }
-    return dequantize(known->quantized, settings_.position_quantum[known->tier],
-                      settings_.angle_steps);
+    return dequantize(known->quantized, settings_.quantum(known->tier), settings_.angle_steps);
 }
 
 } // namespace dsoc::protocol

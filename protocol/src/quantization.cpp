@@ -10,6 +10,7 @@ namespace {
 
 constexpr float kMinQuantum = 1.0f / 1024.0f;
 constexpr float kMaxQuantum = 64.0f;
+constexpr float kMaxHeardQuantum = 1024.0f;
 constexpr std::uint32_t kMinSteps = 256;
 constexpr std::uint32_t kMaxSteps = 65536;
 
@@ -42,6 +43,14 @@ std::vector<std::string> validate(const QuantizationSettings& s, const std::stri
                                " (a farther tier is never finer)");
         }
     }
+    const float far = s.position_quantum[kLodTiers - 1];
+    if (!std::isfinite(s.heard_quantum) || s.heard_quantum > kMaxHeardQuantum ||
+        !(s.heard_quantum >= std::min(far, kMaxQuantum))) {
+        problems.push_back(prefix +
+                           "heard_quantum: must be position_quantum_far..1024 world "
+                           "units (hearing is never finer than sight), got " +
+                           std::to_string(s.heard_quantum));
+    }
     if (s.angle_steps < kMinSteps || s.angle_steps > kMaxSteps) {
         problems.push_back(prefix + "angle_steps: must be 256..65536 steps per turn, got " +
                            std::to_string(s.angle_steps));
@@ -55,6 +64,7 @@ void to_message(const QuantizationSettings& s, pb::Quantization& out) {
         out.add_position_quantum(q);
     }
     out.set_angle_steps(s.angle_steps);
+    out.set_heard_quantum(s.heard_quantum);
 }
 
 bool from_message(const pb::Quantization& m, QuantizationSettings& out, std::string& why) {
@@ -68,6 +78,7 @@ bool from_message(const pb::Quantization& m, QuantizationSettings& out, std::str
         s.position_quantum[t] = m.position_quantum(static_cast<int>(t));
     }
     s.angle_steps = m.angle_steps();
+    s.heard_quantum = m.heard_quantum();
     if (const auto problems = validate(s, "quantization."); !problems.empty()) {
         why = problems.front();
         return false;
@@ -88,6 +99,14 @@ QuantizedPose quantize(const Pose& p, float quantum, std::uint32_t steps) {
     q.yaw = static_cast<std::int32_t>(((yaw % n) + n) % n);
     q.pitch = round_clamped(static_cast<double>(p.pitch_deg) * per_degree);
     return q;
+}
+
+QuantizedPose quantize(const Pose& pose, const QuantizationSettings& settings, std::uint8_t tier) {
+    if (tier == kHeardTier) {
+        return quantize({pose.x, pose.y, pose.z, 0.0f, 0.0f}, settings.heard_quantum,
+                        settings.angle_steps);
+    }
+    return quantize(pose, settings.position_quantum[tier], settings.angle_steps);
 }
 
 Pose dequantize(const QuantizedPose& q, float quantum, std::uint32_t steps) {

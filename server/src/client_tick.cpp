@@ -1,11 +1,14 @@
 #include "dsoc/server/client_tick.hpp"
 
 #include "dsoc/protocol/codec.hpp"
+#include "dsoc/protocol/quantization.hpp"
 
 #include <algorithm>
 #include <cmath>
 
 namespace dsoc::server {
+
+static_assert(interest::kHeardTier == protocol::kHeardTier, "one heard tier on both sides");
 
 void add_own_entity(std::vector<interest::Interest>& interest, std::uint32_t entity_id) {
     const auto own =
@@ -30,10 +33,13 @@ void run_one(const interest::GameWorld& world, interest::InterestPolicy& policy,
     } else {
         policy.select(world, job.viewer, interest);
     }
+    if (job.hearing != nullptr) {
+        job.hearing->add_heard(job.viewer, policy, interest);
+    }
     add_own_entity(interest, job.viewer.entity_id);
     if (!job.network_lod) {
         for (interest::Interest& i : interest) {
-            i.tier = 0;
+            i.tier = i.tier == interest::kHeardTier ? i.tier : 0; // hearing stays coarse
         }
     }
     if (job.build) {

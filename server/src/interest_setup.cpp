@@ -16,6 +16,10 @@ interest::WorldSettings world_settings(const ServerConfig& config) {
     interest::WorldSettings s;
     s.bots = config.bots;
     s.teams = config.teams;
+    s.sounds.enabled = config.sounds;
+    s.sounds.footstep_range = config.footstep_range;
+    s.sounds.shot_range = config.shot_range;
+    s.sounds.bot_shots_per_second = config.bot_shots_per_second;
     s.max_speed = config.max_speed;
     s.seed = config.seed;
     // The shortest delay that keeps respawns from popping entities in (sim/respawn.hpp).

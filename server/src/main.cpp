@@ -112,6 +112,9 @@ void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
         ->capture_default_str();
     app.add_option("--angle-steps", config.angle_steps, "Snapshot angle steps per full turn")
         ->capture_default_str();
+    app.add_option("--heard-quantum", config.heard_quantum,
+                   "Position precision of entities a client hears but does not see [units]")
+        ->capture_default_str();
     app.add_option("--network-lod", config.network_lod,
                    "Coarser, rarer updates for distant entities (dsoc/occlusion) (true/false)")
         ->capture_default_str();

@@ -8,7 +8,7 @@
 
 namespace dsoc::server {
 
-/// The world: map, tick rate, bots, teams, seed.
+/// The world: map, tick rate, bots, teams, sounds, seed.
 template <class App>
 void add_world_options(App& app, ServerConfig& config) {
     app.add_option("--map", config.map,
@@ -19,6 +19,17 @@ void add_world_options(App& app, ServerConfig& config) {
     app.add_option("--bots", config.bots, "Wandering bots")->capture_default_str();
     app.add_option("--teams", config.teams,
                    "Teams (0 = none); teammates are sent whatever they see")
+        ->capture_default_str();
+    app.add_option("--sounds", config.sounds,
+                   "Footsteps and shots: what a client hears but cannot see is sent coarse, "
+                   "without angles (true/false)")
+        ->capture_default_str();
+    app.add_option("--footstep-range", config.footstep_range, "How far footsteps are heard [units]")
+        ->capture_default_str();
+    app.add_option("--shot-range", config.shot_range, "How far shots are heard [units]")
+        ->capture_default_str();
+    app.add_option("--bot-shots-per-second", config.bot_shots_per_second,
+                   "How often a bot fires, on average [1/s]")
         ->capture_default_str();
     app.add_option("--seed", config.seed, "Seed for bots and spawns")->capture_default_str();
 }

@@ -34,8 +34,8 @@ void SharedPoses::compute(const interest::GameWorld& world,
     poses_.clear();
     for (const interest::Entity& e : world.entities()) {
         const protocol::Pose pose = pose_of(e);
-        for (const float quantum : quantization.position_quantum) {
-            poses_.push_back(protocol::quantize(pose, quantum, quantization.angle_steps));
+        for (std::uint8_t tier = 0; tier < protocol::kTiers; ++tier) {
+            poses_.push_back(protocol::quantize(pose, quantization, tier));
         }
     }
 }
@@ -47,7 +47,8 @@ void ReplicationState::build_snapshot(const interest::GameWorld& world,
     assert(poses == nullptr ||
            (poses->size() == world.entities().size() &&
             poses->quantization().angle_steps == encoder_.settings().angle_steps &&
-            poses->quantization().position_quantum == encoder_.settings().position_quantum));
+            poses->quantization().position_quantum == encoder_.settings().position_quantum &&
+            poses->quantization().heard_quantum == encoder_.settings().heard_quantum));
     encoder_.begin(tick, snapshot);
     next_known_.clear();
 
@@ -86,7 +87,7 @@ void ReplicationState::build_snapshot(const interest::GameWorld& world,
             encoder_.enter(wanted.id, pose_of(*e), {half.x, half.y, half.z},
                            static_cast<std::uint32_t>(e->kind), wanted.tier, snapshot);
         } else {
-            const std::uint64_t interval = std::uint64_t{1} << wanted.tier;
+            const std::uint64_t interval = protocol::update_interval(wanted.tier);
             if ((tick + wanted.id) % interval != 0) {
                 return; // deferred: this coarse-tier entity is not due this tick
             }
@@ -97,7 +98,7 @@ void ReplicationState::build_snapshot(const interest::GameWorld& world,
                 encoder_.update(wanted.id, pose_of(*e), wanted.tier, snapshot);
             }
         }
-        if (audit) {
+        if (audit && wanted.tier != protocol::kHeardTier) { // never the pose hearing withholds
             add_audit(*e, snapshot);
         }
     };

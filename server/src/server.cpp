@@ -152,6 +152,7 @@ void Server::start_tick() {
     stats_.prepare_duration.observe(
         std::chrono::duration<double>(culling_start_ - tick_start_).count());
     policy_->begin_tick(world_, tick_);
+    hearing_.begin_tick(world_);
     shared_poses_.compute(world_, quantization(config_));
     // The parallel phase: on the pool's threads; this thread goes back to the sockets.
     phase_running_ = true;
@@ -230,6 +231,10 @@ void Server::apply_inputs() {
             client.watch = input.watch();
             client.input_pending = false;
         }
+        if (client.fire_pending) {
+            world_.fire(client.session->entity_id());
+            client.fire_pending = false;
+        }
     }
 }
 
@@ -270,6 +275,7 @@ void Server::prepare_client_ticks() {
         job.build = build;
         job.audit = client.audit_every > 0 && tick_ % client.audit_every == 0;
         job.network_lod = config_.network_lod;
+        job.hearing = &hearing_;
         client_ticks_.push_back(job);
         tick_clients_.push_back(&client);
     }
@@ -302,6 +308,9 @@ void Server::send_snapshots() {
         const pb::Snapshot& snapshot = job.envelope->snapshot();
         stats_.entity_updates_sent +=
             static_cast<std::uint64_t>(snapshot.enter_size() + snapshot.update_id_size());
+        for (const interest::Interest& wanted : *job.interest) {
+            stats_.heard_entities_sent += wanted.tier == interest::kHeardTier ? 1 : 0;
+        }
         ++stats_.snapshots_sent;
         if (client.session->writable_now()) {
             direct_writes_.push_back(&client);
@@ -368,6 +377,11 @@ void Server::write_trace_tick() {
                 }
             }
         }
+        for (const interest::Interest& i : client.interest) { // this tick's, from its job
+            if (i.tier == interest::kHeardTier) {
+                c.heard.push_back(i.id);
+            }
+        }
     }
     trace_->write_tick(t);
 }
@@ -414,6 +428,7 @@ void Server::on_hello(Session& session, const pb::ClientHello& client_hello) {
     hello.set_protocol_version(protocol::kProtocolVersion);
     hello.set_client_id(session.client_id());
     hello.set_entity_id(entity);
+    hello.set_team(world_.team_for(entity));
     hello.set_tick_rate(static_cast<std::uint32_t>(config_.tick_rate));
     hello.set_map_name(world_.map().name);
     hello.set_server_tick(tick_);
@@ -441,6 +456,7 @@ void Server::on_input(Session& session, const pb::ClientInput& input) {
     if (it != clients_.end()) {
         it->second.input = input;
         it->second.input_pending = true;
+        it->second.fire_pending = it->second.fire_pending || input.fire();
     }
 }
 

@@ -29,6 +29,16 @@ std::vector<std::string> validate(const ServerConfig& c) {
           "must be 0..100000, got " + std::to_string(c.bots));
     check(p, c.teams >= 0 && c.teams <= 1000, "teams",
           "must be 0..1000, got " + std::to_string(c.teams));
+    for (const auto& [name, range] :
+         {std::pair{"footstep_range", c.footstep_range}, std::pair{"shot_range", c.shot_range}}) {
+        check(p, std::isfinite(range) && range >= 0.0f && range <= 100000.0f, name,
+              "must be 0..100000 world units, got " + std::to_string(range));
+    }
+    check(p,
+          std::isfinite(c.bot_shots_per_second) && c.bot_shots_per_second >= 0.0f &&
+              c.bot_shots_per_second <= 100.0f,
+          "bot_shots_per_second",
+          "must be 0..100 per second, got " + std::to_string(c.bot_shots_per_second));
     check(p,
           c.tbv_strategy == "adaptive" || c.tbv_strategy == "explicit" || c.tbv_strategy == "fuzzy",
           "tbv_strategy", "must be one of adaptive, explicit, fuzzy; got '" + c.tbv_strategy + "'");
@@ -108,6 +118,7 @@ protocol::QuantizationSettings quantization(const ServerConfig& c) {
     protocol::QuantizationSettings q;
     q.position_quantum = {c.position_quantum_near, c.position_quantum_mid, c.position_quantum_far};
     q.angle_steps = c.angle_steps;
+    q.heard_quantum = c.heard_quantum;
     return q;
 }
 

@@ -53,6 +53,10 @@ std::string Server::render_metrics() const {
                 "Client-ticks sent the view of another entity than the client's own (spectators, "
                 "ClientInput.watch).",
                 d(stats_.spectating_client_ticks));
+    out.counter("dsoc_heard_entities_total",
+                "Entities in sent snapshots only because the client hears them (heard tier: a "
+                "coarse position, no angles), summed over snapshots.",
+                d(stats_.heard_entities_sent));
     out.gauge("dsoc_clients", "Clients in the game (after a valid hello).", d(clients_.size()));
     out.gauge("dsoc_connections", "Open connections, including those still in the handshake.",
               d(sessions_.size()));

@@ -64,6 +64,7 @@ struct Phases {
     double movement = 0.0;   // world step and inputs
     double begin_tick = 0.0; // the policy's serial part
     double select = 0.0;     // per-client interest (InterestPolicy::select)
+    double hearing = 0.0;    // Hearing::begin_tick and per client add_heard
     double snapshot = 0.0;   // SharedPoses::compute, ReplicationState::build_snapshot
     double encode = 0.0;     // the frame
     double decode = 0.0;     // client side: parse + SnapshotDecoder::apply
@@ -72,6 +73,7 @@ struct Phases {
         movement += p.movement;
         begin_tick += p.begin_tick;
         select += p.select;
+        hearing += p.hearing;
         snapshot += p.snapshot;
         encode += p.encode;
         decode += p.decode;
@@ -120,6 +122,8 @@ int main(int argc, char** argv) {
     auto policy = server::make_policy(config, world);
     std::vector<std::unique_ptr<Player>> clients;
     server::SharedPoses poses;
+    interest::Hearing hearing;
+    std::uint64_t heard = 0;
     std::mt19937_64 rng(config.seed);
     const float dt = 1.0f / static_cast<float>(config.tick_rate);
     Phases total;
@@ -161,15 +165,20 @@ int main(int argc, char** argv) {
         lap(p.movement);
         policy->begin_tick(world, tick);
         lap(p.begin_tick);
+        hearing.begin_tick(world);
+        lap(p.hearing);
         poses.compute(world, server::quantization(config));
         lap(p.snapshot);
         for (auto& c : clients) {
             const interest::Entity* self = world.find(c->entity_id);
             const interest::Viewer viewer = interest::viewer_of(world, c->client_id, *self);
-            // As run_client_ticks: the policy's set plus the viewer's own entity.
+            // As run_client_ticks: the policy's set, what the viewer hears, its own entity.
             policy->select(world, viewer, c->interest);
-            server::add_own_entity(c->interest, c->entity_id);
             lap(p.select);
+            const std::size_t heard_now = hearing.add_heard(viewer, *policy, c->interest);
+            heard += measured ? heard_now : 0;
+            lap(p.hearing);
+            server::add_own_entity(c->interest, c->entity_id);
             c->replication.build_snapshot(world, c->interest, tick, false,
                                           *c->envelope.mutable_snapshot(), &poses);
             lap(p.snapshot);
@@ -193,8 +202,9 @@ int main(int argc, char** argv) {
         }
     }
     const double n = ticks;
-    const double server_ms =
-        (total.movement + total.begin_tick + total.select + total.snapshot + total.encode) / n;
+    const double server_ms = (total.movement + total.begin_tick + total.select + total.hearing +
+                              total.snapshot + total.encode) /
+                             n;
     const double client_tick = static_cast<double>(clients.size()) * n;
     fmt::print("dsoc-tick-bench: map {} policy {} bots {} players {} tick rate {} Hz, {} ticks "
                "measured after {}\n",
@@ -209,11 +219,15 @@ int main(int argc, char** argv) {
     row("movement", total.movement);
     row("begin_tick", total.begin_tick);
     row("select (interest)", total.select);
+    row("hearing", total.hearing);
     row("build_snapshot", total.snapshot);
     row("encode frame", total.encode);
     fmt::print("  client decode        {:8.2f} ms per tick for all clients, {:.2f} us per "
                "snapshot\n",
                total.decode / n, 1000.0 * total.decode / client_tick);
+    fmt::print("  hearing              {:.2f} heard-only entities per client-tick, {:.1f}% of the "
+               "cost of select\n",
+               static_cast<double>(heard) / client_tick, 100.0 * total.hearing / total.select);
     fmt::print("  checksum             {} entity updates, {} bytes, {} decode problems\n", updates,
                bytes, decode_problems);
     return decode_problems == 0 ? cli::exit_ok : cli::exit_failure;

@@ -7,6 +7,8 @@ namespace dsoc::simclient {
 
 namespace {
 constexpr float kPi = 3.14159265358979f;
+/// How often a wanderer fires, on average. [Units: 1/s]
+constexpr double kWandererShotsPerSecond = 0.5;
 
 void set_move(protocol::pb::ClientInput& input, float yaw_deg, float speed) {
     input.set_move_x(speed * std::cos(yaw_deg * kPi / 180.0f));
@@ -60,6 +62,7 @@ void InputModel::wander(protocol::pb::ClientInput& input, int tick_rate) {
     }
     set_move(input, yaw_deg_, 1.0f);
     input.set_view_yaw(yaw_deg_);
+    input.set_fire(std::bernoulli_distribution(kWandererShotsPerSecond / tick_rate)(rng_));
 }
 
 void InputModel::camp(protocol::pb::ClientInput& input, int tick_rate) {

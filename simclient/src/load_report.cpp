@@ -16,6 +16,7 @@ constexpr double kOwnEntityGraceS = 1.0;
 LoadReport summarize_sessions(const std::vector<std::shared_ptr<SimClient>>& sessions) {
     LoadReport r;
     SampleHistogram known;
+    SampleHistogram heard;
     SampleHistogram interarrival;
     SampleHistogram rtt;
     SampleHistogram connect;
@@ -69,6 +70,7 @@ LoadReport summarize_sessions(const std::vector<std::shared_ptr<SimClient>>& ses
         r.audited_poses += s.audited_poses;
         r.max_audit_error = std::max(r.max_audit_error, s.max_audit_error);
         known.merge(s.known_samples);
+        heard.merge(s.heard_samples);
         interarrival.merge(s.interarrival_ms);
         rtt.merge(s.rtt_ms);
     }
@@ -78,6 +80,7 @@ LoadReport summarize_sessions(const std::vector<std::shared_ptr<SimClient>>& ses
         r.entity_updates_per_client_s = update_rate_sum / r.connected;
     }
     r.entities_known = known.summary();
+    r.entities_heard = heard.summary();
     r.snapshot_interarrival_ms = interarrival.summary();
     r.rtt_ms = rtt.summary();
     r.connect_ms = connect.summary();

@@ -57,6 +57,9 @@ std::vector<Figure> make_figures() {
                       [](const LoadReport& r) { return r.entities_known.mean; }));
     f.push_back(plain("entities_known_p95", "entities a client knows, p95 over snapshots",
                       [](const LoadReport& r) { return r.entities_known.p95; }));
+    f.push_back(plain("entities_heard_mean",
+                      "entities a client knows only by hearing, mean over snapshots",
+                      [](const LoadReport& r) { return r.entities_heard.mean; }));
     f.push_back(plain("snapshots", "snapshots received by all clients",
                       [](const LoadReport& r) { return static_cast<double>(r.snapshots); }));
     f.push_back(plain("sessions", "sessions started",

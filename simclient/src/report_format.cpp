@@ -60,7 +60,7 @@ std::string format_summary(const LoadReport& r) {
         "  down per client        {:.1f} KiB/s ({:.0f} B/s), {:.0f} entity updates/s\n"
         "  up per client          {:.2f} KiB/s ({:.0f} B/s)\n"
         "  snapshots received     {}\n"
-        "  entities known/client  mean {:.1f}  p95 {:.0f}\n"
+        "  entities known/client  mean {:.1f}  p95 {:.0f}; by hearing only mean {:.1f}\n"
         "  snapshot interarrival  p50 {:.1f} ms  p95 {:.1f} ms  p99 {:.1f} ms\n"
         "  round trip             p50 {:.2f} ms  p99 {:.2f} ms\n"
         "  replica audit          {} poses, max error {:.3f} quanta (limit 0.5)\n"
@@ -73,11 +73,12 @@ std::string format_summary(const LoadReport& r) {
         r.cancelled_before_hello, r.connect_ms.p50, r.connect_ms.p99,
         r.bytes_down_per_client_s / 1024.0, r.bytes_down_per_client_s,
         r.entity_updates_per_client_s, r.bytes_up_per_client_s / 1024.0, r.bytes_up_per_client_s,
-        r.snapshots, r.entities_known.mean, r.entities_known.p95, r.snapshot_interarrival_ms.p50,
-        r.snapshot_interarrival_ms.p95, r.snapshot_interarrival_ms.p99, r.rtt_ms.p50, r.rtt_ms.p99,
-        r.audited_poses, r.max_audit_error, r.protocol_errors,
-        counts_or_none(r.protocol_errors_by_kind), r.unexpected_disconnects, r.missing_own_entity,
-        counts_or_none(r.disconnect_reasons), r.failures, counts_or_none(r.failures_by_reason));
+        r.snapshots, r.entities_known.mean, r.entities_known.p95, r.entities_heard.mean,
+        r.snapshot_interarrival_ms.p50, r.snapshot_interarrival_ms.p95,
+        r.snapshot_interarrival_ms.p99, r.rtt_ms.p50, r.rtt_ms.p99, r.audited_poses,
+        r.max_audit_error, r.protocol_errors, counts_or_none(r.protocol_errors_by_kind),
+        r.unexpected_disconnects, r.missing_own_entity, counts_or_none(r.disconnect_reasons),
+        r.failures, counts_or_none(r.failures_by_reason));
     for (const auto& [reason, example] : r.failure_examples) {
         out += fmt::format("    {:<20} first: {}\n", reason, example);
     }
@@ -150,6 +151,8 @@ std::string format_json(const LoadReport& r) {
     j["max_audit_error_quanta"] = r.max_audit_error;
     j["entities_known_per_client"] = {{"mean", r.entities_known.mean},
                                       {"p95", r.entities_known.p95}};
+    j["entities_heard_per_client"] = {{"mean", r.entities_heard.mean},
+                                      {"p95", r.entities_heard.p95}};
     j["snapshot_interarrival_ms"] = summary_json(r.snapshot_interarrival_ms);
     j["rtt_ms"] = summary_json(r.rtt_ms);
     j["connect_ms"] = summary_json(r.connect_ms);

@@ -297,6 +297,11 @@ void SimClient::apply_snapshot(const pb::Snapshot& s) {
         stats_.saw_own_entity = true;
     }
     stats_.known_samples.add(static_cast<double>(replica_.size()));
+    std::size_t heard = 0;
+    replica_.entities().for_each([&](std::uint32_t, const protocol::ReplicaEntity& e) {
+        heard += e.tier == protocol::kHeardTier ? 1 : 0;
+    });
+    stats_.heard_samples.add(static_cast<double>(heard));
 }
 
 void SimClient::schedule_input() {

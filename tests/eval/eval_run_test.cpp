@@ -191,5 +191,50 @@ TEST(EvalRun, WithTeamsEveryPolicySendsTeammatesAndTheOracleJudgesTheOtherPairs)
     std::filesystem::remove(path);
 }
 
+TEST(EvalRun, WithSoundsHeardOnlyEntitiesAreCoarseAndJudgedApartFromSight) {
+    // The same world with and without sounds (sounds move nothing): with them every
+    // policy sends more, the extra entities are heard-only (coarse, judged apart), dsoc
+    // still pops nothing in, and no heard-only entity is one the oracle sees.
+    const std::string path = temp_trace_path("dsoc-eval-sounds-");
+    EvalOptions options;
+    options.scenario = tiny_scenario();
+    options.scenario.sounds = true;
+    options.scenario.duration_s = 1.0;
+    options.policies = {"raycast", "dsoc"};
+    options.trace_path = path;
+    options.trace_every = 1;
+    const EvalResult loud = run_evaluation(options, nullptr);
+    options.scenario.sounds = false;
+    options.trace_path.clear();
+    const EvalResult silent = run_evaluation(options, nullptr);
+    for (const char* name : {"raycast", "dsoc"}) {
+        const PolicyMetrics& m = find(loud, name);
+        const PolicyMetrics& s = find(silent, name);
+        EXPECT_GT(m.heard_pairs, 0u) << name;
+        EXPECT_EQ(m.replicated_pairs, s.replicated_pairs + m.heard_pairs) << name;
+        EXPECT_GT(m.heard_entries, 0u) << name;
+        EXPECT_GT(m.bytes, m.sight_bytes) << name;
+        EXPECT_EQ(m.sight_bytes, s.bytes) << name << ": without the heard ones, the same bytes";
+        EXPECT_GT(m.checked_heard, 0u) << name;
+        EXPECT_EQ(s.heard_pairs, 0u) << name;
+    }
+    EXPECT_EQ(find(loud, "dsoc").popin_lookahead, 0u);
+    EXPECT_EQ(find(loud, "dsoc").heard_visible, 0u);
+    trace::TraceReader reader;
+    ASSERT_TRUE(reader.open(path)) << reader.error();
+    trace::TraceTick tick;
+    std::size_t heard = 0;
+    while (reader.next(tick)) {
+        for (const trace::TraceClient& c : tick.clients) {
+            for (const std::uint32_t id : c.heard) {
+                EXPECT_TRUE(std::binary_search(c.replicated.begin(), c.replicated.end(), id));
+            }
+            heard += c.heard.size();
+        }
+    }
+    EXPECT_GT(heard, 0u);
+    std::filesystem::remove(path);
+}
+
 } // namespace
 } // namespace dsoc::eval

@@ -3,6 +3,7 @@
 
 #include "dsoc/server/server.hpp"
 #include "dsoc/simclient/load_config.hpp"
+#include "dsoc/simclient/load_run.hpp"
 #include "support/test_maps.hpp"
 
 #include <boost/asio/io_context.hpp>
@@ -65,6 +66,16 @@ inline simclient::LoadConfig load_config(const RunningServer& server, int client
     lc.ramp_up_s = ramp_up_s;
     lc.progress = false;
     return lc;
+}
+
+/// Runs the simulated clients of `lc` until every one has said goodbye and the server
+/// closed it; returns their report.
+inline simclient::LoadReport run_load(const simclient::LoadConfig& lc) {
+    boost::asio::io_context io;
+    simclient::LoadRun run(io, lc);
+    run.start();
+    io.run();
+    return run.report();
 }
 
 } // namespace dsoc::testing

@@ -65,6 +65,12 @@ TEST(Quantization, ValidateNamesTheFieldAndTheReason) {
     EXPECT_NE(problems[1].find("q.angle_steps"), std::string::npos) << problems[1];
     s.position_quantum = {std::nanf(""), 1.0f, 1.0f};
     EXPECT_FALSE(validate(s).empty());
+    s = QuantizationSettings{};
+    s.heard_quantum = 0.5f; // finer than the far tier: hearing would be more precise
+    ASSERT_EQ(validate(s).size(), 1u);
+    EXPECT_NE(validate(s)[0].find("heard_quantum"), std::string::npos) << validate(s)[0];
+    s.heard_quantum = 2048.0f;
+    EXPECT_EQ(validate(s).size(), 1u);
 
     pb::Quantization m;
     m.add_position_quantum(0.125f);
@@ -75,6 +81,80 @@ TEST(Quantization, ValidateNamesTheFieldAndTheReason) {
     to_message(QuantizationSettings{}, m);
     EXPECT_TRUE(from_message(m, out, why)) << why;
     EXPECT_EQ(out.angle_steps, 4096u);
+    EXPECT_EQ(out.heard_quantum, 64.0f);
+    m.set_heard_quantum(0.0f); // a peer that says nothing of hearing
+    EXPECT_FALSE(from_message(m, out, why));
+    EXPECT_NE(why.find("heard_quantum"), std::string::npos) << why;
+}
+
+TEST(CompactSnapshot, AHeardEntityTravelsCoarseWithoutAnglesAndIsPreciseOnceSeen) {
+    const QuantizationSettings q; // heard quantum 64
+    SnapshotEncoder enc(q);
+    SnapshotDecoder dec(q);
+    pb::Snapshot s;
+    const Pose exact{1000.0f, -230.0f, 24.0f, 75.0f, -10.0f};
+    enc.begin(1, s);
+    enc.enter(7, exact, kHalf, 1, kHeardTier, s);
+    EXPECT_EQ(s.enter(0).x(), 16); // 1000 / 64, rounded
+    EXPECT_EQ(s.enter(0).yaw(), 0u);
+    EXPECT_EQ(s.enter(0).pitch(), 0);
+    EXPECT_EQ(s.enter(0).half_x(), 1u); // 15 units rounds up to one quantum
+    ASSERT_TRUE(dec.apply(through_wire(s)).empty());
+    Pose heard = *dec.pose(7);
+    EXPECT_EQ(heard.x, 1024.0f);
+    EXPECT_EQ(heard.yaw_deg, 0.0f);
+    EXPECT_GT(quantization_error(heard, exact, q.position_quantum[0], q.angle_steps), 100.0);
+
+    // Moving and turning within a heard quantum: nothing travels.
+    enc.begin(2, s);
+    EXPECT_FALSE(enc.update(7, {1010.0f, -230.0f, 24.0f, -120.0f, 30.0f}, kHeardTier, s));
+    // Seen: a rebase to the near tier carries the exact pose.
+    enc.begin(3, s);
+    EXPECT_TRUE(enc.update(7, exact, 0, s));
+    EXPECT_EQ(s.update_fields(0), kFieldRebase);
+    ASSERT_TRUE(dec.apply(through_wire(s)).empty());
+    EXPECT_LE(quantization_error(*dec.pose(7), exact, q.position_quantum[0], q.angle_steps),
+              0.5 + 1e-3);
+    // Heard only again: coarse, angles gone.
+    enc.begin(4, s);
+    EXPECT_TRUE(enc.update(7, exact, kHeardTier, s));
+    ASSERT_TRUE(dec.apply(through_wire(s)).empty());
+    EXPECT_EQ(dec.pose(7)->yaw_deg, 0.0f);
+    EXPECT_EQ(dec.pose(7)->pitch_deg, 0.0f);
+    EXPECT_EQ(dec.pose(7)->x, 1024.0f);
+}
+
+TEST(CompactSnapshot, AHeardEntityWithAnglesOrAnAuditPoseIsAProblem) {
+    const QuantizationSettings q;
+    SnapshotDecoder dec(q);
+    pb::Snapshot s;
+    s.set_server_tick(1);
+    pb::EntityState& e = *s.add_enter();
+    e.set_id(4);
+    e.set_tier(kHeardTier);
+    e.set_x(3);
+    e.set_yaw(100);
+    EXPECT_EQ(kinds(dec.apply(s)).rfind("angles_on_heard_tier", 0), 0u) << kinds(dec.apply(s));
+    EXPECT_FALSE(dec.knows(4));
+
+    e.set_yaw(0);
+    ASSERT_TRUE(dec.apply(s).empty());
+    pb::Snapshot next;
+    next.set_server_tick(2);
+    next.add_update_id(4);
+    next.add_update_fields(kFieldPitch); // angles for a heard-only entity
+    next.add_update_values(5);
+    EXPECT_EQ(kinds(dec.apply(next)).rfind("angles_on_heard_tier", 0), 0u);
+
+    pb::Snapshot audited;
+    audited.set_server_tick(3);
+    pb::AuditPose& a = *audited.add_audit();
+    a.set_id(4);
+    a.set_x(192.0f);
+    double worst = 0.0;
+    const auto problems = dec.check_audit(audited, worst);
+    ASSERT_EQ(problems.size(), 1u);
+    EXPECT_EQ(problems[0].kind, "audit_of_heard_entity") << problems[0].detail;
 }
 
 TEST(CompactSnapshot, OnlyChangedFieldsTravel) {

@@ -1,4 +1,5 @@
 #include "dsoc/interest/culling_policy.hpp"
+#include "dsoc/interest/hearing.hpp"
 #include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/server/interest_setup.hpp"
 #include "support/test_maps.hpp"
@@ -38,6 +39,18 @@ ServerConfig bots(int n) {
     c.baked_stage = false; // the exact stages unless a test asks for the table
     return c;
 }
+
+/// oa_dm4, or null when it is not installed (the caller skips).
+std::shared_ptr<const maps::Map> oa_dm4() {
+    auto loaded = maps::load_map("oa_dm4", maps::MapSearch::from_environment());
+    return loaded ? std::make_shared<const maps::Map>(std::move(loaded).value()) : nullptr;
+}
+constexpr const char* kNoOaDm4 = "oa_dm4 not available (scripts/setup installs openarena-081-maps)";
+
+/// The policies a rule beyond sight must hold for: every one that can hide something.
+constexpr interest::PolicyKind kHidingPolicies[] = {
+    interest::PolicyKind::distance, interest::PolicyKind::pvs, interest::PolicyKind::dsoc,
+    interest::PolicyKind::occlusion};
 
 TEST(InterestPolicy, BroadcastSelectsEverything) {
     GameWorld world(world_settings(bots(25)), testing::rooms_map());
@@ -378,13 +391,11 @@ TEST(InterestPolicyWithTeams, EveryPolicySendsTheViewersTeammatesOverWhatItSees)
     // Two worlds alike but for teams; each viewer's set with teams must be its set
     // without them plus every teammate (relevance.hpp's team rule), and some teammates
     // must be ones sight alone would not send.
-    auto loaded = maps::load_map("oa_dm4", maps::MapSearch::from_environment());
-    if (!loaded) {
-        GTEST_SKIP() << "oa_dm4 not available (scripts/setup installs openarena-081-maps)";
+    const auto map = oa_dm4();
+    if (!map) {
+        GTEST_SKIP() << kNoOaDm4;
     }
-    const auto map = std::make_shared<const maps::Map>(std::move(loaded).value());
-    for (const auto kind : {interest::PolicyKind::distance, interest::PolicyKind::pvs,
-                            interest::PolicyKind::dsoc, interest::PolicyKind::occlusion}) {
+    for (const auto kind : kHidingPolicies) {
         SCOPED_TRACE(std::string(interest::name_of(kind)));
         ServerConfig config = bots(200);
         config.policy = kind;
@@ -429,6 +440,85 @@ TEST(InterestPolicyWithTeams, EveryPolicySendsTheViewersTeammatesOverWhatItSees)
             }
         }
         EXPECT_GT(teammates_unseen, 0u) << "no teammate was sent that sight would not send";
+    }
+}
+
+} // namespace
+} // namespace dsoc::server
+
+namespace dsoc::server {
+namespace {
+
+TEST(InterestPolicyWithSounds, EveryPolicySendsWhatTheViewerHearsCoarseAndWhatItSeesPrecise) {
+    // Two worlds alike but for sounds (sounds never move anything): each viewer's set
+    // with sounds must be its set without them plus every sounding entity within its
+    // sound's range of the eye, those on the heard tier; what sight sends keeps its tier,
+    // so an entity heard, then seen, turns precise the tick it is seen.
+    const auto map = oa_dm4();
+    if (!map) {
+        GTEST_SKIP() << kNoOaDm4;
+    }
+    for (const auto kind : kHidingPolicies) {
+        SCOPED_TRACE(std::string(interest::name_of(kind)));
+        ServerConfig config = bots(200);
+        config.policy = kind;
+        config.distance_radius = 600.0f;
+        config.sounds = false;
+        ServerConfig loud = config;
+        loud.sounds = true;
+        loud.bot_shots_per_second = 1.0f;
+        GameWorld silent_world(world_settings(config), map);
+        GameWorld loud_world(world_settings(loud), map);
+        auto silent = make_policy(config, silent_world);
+        auto with_sounds = make_policy(loud, loud_world);
+        interest::Hearing hearing;
+        constexpr std::uint32_t kViewers = 8;
+        for (std::uint32_t v = 0; v < kViewers; ++v) {
+            silent->add_viewer(v, silent_world.entities()[v * 25].id);
+            with_sounds->add_viewer(v, loud_world.entities()[v * 25].id);
+        }
+        std::size_t heard_only = 0;
+        std::size_t turned_precise = 0;
+        std::vector<std::vector<std::uint32_t>> heard_before(kViewers);
+        for (int tick = 1; tick <= 45; ++tick) {
+            silent_world.step(1.0f / 30.0f);
+            loud_world.step(1.0f / 30.0f);
+            silent->begin_tick(silent_world, static_cast<std::uint64_t>(tick));
+            with_sounds->begin_tick(loud_world, static_cast<std::uint64_t>(tick));
+            hearing.begin_tick(loud_world);
+            for (std::uint32_t v = 0; v < kViewers; ++v) {
+                const Entity& self = loud_world.entities()[v * 25];
+                const Viewer viewer = interest::viewer_of(loud_world, v, self);
+                std::vector<Interest> seen;
+                std::vector<Interest> sent;
+                silent->select(
+                    silent_world,
+                    interest::viewer_of(silent_world, v, silent_world.entities()[v * 25]), seen);
+                with_sounds->select(loud_world, viewer, sent);
+                hearing.add_heard(viewer, *with_sounds, sent);
+                std::vector<std::uint32_t> heard;
+                for (std::size_t i = 0; i < loud_world.entity_count(); ++i) {
+                    const interest::EntityView e = loud_world.entity(i);
+                    if (e.sound_range > 0.0f && e.id != self.id && !contains(seen, e.id) &&
+                        interest::within_radius(e.box, viewer.eye, e.sound_range)) {
+                        heard.push_back(e.id);
+                    }
+                }
+                ASSERT_EQ(ids_of(sent), union_of(ids_of(seen), heard))
+                    << "tick " << tick << " viewer " << v;
+                for (const Interest& i : sent) {
+                    const bool only_heard = std::binary_search(heard.begin(), heard.end(), i.id);
+                    EXPECT_EQ(i.tier == interest::kHeardTier, only_heard) << "entity " << i.id;
+                    turned_precise +=
+                        !only_heard &&
+                        std::binary_search(heard_before[v].begin(), heard_before[v].end(), i.id);
+                }
+                heard_only += heard.size();
+                heard_before[v] = heard;
+            }
+        }
+        EXPECT_GT(heard_only, 0u) << "nothing was heard that sight would not send";
+        EXPECT_GT(turned_precise, 0u) << "no heard entity was seen the next tick";
     }
 }
 

@@ -78,6 +78,7 @@ public:
                     ++snapshots_;
                 } else if (message.has_server_hello()) {
                     hello_received_ = true;
+                    hello_ = message.server_hello();
                 }
             }
         }
@@ -88,6 +89,8 @@ public:
     /// Frames whose payload did not decode as an envelope (bytes lost or mixed up).
     [[nodiscard]] std::uint64_t undecodable_frames() const { return undecodable_frames_; }
     [[nodiscard]] bool hello_received() const { return hello_received_; }
+    /// The server's hello, once hello_received().
+    [[nodiscard]] const protocol::pb::ServerHello& hello() const { return hello_; }
     /// Bytes of an unfinished frame when the connection ended (a cut-off frame).
     [[nodiscard]] std::size_t trailing_bytes() const { return trailing_bytes_; }
 
@@ -97,6 +100,7 @@ private:
     std::uint64_t snapshots_ = 0;
     std::uint64_t undecodable_frames_ = 0;
     bool hello_received_ = false;
+    protocol::pb::ServerHello hello_;
     std::size_t trailing_bytes_ = 0;
 };
 

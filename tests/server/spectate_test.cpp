@@ -125,11 +125,7 @@ TEST(Spectating, SimulatedSpectatorsWatchPlayersAndEverySwitchPassesTheProtocolC
     scenario.groups[1].name = "spectators";
     scenario.groups[1].behaviour = simclient::Behaviour::spectator;
     lc.scenario = scenario;
-    boost::asio::io_context io;
-    simclient::LoadRun run(io, lc);
-    run.start();
-    io.run();
-    const simclient::LoadReport report = run.report();
+    const simclient::LoadReport report = testing::run_load(lc);
     server.stop();
     EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
     // Three spectators for about 3 s at 30 Hz, once they know a player.

@@ -40,7 +40,8 @@ TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
             tick.entities.push_back({42, {{-15, -15, -24}, {15.5f, 15, 32}}});
             tick.entities.push_back({43, {{100, 0, 0}, {130, 30, 56}}});
             tick.clients.push_back({7, 42u, {0.1f, 0.2f, 26}, {43}, std::nullopt, {43}, {44}});
-            tick.clients.push_back({8, std::nullopt, {5, 5, 5}, {}, glm::vec3(900, -4, 26.5f)});
+            tick.clients.push_back(
+                {8, std::nullopt, {5, 5, 5}, {42}, glm::vec3(900, -4, 26.5f), {}, {}, {42}});
             ASSERT_TRUE(w.write_tick(tick));
         }
         TraceTick backwards;
@@ -69,7 +70,7 @@ TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
         std::string::npos);
     EXPECT_NE(
         tick_line.find(
-            R"({"id":8,"entity":null,"eye":[5,5,5],"arrival":[900,-4,26.5],"replicated":[]})"),
+            R"({"id":8,"entity":null,"eye":[5,5,5],"arrival":[900,-4,26.5],"replicated":[42],"heard":[42]})"),
         std::string::npos)
         << tick_line;
 
@@ -95,6 +96,8 @@ TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
         EXPECT_EQ(tick.clients[0].always, std::vector<std::uint32_t>{43});
         EXPECT_EQ(tick.clients[0].never, std::vector<std::uint32_t>{44});
         EXPECT_TRUE(tick.clients[1].always.empty());
+        EXPECT_TRUE(tick.clients[0].heard.empty());
+        EXPECT_EQ(tick.clients[1].heard, std::vector<std::uint32_t>{42});
         EXPECT_EQ(tick.clients[1].arrival, std::optional<glm::vec3>(glm::vec3(900, -4, 26.5f)));
     }
     EXPECT_TRUE(r.error().empty()) << r.error();

@@ -187,7 +187,10 @@ bool TraceReader::next(TraceTick& tick) {
             return true;
         };
         const std::pair<const char*, std::vector<std::uint32_t>*> lists[] = {
-            {"replicated", &tc.replicated}, {"always", &tc.always}, {"never", &tc.never}};
+            {"replicated", &tc.replicated},
+            {"always", &tc.always},
+            {"never", &tc.never},
+            {"heard", &tc.heard}};
         for (const auto& [key, ids] : lists) {
             if (!read_ids(key, *ids)) {
                 return fail("tick: client " + std::to_string(tc.id) + ": bad " + key + " id");

@@ -113,6 +113,9 @@ bool TraceWriter::write_tick(const TraceTick& tick) {
         if (!c.never.empty()) {
             append_ids(out, "never", c.never);
         }
+        if (!c.heard.empty()) {
+            append_ids(out, "heard", c.heard);
+        }
         out += "}";
     }
     out += "]}\n";

@@ -10,8 +10,10 @@
 #include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/trace/trace_writer.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
+#include <iterator>
 #include <memory>
 #include <ostream>
 #include <stdexcept>
@@ -61,7 +63,12 @@ baked_table(const maps::Map& map, const visibility::OccluderScene& scene,
 struct PolicyRun {
     std::unique_ptr<EvalPolicy> policy;
     std::vector<ClientReplication> replication;
-    std::vector<std::vector<std::uint32_t>> sets; ///< this tick's interest set per client
+    std::vector<std::vector<std::uint32_t>> sets;  ///< this tick's interest set per client
+    std::vector<std::vector<std::uint32_t>> heard; ///< of each set, the heard-only ids
+    /// With sounds: what each client would know without hearing (its set minus heard).
+    std::vector<ClientReplication> sight_replication;
+    std::vector<std::vector<std::uint32_t>> sight_sets;
+    std::vector<std::uint32_t> sight_bytes; ///< this tick's, per client
     std::vector<SnapshotCost> costs;
     std::vector<float> cpu;
     PolicyMetrics metrics;
@@ -73,13 +80,15 @@ struct WorkerScratch {
 };
 
 /// Compares one client's interest set with the oracle's flags. Pairs a rule other than
-/// sight decides (teammates: `frame`'s teams) are counted apart, not judged.
+/// sight decides (teammates: `frame`'s teams) are counted apart, not judged. Entities
+/// of the set in `heard` (sent only because heard, coarse) count as not sent for sight.
 void judge_client(const VisibilityTruth& truth, const WorldFrame& frame, std::size_t client,
-                  const std::vector<std::uint32_t>& set, std::uint64_t tick,
-                  std::size_t max_examples, PolicyMetrics& m) {
+                  const std::vector<std::uint32_t>& set, const std::vector<std::uint32_t>& heard,
+                  std::uint64_t tick, std::size_t max_examples, PolicyMetrics& m) {
     const std::size_t entities = frame.entities.size();
     const visibility::TeamId team = frame.entities[client].team;
     std::size_t k = 0;
+    std::size_t h = 0;
     for (std::size_t e = 0; e < entities; ++e) {
         if (e == client) {
             continue;
@@ -87,7 +96,11 @@ void judge_client(const VisibilityTruth& truth, const WorldFrame& frame, std::si
         while (k < set.size() && set[k] < e) {
             ++k;
         }
-        const bool replicated = k < set.size() && set[k] == e;
+        while (h < heard.size() && heard[h] < e) {
+            ++h;
+        }
+        const bool only_heard = h < heard.size() && heard[h] == e;
+        const bool replicated = k < set.size() && set[k] == e && !only_heard;
         if (visibility::team_relevance(team, frame.entities[e].team) !=
             visibility::Relevance::sight) {
             m.checked_by_rule += 1;
@@ -95,6 +108,10 @@ void judge_client(const VisibilityTruth& truth, const WorldFrame& frame, std::si
             continue;
         }
         const std::uint8_t f = truth.at(client, e);
+        if (only_heard) {
+            ++m.checked_heard;
+            m.heard_visible += (f & VisibilityTruth::kLookahead) != 0 ? 1 : 0;
+        }
         if (replicated) {
             ++m.checked_replicated;
             if ((f & VisibilityTruth::kLookahead) == 0) {
@@ -202,6 +219,12 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
         }
         run.replication.assign(viewers, ClientReplication(viewers));
         run.sets.resize(viewers);
+        run.heard.resize(viewers);
+        if (sc.sounds) {
+            run.sight_replication.assign(viewers, ClientReplication(viewers));
+            run.sight_sets.resize(viewers);
+            run.sight_bytes.resize(viewers);
+        }
         run.costs.resize(viewers);
         run.cpu.resize(viewers);
         run.metrics.name = name;
@@ -299,11 +322,21 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
                 (thread_cpu_us() - serial_start) / static_cast<double>(viewers);
             parallel_for(viewers, result.threads, [&](std::size_t c, int worker) {
                 const double t0 = thread_cpu_us();
-                run.policy->select(c, frame, run.sets[c]);
+                run.policy->select(c, frame, run.sets[c], run.heard[c]);
                 run.cpu[c] = static_cast<float>(thread_cpu_us() - t0 + serial_share);
                 WorkerScratch& s = scratch[static_cast<std::size_t>(worker)];
-                run.costs[c] =
-                    run.replication[c].send(frame, run.sets[c], tick, s.envelope, s.buffer);
+                run.costs[c] = run.replication[c].send(frame, run.sets[c], run.heard[c], tick,
+                                                       s.envelope, s.buffer);
+                if (!run.sight_replication.empty()) {
+                    std::vector<std::uint32_t>& sight = run.sight_sets[c];
+                    sight.clear();
+                    std::set_difference(run.sets[c].begin(), run.sets[c].end(),
+                                        run.heard[c].begin(), run.heard[c].end(),
+                                        std::back_inserter(sight));
+                    run.sight_bytes[c] = run.sight_replication[c]
+                                             .send(frame, sight, {}, tick, s.envelope, s.buffer)
+                                             .bytes;
+                }
             });
             PolicyMetrics& m = run.metrics;
             for (std::size_t c = 0; c < viewers; ++c) {
@@ -314,6 +347,9 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
                 m.leaves += cost.leaves;
                 m.bytes += cost.bytes;
                 m.replicated_pairs += run.sets[c].size();
+                m.heard_pairs += run.heard[c].size();
+                m.heard_entries += cost.heard_entries;
+                m.sight_bytes += run.sight_bytes.empty() ? 0 : run.sight_bytes[c];
                 m.cpu_us.push_back(run.cpu[c]);
                 if (measured && c % stride == 0) {
                     m.measured_bytes += cost.bytes;
@@ -333,8 +369,8 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
             for (auto& run : runs) {
                 run.metrics.checked_client_ticks += judged_clients;
                 for (std::size_t c = 0; c < viewers; c += stride) {
-                    judge_client(truth, world.current(), c, run.sets[c], tick, options.max_examples,
-                                 run.metrics);
+                    judge_client(truth, world.current(), c, run.sets[c], run.heard[c], tick,
+                                 options.max_examples, run.metrics);
                 }
                 run.metrics.live_tbv_sum += run.policy->live_tbvs();
                 ++run.metrics.live_tbv_samples;
@@ -349,7 +385,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
                         (truth.at(c, e) & VisibilityTruth::kRegion) != 0 ? 1u : 0u;
                 }
                 const SnapshotCost cost =
-                    ideal[c].send(frame, ideal_set, tick, s.envelope, s.buffer);
+                    ideal[c].send(frame, ideal_set, {}, tick, s.envelope, s.buffer);
                 if (measured) {
                     result.ideal_bytes += cost.bytes;
                     result.ideal_updates += cost.enters + cost.updates;
@@ -373,6 +409,7 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
                 client.arrival = frame.entities[c].arrival_eye;
                 add_teammates(frame, c, client.always); // sent for their team
                 client.replicated = runs[trace_run].sets[c];
+                client.heard = runs[trace_run].heard[c];
                 line.clients.push_back(std::move(client));
             }
             if (!trace_writer.write_tick(line)) {

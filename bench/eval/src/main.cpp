@@ -12,6 +12,7 @@
 
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 int main(int argc, char** argv) {
@@ -30,6 +31,7 @@ int main(int argc, char** argv) {
     int viewers = 0;
     int bots = 0;
     int teams = -1;
+    std::optional<bool> sounds;
     int oracle_every = 0;
     int oracle_clients = -1;
     EvalOptions options;
@@ -55,6 +57,9 @@ int main(int argc, char** argv) {
     app.add_option("--teams", teams,
                    "override the number of teams (0 = none; teammates are sent whatever they see "
                    "and left out of pop-in and exposure)");
+    app.add_option("--sounds", sounds,
+                   "footsteps and shots (true/false): what a viewer only hears is sent coarse, "
+                   "judged apart from sight");
     app.add_option("--oracle-every", oracle_every,
                    "the oracle judges every K-th tick (and the one before); 1 = every tick");
     app.add_option("--oracle-clients", oracle_clients,
@@ -150,6 +155,9 @@ int main(int argc, char** argv) {
     }
     if (teams >= 0) {
         sc.teams = teams;
+    }
+    if (sounds) {
+        sc.sounds = *sounds;
     }
     if (oracle_every > 0) {
         sc.oracle_every = oracle_every;

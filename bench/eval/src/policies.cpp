@@ -120,10 +120,11 @@ void EvalPolicy::begin_tick(const WorldFrame& frame) {
         started_ = true;
     }
     policy_->begin_tick(FrameView(frame), frame.tick);
+    hearing_.begin_tick(FrameView(frame));
 }
 
 void EvalPolicy::select(std::size_t client, const WorldFrame& frame,
-                        std::vector<std::uint32_t>& out) {
+                        std::vector<std::uint32_t>& out, std::vector<std::uint32_t>& heard) {
     interest::Viewer viewer;
     viewer.client_id = static_cast<std::uint32_t>(client);
     viewer.entity_id = static_cast<std::uint32_t>(client);
@@ -137,10 +138,15 @@ void EvalPolicy::select(std::size_t client, const WorldFrame& frame,
     } else {
         policy_->select(view, viewer, answer);
     }
+    hearing_.add_heard(viewer, *policy_, answer);
     out.clear();
+    heard.clear();
     for (const interest::Interest& wanted : answer) {
         if (wanted.id != client) {
             out.push_back(wanted.id);
+            if (wanted.tier == interest::kHeardTier) {
+                heard.push_back(wanted.id);
+            }
         }
     }
 }

@@ -17,7 +17,8 @@ protocol::Pose pose_of(const EntityFrame& e) {
 } // namespace
 
 SnapshotCost ClientReplication::send(const WorldFrame& frame,
-                                     std::span<const std::uint32_t> interest, std::uint64_t tick,
+                                     std::span<const std::uint32_t> interest,
+                                     std::span<const std::uint32_t> heard, std::uint64_t tick,
                                      protocol::pb::Envelope& scratch,
                                      std::vector<std::uint8_t>& buffer) {
     protocol::pb::Snapshot& snapshot = *scratch.mutable_snapshot();
@@ -32,19 +33,30 @@ SnapshotCost ClientReplication::send(const WorldFrame& frame,
         encoder_.leave(id, snapshot);
         ++cost.leaves;
     };
+    std::size_t next_heard = 0; // walks `heard` beside `interest` (both increasing)
     const auto send = [&](std::size_t j, bool was_known) {
         const std::uint32_t id = interest[j];
         const EntityFrame& e = frame.entities[id];
         next_known_.push_back(id);
+        while (next_heard < heard.size() && heard[next_heard] < id) {
+            ++next_heard;
+        }
+        const bool is_heard = next_heard < heard.size() && heard[next_heard] == id;
+        const std::uint8_t tier = is_heard ? protocol::kHeardTier : 0;
         if (!was_known) {
             const glm::vec3 half = e.box.half_extents();
             encoder_.enter(id, pose_of(e), {half.x, half.y, half.z},
-                           id < players_ ? kKindPlayer : kKindBot, 0, snapshot);
+                           id < players_ ? kKindPlayer : kKindBot, tier, snapshot);
             ++cost.enters;
+            cost.heard_entries += is_heard ? 1 : 0;
             return;
         }
-        if (encoder_.update(id, pose_of(e), 0, snapshot)) {
+        if (is_heard && (tick + id) % protocol::update_interval(tier) != 0) {
+            return; // deferred, as the server does on a coarse tier
+        }
+        if (encoder_.update(id, pose_of(e), tier, snapshot)) {
             ++cost.updates;
+            cost.heard_entries += is_heard ? 1 : 0;
             const int entries = snapshot.update_fields_size();
             if ((snapshot.update_fields(entries - 1) & kPositionFields) != 0) {
                 ++cost.moving_updates;

@@ -144,6 +144,32 @@ void write_markdown(const EvalResult& r, const std::string& command, std::ostrea
         }
         out << ".\n\n";
     }
+    if (s.sounds) {
+        // Hearing adds to every policy's set: the same sounds, different sight sets.
+        out << "*Hearing* (footsteps and shots; heard-only entities go coarse, without angles, "
+               "and are judged apart from sight): heard-only entities per client-tick, their "
+               "share of entity updates, the bytes they add, the share of judged pairs sent "
+               "only for hearing (hearing's exposure) and how many of them were visible (also "
+               "counted as pop-in):";
+        for (const auto& m : r.policies) {
+            const double entries = static_cast<double>(m.enters + m.updates);
+            out << " " << m.name << " "
+                << fmt("%.1f", ratio(static_cast<double>(m.heard_pairs),
+                                     static_cast<double>(m.client_ticks)))
+                << ", "
+                << fmt("%.1f%%", 100.0 * ratio(static_cast<double>(m.heard_entries), entries))
+                << ", +"
+                << fmt("%.1f%%", 100.0 * ratio(static_cast<double>(m.bytes) -
+                                                   static_cast<double>(m.sight_bytes),
+                                               static_cast<double>(m.sight_bytes)))
+                << ", "
+                << fmt("%.1f%%",
+                       100.0 * ratio(static_cast<double>(m.checked_heard),
+                                     static_cast<double>(m.checked_replicated + m.checked_heard)))
+                << ", " << m.heard_visible << ";";
+        }
+        out << "\n\n";
+    }
     if (r.region_bound) {
         out << "*Region bound*: entities visible from some eye of a " << r.region_lattice << " x "
             << r.region_lattice << " x " << r.region_lattice
@@ -203,6 +229,8 @@ std::string to_json(const EvalResult& r, const std::string& command) {
                      {"map_source", r.map_source},
                      {"viewers", s.viewers},
                      {"bots", s.bots},
+                     {"teams", s.teams},
+                     {"sounds", s.sounds},
                      {"entities", r.entities},
                      {"tick_rate", s.tick_rate},
                      {"rtt_ms", s.rtt_ms},
@@ -255,6 +283,11 @@ std::string to_json(const EvalResult& r, const std::string& command) {
                   {"exposed", m.exposed},
                   {"checked_by_rule", m.checked_by_rule},
                   {"missed_by_rule", m.missed_by_rule},
+                  {"heard_pairs", m.heard_pairs},
+                  {"heard_entries", m.heard_entries},
+                  {"sight_bytes", m.sight_bytes},
+                  {"checked_heard", m.checked_heard},
+                  {"heard_visible", m.heard_visible},
                   {"exposure", d.exposure},
                   {"measured_bytes", m.measured_bytes},
                   {"bytes_vs_ideal", d.bytes_vs_ideal},

@@ -71,6 +71,7 @@ bool load_scenarios(const std::string& path, std::vector<Scenario>& out, std::st
             s.viewers = j.value("viewers", s.viewers);
             s.bots = j.value("bots", s.bots);
             s.teams = j.value("teams", s.teams);
+            s.sounds = j.value("sounds", s.sounds);
             s.tick_rate = j.value("tick_rate", s.tick_rate);
             s.rtt_ms = j.value("rtt_ms", s.rtt_ms);
             s.interpolation_ms = j.value("interpolation_ms", s.interpolation_ms);

@@ -26,16 +26,18 @@ maps::Map load_scenario_map(const Scenario& scenario) {
 }
 
 WorldSim::WorldSim(const maps::Map& map, const Scenario& scenario, int lookahead)
-    : map_(&map), collision_(map.collision_brushes),
+    : map_(&map), collision_(map.collision_brushes), seed_(scenario.seed),
       viewers_(static_cast<std::size_t>(scenario.viewers)), teams_(scenario.teams),
       dt_(1.0f / static_cast<float>(scenario.tick_rate)) {
     wander_.respawn_delay_ticks = lookahead;
+    sound_settings_.enabled = scenario.sounds;
     if (map.spawn_points.empty()) {
         throw std::runtime_error("map " + map.name + " has no spawn points");
     }
     const std::size_t count =
         static_cast<std::size_t>(scenario.viewers) + static_cast<std::size_t>(scenario.bots);
     bots_ = sim::spawn_wander_bots(collision_, move_, map.spawn_points, count, scenario.seed);
+    sounds_.resize(count);
     frames_.push_back(snapshot(next_tick_++, nullptr));
     for (int k = 0; k < lookahead; ++k) {
         step();
@@ -44,8 +46,14 @@ WorldSim::WorldSim(const maps::Map& map, const Scenario& scenario, int lookahead
 }
 
 void WorldSim::step() {
-    for (auto& bot : bots_) {
+    const std::uint64_t step = steps_++;
+    for (std::size_t i = 0; i < bots_.size(); ++i) {
+        sim::WanderBot& bot = bots_[i];
         sim::wander_step(bot, collision_, wander_, move_, map_->spawn_points, map_->hazards, dt_);
+        const bool fired =
+            sim::bot_fires(seed_, static_cast<std::uint32_t>(i), step, sound_settings_, dt_);
+        sim::step_sounds(sounds_[i], bot.state, !bot.respawn, fired, move_.max_speed,
+                         sound_settings_, dt_);
     }
 }
 
@@ -66,6 +74,7 @@ WorldFrame WorldSim::snapshot(std::uint64_t tick, const WorldFrame* previous) co
         e.velocity = s.velocity;
         e.box = {s.position + move_.mins, s.position + move_.maxs};
         e.respawned = bots_[i].respawned;
+        e.sound_range = sim::audible_range(sounds_[i], sound_settings_);
         if (teams_ > 0) {
             e.team = static_cast<visibility::TeamId>(i % static_cast<std::size_t>(teams_) + 1);
         }

@@ -6,13 +6,16 @@
 // TBVs rely on. A bot or player whose box touches a hazard (a pit, lava) dies and
 // respawns at a spawn point (a teleport, flagged for that tick) respawn_delay_ticks
 // steps later; the spawn point is picked at death (sim/respawn.hpp), so a client's
-// interest can cover where it will be (EntityView::arrival_eye).
+// interest can cover where it will be (EntityView::arrival_eye). Entities running
+// and firing make sounds (sim/sounds.hpp; EntityView::sound_range), heard by the
+// clients within range (interest/hearing.hpp).
 
 #include "dsoc/interest/world_view.hpp"
 #include "dsoc/maps/map.hpp"
 #include "dsoc/sim/collision_world.hpp"
 #include "dsoc/sim/player_move.hpp"
 #include "dsoc/sim/respawn.hpp"
+#include "dsoc/sim/sounds.hpp"
 #include "dsoc/sim/wander_bot.hpp"
 #include "dsoc/visibility/geometry.hpp"
 #include "dsoc/visibility/relevance.hpp"
@@ -41,10 +44,12 @@ struct WorldSettings {
     /// allowance in ticks, or a respawn inside it pops entities in (sim/respawn.hpp).
     /// [Units: ticks] [Limit: >= 0]
     int respawn_delay_ticks = 0;
-    /// Teams (0: none): bot i joins team i % teams + 1, players join teams 1..teams in
-    /// turn as they spawn. Teammates are always replicated to each other (relevance.hpp).
-    /// [Limit: 0..1000]
+    /// Teams (0: none): entity `id`, bot or player, plays for team (id - 1) % teams + 1
+    /// (GameWorld::team_for), so a player's team is known when its id is reserved.
+    /// Teammates are always replicated to each other (relevance.hpp). [Limit: 0..1000]
     int teams = 0;
+    /// Footsteps and shots (sim/sounds.hpp): who hears whom (interest/hearing.hpp).
+    sim::SoundSettings sounds;
 };
 
 enum class EntityKind : std::uint8_t { bot = 0, player = 1 };
@@ -60,6 +65,8 @@ struct Entity {
     bool teleported = false;                    ///< respawned during the last step()
     std::optional<sim::PendingRespawn> respawn; ///< dead, waiting to be put at a spawn point
     visibility::TeamId team = visibility::kNoTeam;
+    bool firing = false;  ///< players: fires in the next step() (GameWorld::fire)
+    sim::Audible audible; ///< the sounds it is making
 };
 
 class GameWorld final : public WorldView {
@@ -77,6 +84,9 @@ public:
     /// Adds the player entity `id` (from reserve_player(), not spawned yet) at the next
     /// spawn point, keeping entities() in increasing id order.
     void spawn_reserved(std::uint32_t id);
+    /// The team entity `id` plays for when it joins (WorldSettings::teams; kNoTeam
+    /// without teams).
+    [[nodiscard]] visibility::TeamId team_for(std::uint32_t id) const;
     /// Moves an entity to `team` (visibility::kNoTeam: none); unknown ids are ignored.
     void set_team(std::uint32_t id, visibility::TeamId team);
     /// Removes an entity; unknown ids are ignored.
@@ -85,6 +95,9 @@ public:
     /// wrapped and clamped. Non-finite values must be rejected by the caller.
     void set_player_input(std::uint32_t id, glm::vec3 wish, bool jump, float yaw_deg,
                           float pitch_deg);
+    /// The player fires in the next step(): a shot heard for the settings' shot_seconds
+    /// (sim::SoundSettings). Unknown ids are ignored.
+    void fire(std::uint32_t id);
 
     /// Runs `body(i)` for every i in [0, count), possibly on several threads at once,
     /// and returns when all have returned.
@@ -103,7 +116,12 @@ public:
     [[nodiscard]] std::size_t entity_count() const override { return entities_.size(); }
     [[nodiscard]] EntityView entity(std::size_t index) const override {
         const Entity& e = entities_[index];
-        return {e.id, box_of(e), e.move.velocity, arrival_eye_of(e), e.team};
+        return {e.id,
+                box_of(e),
+                e.move.velocity,
+                arrival_eye_of(e),
+                e.team,
+                sim::audible_range(e.audible, sounds_)};
     }
     [[nodiscard]] const Entity* find(std::uint32_t id) const;
     /// The entity's collision box in world space.
@@ -115,6 +133,7 @@ public:
     [[nodiscard]] std::optional<glm::vec3> arrival_eye_of(const Entity& e) const;
     [[nodiscard]] float max_speed() const { return move_.max_speed; }
     [[nodiscard]] const sim::MoveConfig& move_config() const { return move_; }
+    [[nodiscard]] const sim::SoundSettings& sound_settings() const { return sounds_; }
     [[nodiscard]] const maps::Map& map() const { return *map_; }
     [[nodiscard]] const std::shared_ptr<const maps::Map>& map_ptr() const { return map_; }
 
@@ -133,7 +152,9 @@ private:
     std::uint32_t next_spawn_ = 0;
     int respawn_delay_ticks_ = 0;
     int teams_ = 0;
-    std::uint32_t next_team_ = 0;    ///< players join teams in turn
+    sim::SoundSettings sounds_;
+    std::uint64_t seed_ = 0;
+    std::uint64_t steps_ = 0;        ///< step() calls so far: the bots' shot draws
     std::vector<std::uint8_t> died_; ///< step(): players who touched a hazard, by index
 };
 

@@ -27,12 +27,16 @@
 
 namespace dsoc::interest {
 
+/// The tier of an entity a client is sent only because it hears it (hearing.hpp): a
+/// coarse position, no view angles (protocol::kHeardTier).
+inline constexpr std::uint8_t kHeardTier = 3;
+
 /// One entity of a client's interest set, with its network level-of-detail tier.
 struct Interest {
     std::uint32_t id = 0;
     /// 0 near: updated every tick at the finest quantum; 1 mid: every 2nd tick, coarser;
     /// 2 far: every 4th tick, coarsest (the server's position quanta). Policies
-    /// without a distance hint answer 0.
+    /// without a distance hint answer 0. kHeardTier: heard, not seen (Hearing).
     std::uint8_t tier = 0;
     friend bool operator==(const Interest&, const Interest&) = default;
 };
@@ -81,6 +85,13 @@ public:
     virtual void add_viewer(std::uint32_t /*client_id*/, std::uint32_t /*entity_id*/) {}
     /// A client left: forget any per-client state.
     virtual void remove_viewer(std::uint32_t /*client_id*/) {}
+    /// Whether a pair rule keeps entity `entity_id` from client `client_id` whatever it
+    /// sees or hears (visibility::Relevance::never), for a policy with such rules (the
+    /// built-in ones have only teams, which never deny). Safe beside select().
+    [[nodiscard]] virtual bool denies(std::uint32_t /*client_id*/,
+                                      std::uint32_t /*entity_id*/) const {
+        return false;
+    }
     /// Live TBV groups over all viewers (0 for policies without TBVs); for metrics.
     /// Serialized with begin_tick().
     [[nodiscard]] virtual std::size_t tbvs_alive() const { return 0; }

@@ -1,8 +1,8 @@
 #pragma once
 // What an interest policy reads of the world each tick: the entities, in increasing id
-// order, each with its box, velocity, pending respawn and team. GameWorld (the server's and
-// dsoc-inspect's world) is one; dsoc-eval's recorded frames are another, so that the evaluation
-// runs the very policies the server runs.
+// order, each with its box, velocity, pending respawn, team and the range of its sound. GameWorld
+// (the server's and dsoc-inspect's world) is one; dsoc-eval's recorded frames are another, so that
+// the evaluation runs the very policies the server runs.
 
 #include "dsoc/visibility/geometry.hpp"
 #include "dsoc/visibility/relevance.hpp"
@@ -25,6 +25,10 @@ struct EntityView {
     std::optional<glm::vec3> arrival_eye;
     /// Its team (visibility::kNoTeam: none): teammates are always replicated.
     visibility::TeamId team = visibility::kNoTeam;
+    /// How far the sound it makes this tick is heard (0: silent): every client whose eye
+    /// is within this distance of its box hears it (interest/hearing.hpp).
+    /// [Units: world units]
+    float sound_range = 0.0f;
 };
 
 class WorldView {

@@ -1,5 +1,5 @@
 #pragma once
-// Compact snapshots (protocol version 2, docs/protocol.md): the sender's and the
+// Compact snapshots (protocol version 3, docs/protocol.md): the sender's and the
 // receiver's halves of one connection's entity replica. The encoder remembers the
 // quantized pose it last sent for every entity the connection knows and writes only
 // the fields whose quantized value changed, as deltas; the decoder rebuilds the same
@@ -44,15 +44,16 @@ public:
     /// Clears `out` and starts the snapshot of `tick`.
     void begin(std::uint64_t tick, pb::Snapshot& out);
     /// `id` (unknown to the connection) enters with its full state on `tier`
-    /// (< kLodTiers). `half_extents` in world units.
+    /// (< kTiers; kHeardTier: position at the heard quantum, no angles). `half_extents`
+    /// in world units.
     void enter(std::uint32_t id, const Pose& pose, const std::array<float, 3>& half_extents,
                std::uint32_t kind, std::uint8_t tier, pb::Snapshot& out);
     /// `id` (known) is now at `pose` on `tier`: appends an update entry holding the
     /// fields whose quantized value changed, or nothing when none did. Within one
     /// snapshot, update() ids must increase. Returns whether an entry was written.
     bool update(std::uint32_t id, const Pose& pose, std::uint8_t tier, pb::Snapshot& out);
-    /// The same with the pose already quantized on `tier` (quantize(pose,
-    /// settings().position_quantum[tier], settings().angle_steps)): a server quantizes
+    /// The same with the pose already quantized on `tier` (quantize(pose, settings(),
+    /// tier)): a server quantizes
     /// each entity once per tick for all its clients. Same bytes as update(pose).
     bool update_quantized(std::uint32_t id, const QuantizedPose& quantized, std::uint8_t tier,
                           pb::Snapshot& out);
@@ -79,7 +80,8 @@ private:
 
 /// Something wrong with a received snapshot. `kind` is a stable snake_case name
 /// (duplicate_enter, update_for_unknown_entity, leave_for_unknown_entity, bad_tier,
-/// malformed_update, audit_for_unknown_entity, pose_beyond_quantization); `detail`
+/// malformed_update, angles_on_heard_tier, audit_for_unknown_entity,
+/// audit_of_heard_entity, pose_beyond_quantization); `detail`
 /// says which entity and why.
 struct SnapshotProblem {
     std::string kind;
@@ -90,7 +92,8 @@ struct SnapshotProblem {
 struct ReplicaEntity {
     QuantizedPose quantized;
     std::uint8_t tier = 0;
-    std::array<std::uint32_t, 3> half_extents{}; ///< in quanta of `tier` at enter
+    std::array<std::uint32_t, 3> half_extents{}; ///< in quanta of `enter_tier`
+    std::uint8_t enter_tier = 0;                 ///< the tier it entered on
     std::uint32_t kind = 0;
 };
 

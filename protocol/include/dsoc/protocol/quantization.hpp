@@ -13,8 +13,20 @@
 
 namespace dsoc::protocol {
 
-/// Network level-of-detail tiers: 0 near (every tick), 1 mid, 2 far.
+/// Network level-of-detail tiers of entities the client sees: 0 near (every tick), 1
+/// mid, 2 far.
 inline constexpr std::size_t kLodTiers = 3;
+/// The tier of an entity the client hears but does not see: positions in
+/// QuantizationSettings::heard_quantum, angles never sent (always 0).
+inline constexpr std::uint8_t kHeardTier = 3;
+/// Every tier: the three of sight, then the heard tier.
+inline constexpr std::size_t kTiers = 4;
+
+/// How often an entity on `tier` (< kTiers) is updated: every 1st, 2nd, 4th, 4th tick.
+/// [Units: ticks]
+[[nodiscard]] constexpr std::uint64_t update_interval(std::uint8_t tier) {
+    return std::uint64_t{1} << (tier < 2 ? tier : 2);
+}
 /// Largest |position / quantum| that travels; larger values are clamped (a world
 /// that large is a server bug, the clamp only keeps the arithmetic defined).
 inline constexpr std::int32_t kMaxQuantizedCoordinate = 1 << 30;
@@ -25,6 +37,14 @@ struct QuantizationSettings {
     std::array<float, kLodTiers> position_quantum{0.125f, 0.5f, 1.0f};
     /// Steps per full turn for yaw and pitch (4096: 0.088 degrees). [Limit: 256..65536]
     std::uint32_t angle_steps = 4096;
+    /// Position quantum of the heard tier: where a sound comes from, no finer.
+    /// [Units: world units] [Limit: position_quantum far..1024]
+    float heard_quantum = 64.0f;
+
+    /// The position quantum of `tier` (< kTiers).
+    [[nodiscard]] float quantum(std::uint8_t tier) const {
+        return tier == kHeardTier ? heard_quantum : position_quantum[tier];
+    }
 };
 
 /// Every problem with the settings, each naming the field and why; empty when usable.
@@ -63,6 +83,9 @@ struct QuantizedPose {
 [[nodiscard]] QuantizedPose quantize(const Pose& pose, float quantum, std::uint32_t steps);
 /// The pose a quantized pose stands for; yaw in [-180, 180).
 [[nodiscard]] Pose dequantize(const QuantizedPose& q, float quantum, std::uint32_t steps);
+/// quantize() on `tier` (< kTiers) of `settings`: the heard tier drops the angles (0).
+[[nodiscard]] QuantizedPose quantize(const Pose& pose, const QuantizationSettings& settings,
+                                     std::uint8_t tier);
 /// Quantized position of a box half extent, rounded up so the replica's box is
 /// never smaller than the server's.
 [[nodiscard]] std::uint32_t quantize_extent(float half_extent, float quantum);

@@ -6,6 +6,7 @@
 // are identical whatever the thread count (tests/server/parallel_tick_test.cpp).
 
 #include "dsoc/interest/game_world.hpp"
+#include "dsoc/interest/hearing.hpp"
 #include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/server/replication_state.hpp"
@@ -38,7 +39,10 @@ struct ClientTick {
     /// replica stays what was really sent.
     bool build = true;
     bool audit = false;      ///< fill Snapshot.audit with the exact poses
-    bool network_lod = true; ///< false: every entity on tier 0
+    bool network_lod = true; ///< false: every entity seen on tier 0
+    /// Optional: this tick's sounds; what the viewer hears and the policy did not send
+    /// is added on the heard tier (interest::Hearing::add_heard).
+    const interest::Hearing* hearing = nullptr;
 };
 
 /// Fail-open for one tick's parallel phase: a job whose turn comes after `deadline` gets

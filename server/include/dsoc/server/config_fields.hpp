@@ -16,6 +16,10 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("tick_rate", config.tick_rate);
     visit("bots", config.bots);
     visit("teams", config.teams);
+    visit("sounds", config.sounds);
+    visit("footstep_range", config.footstep_range);
+    visit("shot_range", config.shot_range);
+    visit("bot_shots_per_second", config.bot_shots_per_second);
     visit("map", config.map);
     visit("policy", config.policy);
     visit("tbv_strategy", config.tbv_strategy);
@@ -37,6 +41,7 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("position_quantum_mid", config.position_quantum_mid);
     visit("position_quantum_far", config.position_quantum_far);
     visit("angle_steps", config.angle_steps);
+    visit("heard_quantum", config.heard_quantum);
     visit("network_lod", config.network_lod);
     visit("max_clients", config.max_clients);
     visit("max_frame_bytes", config.max_frame_bytes);

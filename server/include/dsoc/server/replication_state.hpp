@@ -1,6 +1,6 @@
 #pragma once
 // What one client knows, and how a new interest set becomes a compact snapshot of
-// enter / update / leave (protocol version 2: quantized poses, updates as deltas
+// enter / update / leave (protocol version 3: quantized poses, updates as deltas
 // against what this client last received, only changed fields present).
 //
 // Threading: one per client; build_snapshot() of distinct clients may run
@@ -21,7 +21,7 @@ namespace dsoc::server {
 [[nodiscard]] protocol::Pose pose_of(const interest::Entity& e);
 
 /// Every entity's wire pose this tick, quantized on each network level-of-detail
-/// tier once for all clients (instead of once per client that is sent it).
+/// tier (and the heard tier) once for all clients (instead of once per client that is sent it).
 /// Threading: compute() serial; at() may be read concurrently afterwards.
 class SharedPoses {
 public:
@@ -30,12 +30,12 @@ public:
                  const protocol::QuantizationSettings& quantization);
     /// The pose of world.entities()[index] on `tier`, as of the last compute().
     [[nodiscard]] const protocol::QuantizedPose& at(std::size_t index, std::uint8_t tier) const {
-        return poses_[index * protocol::kLodTiers + tier];
+        return poses_[index * protocol::kTiers + tier];
     }
     [[nodiscard]] const protocol::QuantizationSettings& quantization() const {
         return quantization_;
     }
-    [[nodiscard]] std::size_t size() const { return poses_.size() / protocol::kLodTiers; }
+    [[nodiscard]] std::size_t size() const { return poses_.size() / protocol::kTiers; }
 
 private:
     protocol::QuantizationSettings quantization_;

@@ -28,6 +28,7 @@
 // One tick at a time: the next tick is scheduled at the hand-over.
 
 #include "dsoc/interest/game_world.hpp"
+#include "dsoc/interest/hearing.hpp"
 #include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/protocol/connect_token.hpp"
 #include "dsoc/protocol/messages.hpp"
@@ -100,6 +101,9 @@ struct ServerStats {
     std::uint64_t cheapest_client_ticks = 0;
     /// Client-ticks sent another entity's view (spectators: ClientInput.watch).
     std::uint64_t spectating_client_ticks = 0;
+    /// Entities in snapshots sent only because the client hears them (the heard tier),
+    /// summed over the client-ticks that were sent.
+    std::uint64_t heard_entities_sent = 0;
 };
 
 class Server final : private SessionHost {
@@ -145,6 +149,7 @@ private:
         std::vector<std::uint8_t> frame;          // this tick's snapshot frame, written by the job
         protocol::pb::ClientInput input;          // the latest input, for the next tick start
         bool input_pending = false;               // `input` not handed to the world yet
+        bool fire_pending = false; // an input since the last tick start fired (not only the latest)
         std::uint32_t watch = 0;   // ClientInput.watch of the latest input (0: its own view)
         std::uint32_t viewing = 0; // the entity the policy views from for it (0: not yet)
     };
@@ -205,6 +210,7 @@ private:
     std::vector<Client*> direct_writes_;   // the hand-over's clients whose frame goes straight out
     std::vector<std::size_t> direct_written_; // bytes the kernel took of each of those frames
     SharedPoses shared_poses_;                // this tick's quantized poses, for every job
+    interest::Hearing hearing_;               // this tick's sounds, for every job
     std::unique_ptr<trace::TraceWriter> trace_;
     trace::TraceTick trace_tick_;
     WorkerPool pool_; // last: its threads stop first (after ~Server waited for a phase)

@@ -36,6 +36,16 @@ struct ServerConfig {
     /// sends a client its teammates whatever it sees (interest beyond sight).
     /// [Limit: 0..1000]
     int teams = interest::WorldSettings{}.teams;
+    /// Footsteps (entities running on the ground) and shots (bots at random, players
+    /// with ClientInput.fire): a client is sent what it hears but cannot see on the heard
+    /// tier (a coarse position, no angles; interest/hearing.hpp), whatever the policy.
+    bool sounds = sim::SoundSettings{}.enabled;
+    /// How far footsteps are heard. [Units: world units] [Limit: 0..100000]
+    float footstep_range = sim::SoundSettings{}.footstep_range;
+    /// How far a shot is heard. [Units: world units] [Limit: 0..100000]
+    float shot_range = sim::SoundSettings{}.shot_range;
+    /// How often a bot fires, on average. [Units: 1/s] [Limit: 0..100]
+    float bot_shots_per_second = sim::SoundSettings{}.bot_shots_per_second;
     /// Map: a name looked up in OpenArena's .pk3 archives (and $DSOC_MAP_PATH), a path
     /// to a .bsp or text map, or "gen:city[:seed]" / "gen:rooms[:seed]".
     std::string map = "oa_dm4";
@@ -109,6 +119,9 @@ struct ServerConfig {
     float position_quantum_far = 1.0f;
     /// Steps per full turn of the angles in snapshots. [Limit: 256..65536]
     std::uint32_t angle_steps = 4096;
+    /// Position quantum of entities a client hears but does not see (no angles either).
+    /// [Units: world units] [Limit: position_quantum_far..1024]
+    float heard_quantum = protocol::QuantizationSettings{}.heard_quantum;
     /// false: every entity near (every tick, finest quantum), whatever the policy says.
     bool network_lod = true;
     /// Connected clients at most; more are refused with `server_full`. [Limit: 1..100000]

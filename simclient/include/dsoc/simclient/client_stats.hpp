@@ -33,6 +33,9 @@ struct ClientStats {
     double active_seconds = 0.0;   ///< from server hello to stop
     double connect_ms = 0.0;       ///< start (resolve) to server hello; 0 without a hello
     SampleHistogram known_samples; ///< entities known after each snapshot
+    /// Of them, entities known only by hearing (the heard tier: a coarse position, no
+    /// angles; the decoder rejects angles or an audit pose for one).
+    SampleHistogram heard_samples;
     SampleHistogram interarrival_ms;
     SampleHistogram rtt_ms;
     std::map<std::string, std::uint64_t> protocol_errors; ///< by kind

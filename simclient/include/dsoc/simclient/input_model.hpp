@@ -1,6 +1,7 @@
 #pragma once
 // What a simulated player wants to do each tick, by behaviour: wanderers hold a random
-// heading 1-3 s then pick another; campers stand still, now and then take a short small
+// heading 1-3 s then pick another and fire now and then (0.5 shots a second, so
+// other clients hear shots); campers stand still, now and then take a short small
 // step (0.2-0.5 s at a third of full speed, every 2-5 s) and sweep their view slowly;
 // spectators stand still and watch a player entity they know (not their own), another
 // every 5-10 s or as soon as the watched one is gone from their replica.

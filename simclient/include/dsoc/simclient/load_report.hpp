@@ -60,6 +60,7 @@ struct LoadReport {
     double bytes_up_per_client_s = 0.0;
     double entity_updates_per_client_s = 0.0;
     common::Summary entities_known; ///< over every snapshot of every client
+    common::Summary entities_heard; ///< of them, known only by hearing (heard tier)
     common::Summary snapshot_interarrival_ms;
     common::Summary rtt_ms;
     common::Summary connect_ms; ///< session start (resolve, TCP connect) to server hello

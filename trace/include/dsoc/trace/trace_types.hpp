@@ -47,6 +47,11 @@ struct TraceClient {
     /// exposure and `never` out of pop-in.
     std::vector<std::uint32_t> always;
     std::vector<std::uint32_t> never;
+    /// Replicated entities sent only because the client hears them (interest/hearing.hpp):
+    /// a coarse position, no angles. Increasing; a subset of `replicated`. A checker
+    /// counts them as hearing's exposure, apart from sight's, and one that is visible
+    /// as a pop-in (sight needed it precise).
+    std::vector<std::uint32_t> heard;
 };
 
 struct TraceTick {

@@ -1,7 +1,7 @@
 #pragma once
 // One of the evaluation's frames as the interest layer's policies read a world
 // (interest::WorldView): entity i is frames' entity i, with its box, velocity and
-// pending respawn and team.
+// pending respawn, team and sound.
 
 #include "dsoc/eval/world_sim.hpp"
 #include "dsoc/interest/world_view.hpp"
@@ -15,7 +15,12 @@ public:
     [[nodiscard]] std::size_t entity_count() const override { return frame_->entities.size(); }
     [[nodiscard]] interest::EntityView entity(std::size_t index) const override {
         const EntityFrame& e = frame_->entities[index];
-        return {static_cast<std::uint32_t>(index), e.box, e.velocity, e.arrival_eye, e.team};
+        return {static_cast<std::uint32_t>(index),
+                e.box,
+                e.velocity,
+                e.arrival_eye,
+                e.team,
+                e.sound_range};
     }
 
 private:

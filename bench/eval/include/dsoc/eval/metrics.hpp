@@ -28,6 +28,12 @@ struct PolicyMetrics {
     std::uint64_t leaves = 0;
     std::uint64_t bytes = 0;
     std::uint64_t replicated_pairs = 0; ///< sum over client-ticks of the set size
+    // Hearing (Scenario::sounds), every tick and client.
+    std::uint64_t heard_pairs = 0;   ///< of replicated_pairs, sent only because heard
+    std::uint64_t heard_entries = 0; ///< enters and updates on the heard tier
+    /// The bytes the same sets without the heard-only entities would have cost (only
+    /// with sounds; 0 without): `bytes` minus this is what hearing adds.
+    std::uint64_t sight_bytes = 0;
 
     // CPU: per client-tick decision time (thread CPU time; the serial part of a tick
     // is shared equally among the clients). [Units: microseconds]
@@ -43,6 +49,11 @@ struct PolicyMetrics {
     /// exposure and pop-in; `missed_by_rule` of them were not sent (must be 0).
     std::uint64_t checked_by_rule = 0;
     std::uint64_t missed_by_rule = 0;
+    /// Heard-only pairs on checked ticks: not sent for sight, so left out of exposure
+    /// (this is hearing's exposure, at its coarse precision); `heard_visible` of them were
+    /// visible within the allowance and so are pop-in too (sight needed them precise).
+    std::uint64_t checked_heard = 0;
+    std::uint64_t heard_visible = 0;
     std::vector<ViolationExample> examples; ///< the first few
 
     // Bytes on the ticks where the ideal's bytes are known (see EvalResult).

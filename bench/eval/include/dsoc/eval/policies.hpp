@@ -18,6 +18,7 @@
 #include "dsoc/eval/ray_oracle.hpp"
 #include "dsoc/eval/scenario.hpp"
 #include "dsoc/eval/world_sim.hpp"
+#include "dsoc/interest/hearing.hpp"
 #include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/visibility/cell_visibility.hpp"
 #include "dsoc/visibility/dsoc_config.hpp"
@@ -97,8 +98,10 @@ public:
     /// Serial part of a tick: the world is now `frame`. The first call adds every viewer.
     void begin_tick(const WorldFrame& frame);
     /// Client `client`'s interest set in `out` (cleared first): increasing entity ids,
-    /// its own entity left out.
-    void select(std::size_t client, const WorldFrame& frame, std::vector<std::uint32_t>& out);
+    /// its own entity left out; with them, in `heard` (cleared first), those of them sent
+    /// only because the client hears them (interest::Hearing; the heard tier).
+    void select(std::size_t client, const WorldFrame& frame, std::vector<std::uint32_t>& out,
+                std::vector<std::uint32_t>& heard);
     /// The InterestManager's counters for the culling policies (available = false for
     /// the others).
     [[nodiscard]] TbvSummary tbv_summary() const;
@@ -117,6 +120,7 @@ private:
     double cheapest_share_;
     bool started_ = false;
     std::vector<std::vector<interest::Interest>> answers_; ///< per client, reused
+    interest::Hearing hearing_; ///< this tick's sounds (the server's rule, added to every policy)
 };
 
 /// The dsoc policies over a baked cell table (EvalOptions::bake_cell_size):

@@ -3,9 +3,10 @@
 // its new interest set, in the server's compact encoding (protocol version 2:
 // quantized poses, updates as deltas against what the client last received, only
 // changed fields present), written by the same dsoc::protocol::SnapshotEncoder the
-// server uses and sized by the real protocol encoder. Every entity is sent on the
+// server uses and sized by the real protocol encoder. Every entity seen is sent on the
 // near tier (updated every tick, finest quantum): the eval's policies give no
-// level-of-detail hint, so all of them are measured with the same precision.
+// level-of-detail hint, so all of them are measured with the same precision. An entity
+// only heard goes on the heard tier, as the server sends it.
 // dsoc-eval does not link the server (and Asio); it walks the server's rule
 // (protocol::merge_interest, as dsoc::server::ReplicationState does) over the
 // evaluation's frames.
@@ -29,6 +30,8 @@ struct SnapshotCost {
     std::uint32_t update_bytes = 0;
     /// Entities whose update carried a position change (the "moving" ones).
     std::uint32_t moving_updates = 0;
+    /// Enters and updates of entities on the heard tier.
+    std::uint32_t heard_entries = 0;
 };
 
 /// Size of an entity's uncompressed full state, the baseline of the compression
@@ -44,11 +47,12 @@ public:
         : encoder_(quantization), players_(players) {}
 
     /// Moves this client's knowledge to `interest` (increasing ids, entity ids of
-    /// `frame`) and returns what the snapshot of `tick` costs. `scratch` and `buffer`
-    /// are reused between calls (one per thread).
+    /// `frame`), those also in `heard` (increasing, a subset) on the heard tier, and
+    /// returns what the snapshot of `tick` costs. `scratch` and `buffer` are reused
+    /// between calls (one per thread).
     SnapshotCost send(const WorldFrame& frame, std::span<const std::uint32_t> interest,
-                      std::uint64_t tick, protocol::pb::Envelope& scratch,
-                      std::vector<std::uint8_t>& buffer);
+                      std::span<const std::uint32_t> heard, std::uint64_t tick,
+                      protocol::pb::Envelope& scratch, std::vector<std::uint8_t>& buffer);
 
     [[nodiscard]] const std::vector<std::uint32_t>& known() const { return known_; }
 

@@ -23,6 +23,10 @@ struct Scenario {
     /// and every policy sends a viewer its teammates whatever it sees; the oracle judges
     /// only the other pairs. [Limit: 0..1000]
     int teams = 0;
+    /// Footsteps and shots (sim::SoundSettings, its defaults): every policy sends what a
+    /// viewer hears but does not see on the heard tier (interest::Hearing); the oracle
+    /// judges sight alone and counts the heard-only pairs apart.
+    bool sounds = false;
     /// [Units: Hz] [Limit: 1..240]
     int tick_rate = 30;
     /// Client round trip. [Units: ms] [Limit: >= 0]

@@ -13,6 +13,7 @@
 #include "dsoc/maps/map.hpp"
 #include "dsoc/sim/collision_world.hpp"
 #include "dsoc/sim/player_move.hpp"
+#include "dsoc/sim/sounds.hpp"
 #include "dsoc/sim/wander_bot.hpp"
 #include "dsoc/visibility/geometry.hpp"
 #include "dsoc/visibility/relevance.hpp"
@@ -36,6 +37,9 @@ struct EntityFrame {
     /// point (within the lookahead: sim/respawn.hpp); nothing while it lives.
     std::optional<glm::vec3> arrival_eye;
     visibility::TeamId team = visibility::kNoTeam; ///< Scenario::teams
+    /// How far the sound it makes is heard (0: silent; Scenario::sounds).
+    /// [Units: world units]
+    float sound_range = 0.0f;
 };
 
 struct WorldFrame {
@@ -77,6 +81,10 @@ private:
     sim::MoveConfig move_;
     sim::WanderConfig wander_;
     std::vector<sim::WanderBot> bots_; ///< every entity: viewers first
+    std::vector<sim::Audible> sounds_; ///< the sounds each entity makes
+    sim::SoundSettings sound_settings_;
+    std::uint64_t seed_;
+    std::uint64_t steps_ = 0;
     std::size_t viewers_;
     int teams_;
     float dt_;
