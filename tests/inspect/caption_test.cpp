@@ -159,7 +159,7 @@ TEST(Caption, ColumnLabelsAreCentredAboveTheirCells) {
     }
 }
 
-TEST(PlanLegend, LiveListsEveryStateWithItsCountTraceOnlyItsThree) {
+TEST(PlanLegend, LiveListsEveryStateWithItsCountTraceOnlyItsFive) {
     ClientView view;
     view.entities = {{1, {}, EntityState::replicated_visible, {}},
                      {2, {}, EntityState::replicated_visible, {}},
@@ -176,12 +176,16 @@ TEST(PlanLegend, LiveListsEveryStateWithItsCountTraceOnlyItsThree) {
     EXPECT_TRUE(has(live, kPalette.replicated_visible, "(2)"));
     EXPECT_TRUE(has(live, kPalette.hidden_expired, "(1)"));
     EXPECT_TRUE(has(live, kPalette.replicated_held, "(0)"));
+    EXPECT_TRUE(has(live, kPalette.replicated_heard, "heard"));
+    EXPECT_TRUE(has(live, kPalette.replicated_rule, "teammate"));
     EXPECT_TRUE(has(live, kPalette.tbv_outline, "TBV"));
     EXPECT_TRUE(has(live, kPalette.eye_region, "latency"));
     EXPECT_FALSE(has(live, kPalette.not_replicated, ""));
 
     const auto trace = plan_legend(view, {.from_trace = true, .counts = false});
     EXPECT_TRUE(has(trace, kPalette.not_replicated, "not sent"));
+    EXPECT_TRUE(has(trace, kPalette.replicated_heard, "heard"));
+    EXPECT_TRUE(has(trace, kPalette.replicated_rule, "teammate"));
     EXPECT_FALSE(has(trace, kPalette.hidden_tbv, ""));
     EXPECT_FALSE(has(trace, kPalette.eye_region, ""));
     EXPECT_FALSE(has(trace, kPalette.replicated_visible, "("));

@@ -35,6 +35,7 @@ TEST(LiveSource, RoomsMapStatesAreConsistentAndDrawnInTheirColours) {
     EXPECT_TRUE(view.eye_region.contains(view.eye));
     std::size_t replicated = 0;
     std::size_t hidden = 0;
+    std::size_t heard = 0;
     for (const EntityView& e : view.entities) {
         EXPECT_NE(e.id, options.viewer_entity);
         if (e.state == EntityState::hidden_tbv) {
@@ -46,10 +47,13 @@ TEST(LiveSource, RoomsMapStatesAreConsistentAndDrawnInTheirColours) {
                                    e.state == EntityState::replicated_lookahead ||
                                    e.state == EntityState::replicated_held;
         (is_replicated ? replicated : hidden) += 1;
+        heard += e.state == EntityState::replicated_heard ? 1 : 0;
     }
-    // Walls between rooms: some bots are hidden, some (at least in the own room) not.
+    // Walls between rooms: some bots are hidden, some (at least in the own room) not,
+    // and some hidden ones are heard running (the world's sounds are on by default).
     EXPECT_GT(hidden, 0u);
     EXPECT_GT(replicated, 0u);
+    EXPECT_GT(heard, 0u);
 
     PlanStyle style;
     style.units_per_pixel = 4.0f;
@@ -95,7 +99,8 @@ TEST(LiveSource, RefusesOptionsItCannotRun) {
 
 TEST(TraceSource, SplitsReplicatedByWhatTheEyeSees) {
     // A wall at x in [100, 120]; the eye at the origin. Entity 1 is in the open, 2
-    // behind the wall, 3 in the open but not replicated; entity 9 is the client's own.
+    // behind the wall, 3 in the open but not replicated, 4 and 5 behind the wall and
+    // sent for hearing and for the team; entity 9 is the client's own.
     trace::TraceHeader header;
     header.map = "test";
     header.policy = "dsoc";
@@ -111,11 +116,11 @@ TEST(TraceSource, SplitsReplicatedByWhatTheEyeSees) {
         for (std::uint64_t t : {3u, 6u}) {
             trace::TraceTick tick;
             tick.t = t;
-            tick.entities = {{9, Aabb{{-10, -10, -30}, {10, 10, 30}}},
-                             {1, Aabb{{-200, 0, 0}, {-180, 20, 20}}},
-                             {2, Aabb{{300, 0, 0}, {320, 20, 20}}},
-                             {3, Aabb{{0, 200, 0}, {20, 220, 20}}}};
-            tick.clients = {{7, 9u, glm::vec3(0.0f), {1, 2}}};
+            tick.entities = {
+                {9, Aabb{{-10, -10, -30}, {10, 10, 30}}}, {1, Aabb{{-200, 0, 0}, {-180, 20, 20}}},
+                {2, Aabb{{300, 0, 0}, {320, 20, 20}}},    {3, Aabb{{0, 200, 0}, {20, 220, 20}}},
+                {4, Aabb{{300, 100, 0}, {320, 120, 20}}}, {5, Aabb{{300, 200, 0}, {320, 220, 20}}}};
+            tick.clients = {{7, 9u, glm::vec3(0.0f), {1, 2, 4, 5}, std::nullopt, {5}, {}, {4}}};
             ASSERT_TRUE(writer.write_tick(tick));
         }
         ASSERT_TRUE(writer.close());
@@ -131,10 +136,12 @@ TEST(TraceSource, SplitsReplicatedByWhatTheEyeSees) {
     ASSERT_TRUE(view.viewer_entity.has_value());
     EXPECT_EQ(*view.viewer_entity, 9u);
     EXPECT_TRUE(view.eye_region.is_empty());
-    ASSERT_EQ(view.entities.size(), 3u);
+    ASSERT_EQ(view.entities.size(), 5u);
     EXPECT_EQ(view.entities[0].state, EntityState::replicated_visible);
     EXPECT_EQ(view.entities[1].state, EntityState::replicated_lookahead);
     EXPECT_EQ(view.entities[2].state, EntityState::not_replicated);
+    EXPECT_EQ(view.entities[3].state, EntityState::replicated_heard);
+    EXPECT_EQ(view.entities[4].state, EntityState::replicated_rule);
     EXPECT_FALSE(source.next_view(7, 7u, view, error));
     EXPECT_EQ(error, "");
     std::filesystem::remove(path);

@@ -99,9 +99,7 @@ nlohmann::json summary(const inspect::ClientView& v) {
                            {"max", {v.eye_region.max.x, v.eye_region.max.y, v.eye_region.max.z}}};
     }
     j["entities"] = v.entities.size();
-    for (const EntityState s : {EntityState::replicated_visible, EntityState::replicated_lookahead,
-                                EntityState::replicated_held, EntityState::hidden_tbv,
-                                EntityState::hidden_expired, EntityState::not_replicated}) {
+    for (const EntityState s : inspect::kEveryEntityState) {
         j["states"][inspect::to_string(s)] = v.count(s);
     }
     j["distinct_tbv_boxes"] = tbvs.size();

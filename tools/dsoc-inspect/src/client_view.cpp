@@ -12,6 +12,10 @@ const char* to_string(EntityState s) noexcept {
         return "replicated_lookahead";
     case EntityState::replicated_held:
         return "replicated_held";
+    case EntityState::replicated_rule:
+        return "replicated_rule";
+    case EntityState::replicated_heard:
+        return "replicated_heard";
     case EntityState::hidden_tbv:
         return "hidden_tbv";
     case EntityState::hidden_expired:

@@ -102,6 +102,15 @@ void LiveSimulation::advance() {
         const interest::Viewer viewer = interest::viewer_of(*world_, kClientId, *self);
         std::vector<interest::Interest> answer;
         policy_->select(*world_, viewer, answer);
+        // And what the viewer hears, as the server adds it.
+        hearing_.begin_tick(*world_);
+        hearing_.add_heard(viewer, *policy_, answer);
+        heard_.clear();
+        for (const interest::Interest& i : answer) {
+            if (i.tier == interest::kHeardTier) {
+                heard_.push_back(i.id);
+            }
+        }
     }
 }
 
@@ -134,8 +143,12 @@ ClientView LiveSimulation::view() {
         EntityView ev;
         ev.id = e.id;
         ev.box = world_->box_of(e);
-        if (e.id < replicated.size() && replicated[e.id]) {
-            ev.state = classifier_->classify(ev.box);
+        if (std::binary_search(heard_.begin(), heard_.end(), e.id)) {
+            ev.state = EntityState::replicated_heard;
+        } else if (e.id < replicated.size() && replicated[e.id]) {
+            ev.state = manager.relevance(kClientId, e.id) == visibility::Relevance::always
+                           ? EntityState::replicated_rule
+                           : classifier_->classify(ev.box);
         } else {
             switch (manager.state(kClientId, e.id)) {
             case visibility::PairState::hidden_with_tbv:

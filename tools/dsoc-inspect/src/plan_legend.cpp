@@ -15,6 +15,10 @@ const char* label_of(EntityState s, bool from_trace) {
                           : "sent: hidden from the eye, not from all reach";
     case EntityState::replicated_held:
         return "sent: hidden, held until its next test";
+    case EntityState::replicated_rule:
+        return "sent by a rule: a teammate";
+    case EntityState::replicated_heard:
+        return "sent heard only: coarse, no angles";
     case EntityState::hidden_tbv:
         return "not sent: hidden, inside its TBV";
     case EntityState::hidden_expired:
@@ -41,10 +45,12 @@ std::vector<LegendEntry> plan_legend(const ClientView& view, const PlanLegendOpt
     }
     static constexpr EntityState kLive[] = {
         EntityState::replicated_visible, EntityState::replicated_lookahead,
-        EntityState::replicated_held, EntityState::hidden_tbv, EntityState::hidden_expired};
-    static constexpr EntityState kTrace[] = {EntityState::replicated_visible,
-                                             EntityState::replicated_lookahead,
-                                             EntityState::not_replicated};
+        EntityState::replicated_held,    EntityState::replicated_rule,
+        EntityState::replicated_heard,   EntityState::hidden_tbv,
+        EntityState::hidden_expired};
+    static constexpr EntityState kTrace[] = {
+        EntityState::replicated_visible, EntityState::replicated_lookahead,
+        EntityState::replicated_rule, EntityState::replicated_heard, EntityState::not_replicated};
     const auto add = [&](EntityState s) {
         std::string label = label_of(s, options.from_trace);
         if (options.counts) {

@@ -54,6 +54,10 @@ Rgb PlanPalette::of(EntityState s) const {
         return replicated_lookahead;
     case EntityState::replicated_held:
         return replicated_held;
+    case EntityState::replicated_rule:
+        return replicated_rule;
+    case EntityState::replicated_heard:
+        return replicated_heard;
     case EntityState::hidden_tbv:
         return hidden_tbv;
     case EntityState::hidden_expired:
@@ -190,7 +194,8 @@ Image render_plan(const std::vector<Footprint>& occluders, const visibility::Aab
     // Hidden first, then replicated: what the client receives is never covered.
     static constexpr EntityState kDrawOrder[] = {
         EntityState::not_replicated,       EntityState::hidden_expired,
-        EntityState::hidden_tbv,           EntityState::replicated_held,
+        EntityState::hidden_tbv,           EntityState::replicated_heard,
+        EntityState::replicated_held,      EntityState::replicated_rule,
         EntityState::replicated_lookahead, EntityState::replicated_visible};
     for (const EntityState s : kDrawOrder) {
         for (const EntityView& e : view.entities) {

@@ -62,9 +62,18 @@ bool TraceSource::next_view(std::uint64_t min_tick, std::optional<std::uint32_t>
             EntityView ev;
             ev.id = e.id;
             ev.box = e.box;
-            ev.state = std::binary_search(replicated.begin(), replicated.end(), e.id)
-                           ? classifier_->classify(e.box)
-                           : EntityState::not_replicated;
+            const auto listed = [&](const std::vector<std::uint32_t>& ids) {
+                return std::find(ids.begin(), ids.end(), e.id) != ids.end();
+            };
+            if (!std::binary_search(replicated.begin(), replicated.end(), e.id)) {
+                ev.state = EntityState::not_replicated;
+            } else if (listed(it->heard)) {
+                ev.state = EntityState::replicated_heard;
+            } else if (listed(it->always)) {
+                ev.state = EntityState::replicated_rule;
+            } else {
+                ev.state = classifier_->classify(e.box);
+            }
             view.entities.push_back(ev);
         }
         if (view.viewer_entity && view.viewer_box.is_empty()) {

@@ -25,6 +25,12 @@ enum class EntityState : std::uint8_t {
     /// only every few ticks) or because the manager's culling region is the reused,
     /// larger one.
     replicated_held,
+    /// Replicated by a rule beyond sight, whatever it sees: a teammate, or a pair rule
+    /// `always` (visibility::Relevance).
+    replicated_rule,
+    /// Replicated only because the client hears it: a coarse position, no view angles
+    /// (interest::Hearing).
+    replicated_heard,
     /// Not replicated; its Temporal Bounding Volume is hidden from the client.
     hidden_tbv,
     /// Not replicated and no valid TBV: its box is tested every tick.
@@ -32,6 +38,13 @@ enum class EntityState : std::uint8_t {
     /// Not replicated, no more known (a trace records no TBVs; or a new pair).
     not_replicated,
 };
+
+/// Every state, sent ones first.
+inline constexpr EntityState kEveryEntityState[] = {
+    EntityState::replicated_visible, EntityState::replicated_lookahead,
+    EntityState::replicated_held,    EntityState::replicated_rule,
+    EntityState::replicated_heard,   EntityState::hidden_tbv,
+    EntityState::hidden_expired,     EntityState::not_replicated};
 
 [[nodiscard]] const char* to_string(EntityState s) noexcept;
 

@@ -11,6 +11,7 @@
 #include "dsoc/inspect/client_view.hpp"
 #include "dsoc/inspect/replicated_classifier.hpp"
 #include "dsoc/interest/game_world.hpp"
+#include "dsoc/interest/hearing.hpp"
 #include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/maps/map.hpp"
 #include "dsoc/visibility/occluder_region_visibility.hpp"
@@ -76,6 +77,8 @@ private:
     const interest::CullingPolicy* culling_ = nullptr; ///< policy_ itself
     std::shared_ptr<const visibility::OccluderScene> scene_;
     std::unique_ptr<ReplicatedClassifier> classifier_;
+    interest::Hearing hearing_;
+    std::vector<std::uint32_t> heard_; ///< this tick's heard-only entities, increasing
     std::uint64_t tick_ = 0;
 };
 

@@ -2,7 +2,7 @@
 // The legend of a plan (plan_view.hpp): what each colour of kPalette means, as entries
 // for with_legend (caption.hpp). Live views list every state a live run can show,
 // always in the same order (so that frames of a sequence get the same layout); trace
-// views list the three a trace can show (a trace records no TBVs or eye regions).
+// views list the five a trace can show (a trace records no TBVs or eye regions).
 
 #include "dsoc/inspect/caption.hpp"
 #include "dsoc/inspect/client_view.hpp"

@@ -23,6 +23,8 @@ struct PlanPalette {
     Rgb replicated_visible{40, 210, 70};
     Rgb replicated_lookahead{250, 200, 30};
     Rgb replicated_held{200, 120, 255};
+    Rgb replicated_rule{255, 120, 170}; ///< teammates: pink
+    Rgb replicated_heard{255, 130, 0};  ///< heard only: orange
     // Not sent: cool and dark, so that what the client receives stands out and the
     // usual hidden entity does not read as an error.
     Rgb hidden_tbv{60, 120, 255};
