@@ -13,6 +13,8 @@ given. Figures:
                        broadcast row's, when there is one
   updates/s            server entity_updates_sent / snapshots_sent * tick_rate
   known                simclient entities_known_per_client.mean
+  heard only           simclient entities_heard_per_client.mean (of the known ones,
+                       those sent only because heard: coarse, without angles)
   tick ms              server tick_cost_us.mean / 1000 (wall time of a tick, workers in
                        parallel)
   us/client-tick       server tick_cost_us.mean * ticks / snapshots_sent
@@ -37,6 +39,7 @@ COLUMNS = [
     ("x broadcast", "r"),
     ("updates/s per client", "r"),
     ("entities known", "r"),
+    ("heard only", "r"),
     ("tick ms", "r"),
     ("us/client-tick", "r"),
     ("pop-in", "r"),
@@ -46,7 +49,9 @@ COLUMNS = [
 # Printed under the table: what each column is, for a reader who has not read this file.
 NOTES = """\
 KiB/s, updates/s: what the server sent each client per second (server --stats-json);
-entities known: mean per client, as the clients decoded them (simclient --report);
+entities known: mean per client, as the clients decoded them (simclient --report), of
+them heard only: sent because heard, not seen (a 64-unit blob without angles; the
+oracle judges sight, so they are not in its pop-in or exposure);
 tick ms: the server's tick (wall time, its workers in parallel), mean; us/client-tick:
 all tick time over all client-ticks. pop-in (visible from the eye / from anywhere
 reachable within the latency allowance, not sent) and exposure (sent entities that
@@ -93,6 +98,7 @@ def rows(runs, evaluation=None):
     out = []
     for policy, f, simclient in figures:
         known = (simclient.get("entities_known_per_client") or {}).get("mean")
+        heard = (simclient.get("entities_heard_per_client") or {}).get("mean")
         share = None
         if broadcast and f["bytes_per_s"] is not None:
             share = f["bytes_per_s"] / broadcast
@@ -108,6 +114,7 @@ def rows(runs, evaluation=None):
             fmt(share, 2, suffix="x"),
             fmt(f["updates_per_s"], 0),
             fmt(known, 1),
+            fmt(heard, 1),
             fmt(f["tick_ms"], 2),
             fmt(f["us_per_client_tick"], 1),
             popin or "-",

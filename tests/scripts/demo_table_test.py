@@ -21,8 +21,11 @@ def server(bytes_sent, snapshots, updates, ticks=300, mean_us=1500.0, rate=30):
             "tick_cost_us": {"mean": mean_us, "p99": 2 * mean_us}}
 
 
-def simclient(known):
-    return {"entities_known_per_client": {"mean": known, "p95": 2 * known}}
+def simclient(known, heard=None):
+    out = {"entities_known_per_client": {"mean": known, "p95": 2 * known}}
+    if heard is not None:
+        out["entities_heard_per_client"] = {"mean": heard, "p95": 2 * heard}
+    return out
 
 
 class DemoTable(unittest.TestCase):
@@ -45,7 +48,7 @@ class DemoTable(unittest.TestCase):
             {"name": "dsoc-table", "popin_present": 0, "popin_lookahead": 0, "exposure": 0.3},
             {"name": "pvs", "popin_present": 1, "popin_lookahead": 62, "exposure": 0.5}]}
         cells = demo_table.rows([
-            ("dsoc", server(9_600 * 512, 9_600, 9_600), simclient(80.0)),
+            ("dsoc", server(9_600 * 512, 9_600, 9_600), simclient(80.0, 30.5)),
             ("pvs", server(9_600 * 600, 9_600, 9_600), simclient(90.0)),
             ("broadcast", server(9_600 * 2048, 9_600, 9_600), simclient(231.0)),
         ], evaluation)
@@ -55,6 +58,8 @@ class DemoTable(unittest.TestCase):
         self.assertEqual(dsoc["x broadcast"], "0.25x")
         self.assertEqual(broadcast["x broadcast"], "1.00x")
         self.assertEqual(dsoc["entities known"], "80.0")
+        self.assertEqual(dsoc["heard only"], "30.5")
+        self.assertEqual(pvs["heard only"], "-")  # a simclient report without the figure
         self.assertEqual(dsoc["pop-in"], "0 / 0")  # dsoc is the eval's dsoc-table
         self.assertEqual(dsoc["exposure"], "30%")
         self.assertEqual(pvs["pop-in"], "1 / 62")
