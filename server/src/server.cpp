@@ -377,8 +377,11 @@ void Server::write_trace_tick() {
                 }
             }
         }
-        for (const interest::Interest& i : client.interest) { // this tick's, from its job
-            if (i.tier == interest::kHeardTier) {
+        // This tick's heard-only entities (its job's answer) that the client knows: a
+        // client whose snapshot was skipped still knows what it was last sent.
+        for (const interest::Interest& i : client.interest) {
+            if (i.tier == interest::kHeardTier &&
+                std::binary_search(c.replicated.begin(), c.replicated.end(), i.id)) {
                 c.heard.push_back(i.id);
             }
         }
