@@ -387,6 +387,47 @@ TEST(InterestPolicyWhileRespawning, EveryPolicyAnswersForTheEyeNowAndTheArrivalE
 namespace dsoc::server {
 namespace {
 
+/// Two worlds alike but for one setting (`plain` and `varied`, both on oa_dm4), each with
+/// the policy they ask for and the same kViewers viewers (entity v * 25 for client v):
+/// what a rule beyond sight adds is the difference between the two.
+struct TwinWorlds {
+    static constexpr std::uint32_t kViewers = 8;
+    GameWorld plain_world;
+    GameWorld varied_world;
+    std::unique_ptr<interest::InterestPolicy> plain;
+    std::unique_ptr<interest::InterestPolicy> varied;
+
+    TwinWorlds(const ServerConfig& plain_config, const ServerConfig& varied_config,
+               const std::shared_ptr<const maps::Map>& map)
+        : plain_world(world_settings(plain_config), map),
+          varied_world(world_settings(varied_config), map),
+          plain(make_policy(plain_config, plain_world)),
+          varied(make_policy(varied_config, varied_world)) {
+        for (std::uint32_t v = 0; v < kViewers; ++v) {
+            plain->add_viewer(v, plain_world.entities()[v * 25].id);
+            varied->add_viewer(v, varied_world.entities()[v * 25].id);
+        }
+    }
+    /// Both worlds one 30 Hz step on, and both policies' begin_tick(`tick`).
+    void step(int tick) {
+        plain_world.step(1.0f / 30.0f);
+        varied_world.step(1.0f / 30.0f);
+        plain->begin_tick(plain_world, static_cast<std::uint64_t>(tick));
+        varied->begin_tick(varied_world, static_cast<std::uint64_t>(tick));
+    }
+    /// Viewer `v`'s entity in the varied world.
+    [[nodiscard]] const Entity& self(std::uint32_t v) const {
+        return varied_world.entities()[v * 25];
+    }
+    /// What the plain world's policy sends viewer `v` this tick.
+    [[nodiscard]] std::vector<Interest> plain_set(std::uint32_t v) {
+        std::vector<Interest> out;
+        plain->select(plain_world,
+                      interest::viewer_of(plain_world, v, plain_world.entities()[v * 25]), out);
+        return out;
+    }
+};
+
 TEST(InterestPolicyWithTeams, EveryPolicySendsTheViewersTeammatesOverWhatItSees) {
     // Two worlds alike but for teams; each viewer's set with teams must be its set
     // without them plus every teammate (relevance.hpp's team rule), and some teammates
@@ -402,33 +443,19 @@ TEST(InterestPolicyWithTeams, EveryPolicySendsTheViewersTeammatesOverWhatItSees)
         config.distance_radius = 800.0f;
         ServerConfig teamed = config;
         teamed.teams = 2;
-        GameWorld plain_world(world_settings(config), map);
-        GameWorld team_world(world_settings(teamed), map);
-        auto plain = make_policy(config, plain_world);
-        auto with_teams = make_policy(teamed, team_world);
-        constexpr std::uint32_t kViewers = 8;
-        for (std::uint32_t v = 0; v < kViewers; ++v) {
-            plain->add_viewer(v, plain_world.entities()[v * 25].id);
-            with_teams->add_viewer(v, team_world.entities()[v * 25].id);
-        }
+        TwinWorlds twins(config, teamed, map);
         std::size_t teammates_unseen = 0;
         for (int tick = 1; tick <= 30; ++tick) {
-            plain_world.step(1.0f / 30.0f);
-            team_world.step(1.0f / 30.0f);
-            plain->begin_tick(plain_world, static_cast<std::uint64_t>(tick));
-            with_teams->begin_tick(team_world, static_cast<std::uint64_t>(tick));
-            for (std::uint32_t v = 0; v < kViewers; ++v) {
-                const Entity& self = team_world.entities()[v * 25];
+            twins.step(tick);
+            for (std::uint32_t v = 0; v < TwinWorlds::kViewers; ++v) {
+                const Entity& self = twins.self(v);
                 ASSERT_NE(self.team, visibility::kNoTeam);
-                std::vector<Interest> seen;
                 std::vector<Interest> sent;
-                plain->select(plain_world,
-                              interest::viewer_of(plain_world, v, plain_world.entities()[v * 25]),
-                              seen);
-                with_teams->select(team_world, interest::viewer_of(team_world, v, self), sent);
-                std::vector<std::uint32_t> expected = ids_of(seen);
+                twins.varied->select(twins.varied_world,
+                                     interest::viewer_of(twins.varied_world, v, self), sent);
+                const std::vector<std::uint32_t> expected = ids_of(twins.plain_set(v));
                 std::vector<std::uint32_t> teammates;
-                for (const Entity& e : team_world.entities()) {
+                for (const Entity& e : twins.varied_world.entities()) {
                     if (e.team == self.team) {
                         teammates.push_back(e.id);
                         teammates_unseen +=
@@ -442,12 +469,6 @@ TEST(InterestPolicyWithTeams, EveryPolicySendsTheViewersTeammatesOverWhatItSees)
         EXPECT_GT(teammates_unseen, 0u) << "no teammate was sent that sight would not send";
     }
 }
-
-} // namespace
-} // namespace dsoc::server
-
-namespace dsoc::server {
-namespace {
 
 TEST(InterestPolicyWithSounds, EveryPolicySendsWhatTheViewerHearsCoarseAndWhatItSeesPrecise) {
     // Two worlds alike but for sounds (sounds never move anything): each viewer's set
@@ -467,39 +488,24 @@ TEST(InterestPolicyWithSounds, EveryPolicySendsWhatTheViewerHearsCoarseAndWhatIt
         ServerConfig loud = config;
         loud.sounds = true;
         loud.bot_shots_per_second = 1.0f;
-        GameWorld silent_world(world_settings(config), map);
-        GameWorld loud_world(world_settings(loud), map);
-        auto silent = make_policy(config, silent_world);
-        auto with_sounds = make_policy(loud, loud_world);
+        TwinWorlds twins(config, loud, map);
         interest::Hearing hearing;
-        constexpr std::uint32_t kViewers = 8;
-        for (std::uint32_t v = 0; v < kViewers; ++v) {
-            silent->add_viewer(v, silent_world.entities()[v * 25].id);
-            with_sounds->add_viewer(v, loud_world.entities()[v * 25].id);
-        }
         std::size_t heard_only = 0;
         std::size_t turned_precise = 0;
-        std::vector<std::vector<std::uint32_t>> heard_before(kViewers);
+        std::vector<std::vector<std::uint32_t>> heard_before(TwinWorlds::kViewers);
         for (int tick = 1; tick <= 45; ++tick) {
-            silent_world.step(1.0f / 30.0f);
-            loud_world.step(1.0f / 30.0f);
-            silent->begin_tick(silent_world, static_cast<std::uint64_t>(tick));
-            with_sounds->begin_tick(loud_world, static_cast<std::uint64_t>(tick));
-            hearing.begin_tick(loud_world);
-            for (std::uint32_t v = 0; v < kViewers; ++v) {
-                const Entity& self = loud_world.entities()[v * 25];
-                const Viewer viewer = interest::viewer_of(loud_world, v, self);
-                std::vector<Interest> seen;
+            twins.step(tick);
+            hearing.begin_tick(twins.varied_world);
+            for (std::uint32_t v = 0; v < TwinWorlds::kViewers; ++v) {
+                const Viewer viewer = interest::viewer_of(twins.varied_world, v, twins.self(v));
+                const std::vector<Interest> seen = twins.plain_set(v);
                 std::vector<Interest> sent;
-                silent->select(
-                    silent_world,
-                    interest::viewer_of(silent_world, v, silent_world.entities()[v * 25]), seen);
-                with_sounds->select(loud_world, viewer, sent);
-                hearing.add_heard(viewer, *with_sounds, sent);
+                twins.varied->select(twins.varied_world, viewer, sent);
+                hearing.add_heard(viewer, *twins.varied, sent);
                 std::vector<std::uint32_t> heard;
-                for (std::size_t i = 0; i < loud_world.entity_count(); ++i) {
-                    const interest::EntityView e = loud_world.entity(i);
-                    if (e.sound_range > 0.0f && e.id != self.id && !contains(seen, e.id) &&
+                for (std::size_t i = 0; i < twins.varied_world.entity_count(); ++i) {
+                    const interest::EntityView e = twins.varied_world.entity(i);
+                    if (e.sound_range > 0.0f && e.id != viewer.entity_id && !contains(seen, e.id) &&
                         interest::within_radius(e.box, viewer.eye, e.sound_range)) {
                         heard.push_back(e.id);
                     }
