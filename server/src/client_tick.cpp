@@ -33,8 +33,10 @@ void run_one(const interest::GameWorld& world, interest::InterestPolicy& policy,
     } else {
         policy.select(world, job.viewer, interest);
     }
-    if (job.hearing != nullptr) {
-        job.hearing->add_heard(job.viewer, policy, interest);
+    const std::size_t heard =
+        job.hearing != nullptr ? job.hearing->add_heard(job.viewer, policy, interest) : 0;
+    if (job.heard != nullptr) {
+        *job.heard = static_cast<std::uint32_t>(heard);
     }
     add_own_entity(interest, job.viewer.entity_id);
     if (!job.network_lod) {

@@ -276,6 +276,7 @@ void Server::prepare_client_ticks() {
         job.audit = client.audit_every > 0 && tick_ % client.audit_every == 0;
         job.network_lod = config_.network_lod;
         job.hearing = &hearing_;
+        job.heard = &client.heard;
         client_ticks_.push_back(job);
         tick_clients_.push_back(&client);
     }
@@ -308,9 +309,7 @@ void Server::send_snapshots() {
         const pb::Snapshot& snapshot = job.envelope->snapshot();
         stats_.entity_updates_sent +=
             static_cast<std::uint64_t>(snapshot.enter_size() + snapshot.update_id_size());
-        for (const interest::Interest& wanted : *job.interest) {
-            stats_.heard_entities_sent += wanted.tier == interest::kHeardTier ? 1 : 0;
-        }
+        stats_.heard_entities_sent += client.heard;
         ++stats_.snapshots_sent;
         if (client.session->writable_now()) {
             direct_writes_.push_back(&client);

@@ -43,6 +43,8 @@ struct ClientTick {
     /// Optional: this tick's sounds; what the viewer hears and the policy did not send
     /// is added on the heard tier (interest::Hearing::add_heard).
     const interest::Hearing* hearing = nullptr;
+    /// Optional: receives how many entities hearing added (0 without `hearing`).
+    std::uint32_t* heard = nullptr;
 };
 
 /// Fail-open for one tick's parallel phase: a job whose turn comes after `deadline` gets

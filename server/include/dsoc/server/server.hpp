@@ -149,6 +149,7 @@ private:
         std::vector<std::uint8_t> frame;          // this tick's snapshot frame, written by the job
         protocol::pb::ClientInput input;          // the latest input, for the next tick start
         bool input_pending = false;               // `input` not handed to the world yet
+        std::uint32_t heard = 0;                  // this tick's entities sent only because heard
         bool fire_pending = false; // an input since the last tick start fired (not only the latest)
         std::uint32_t watch = 0;   // ClientInput.watch of the latest input (0: its own view)
         std::uint32_t viewing = 0; // the entity the policy views from for it (0: not yet)
