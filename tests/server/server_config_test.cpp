@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace dsoc::server {
@@ -32,6 +33,23 @@ TEST(ServerConfig, EachProblemNamesItsField) {
     EXPECT_NE(problems[1].find("bots"), std::string::npos);
     EXPECT_NE(problems[1].find("-1"), std::string::npos);
     EXPECT_NE(problems[2].find("max_speed"), std::string::npos);
+}
+
+TEST(ServerConfig, SoundSettingsAreCheckedWithTheirNames) {
+    ServerConfig c;
+    c.insecure = true;
+    c.footstep_range = std::nanf("");
+    c.shot_range = -1.0f;
+    c.bot_shots_per_second = 1000.0f;
+    c.heard_quantum = 0.25f; // finer than the far tier
+    const auto problems = validate(c);
+    ASSERT_EQ(problems.size(), 4u);
+    for (const char* field :
+         {"footstep_range", "shot_range", "bot_shots_per_second", "heard_quantum"}) {
+        EXPECT_TRUE(std::any_of(problems.begin(), problems.end(), [&](const std::string& p) {
+            return p.find(field) != std::string::npos;
+        })) << field;
+    }
 }
 
 TEST(ServerConfig, InputCapMustLetAnHonestClientThrough) {
