@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <bit>
+#include <cstring>
+#include <type_traits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -68,51 +70,112 @@ void in_range_bits(std::size_t n, const float* min_x, const float* min_y, const 
     }
 }
 
+/// A merge of part of a policy's answer (increasing ids) with heard ids (increasing) into
+/// `to`: the answer's entries as they are, the heard ids it lacks on kHeardTier. Each step
+/// is arithmetic, not a branch (the two lists interleave at random), and an Interest moves
+/// as one 8-byte word, so that picking one of two is a cmov; what bounds a step is then
+/// the latency of the loads its pointers wait for, so add_heard() runs two merges side by
+/// side.
+struct HeardMerge {
+    const Interest* sent;
+    const Interest* sent_end;
+    const std::uint32_t* heard;
+    const std::uint32_t* heard_end;
+    Interest* to;
+
+    [[nodiscard]] bool both_left() const { return sent != sent_end && heard != heard_end; }
+    void step() {
+        static_assert(sizeof(Interest) == sizeof(std::uint64_t) &&
+                      std::is_trivially_copyable_v<Interest>);
+        const std::uint32_t sent_id = sent->id;
+        const std::uint32_t heard_id = *heard;
+        const auto sent_word = std::bit_cast<std::uint64_t>(*sent);
+        const auto heard_word = std::bit_cast<std::uint64_t>(Interest{heard_id, kHeardTier});
+        const bool take_sent = sent_id <= heard_id;
+        const std::uint64_t word = take_sent ? sent_word : heard_word;
+        std::memcpy(static_cast<void*>(to++), &word, sizeof word); // one store, padding too
+        sent += static_cast<std::ptrdiff_t>(take_sent);
+        heard += static_cast<std::ptrdiff_t>(heard_id <= sent_id); // both when equal
+    }
+    /// Steps while both lists last, then copies what is left; returns the end of `to`.
+    Interest* finish() {
+        while (both_left()) {
+            step();
+        }
+        to = std::copy(sent, sent_end, to);
+        for (; heard != heard_end; ++heard) {
+            *to++ = {*heard, kHeardTier};
+        }
+        return to;
+    }
+};
+
 } // namespace
 
 std::size_t Hearing::add_heard(const Viewer& viewer, const InterestPolicy& policy,
                                std::vector<Interest>& out) const {
-    // Per thread, so that no call allocates once warm.
+    // Per thread, so that no call allocates once warm; `merged` only grows, so that no
+    // call initializes it either.
     thread_local std::vector<std::uint64_t> bits_of_thread;
+    thread_local std::vector<std::uint32_t> heard_of_thread;
     thread_local std::vector<Interest> merged_of_thread;
     std::vector<std::uint64_t>& bits = bits_of_thread; // one TLS lookup per call
+    std::vector<std::uint32_t>& heard = heard_of_thread;
     std::vector<Interest>& merged = merged_of_thread;
     const std::size_t n = ids_.size();
     bits.resize((n + 63) / 64);
     in_range_bits(n, min_x_.data(), min_y_.data(), min_z_.data(), max_x_.data(), max_y_.data(),
                   max_z_.data(), range_squared_.data(), viewer.eye, bits.data());
-    // One pass over the policy's answer and the sounding ids in range (both increasing):
-    // what the policy sent as it is, then what is heard and not sent, on the heard tier.
-    std::size_t in_range = 0;
-    for (const std::uint64_t w : bits) {
-        in_range += static_cast<std::size_t>(std::popcount(w));
+    // The sounding ids in range but the viewer's own, increasing, less what the policy
+    // denies.
+    if (const auto own = std::lower_bound(ids_.begin(), ids_.end(), viewer.entity_id);
+        own != ids_.end() && *own == viewer.entity_id) {
+        const auto s = static_cast<std::size_t>(own - ids_.begin());
+        bits[s / 64] &= ~(std::uint64_t{1} << (s % 64));
     }
-    merged.resize(out.size() + in_range);
-    Interest* to = merged.data();
-    const Interest* from = out.data();
-    const Interest* const end = from + out.size();
-    std::size_t added = 0;
+    std::size_t count = 0;
+    for (const std::uint64_t w : bits) {
+        count += static_cast<std::size_t>(std::popcount(w));
+    }
+    heard.resize(count);
+    std::uint32_t* to_heard = heard.data();
     for (std::size_t word = 0; word < bits.size(); ++word) {
         for (std::uint64_t w = bits[word]; w != 0; w &= w - 1) {
-            const std::uint32_t id =
-                ids_[word * 64 + static_cast<std::size_t>(std::countr_zero(w))];
-            while (from != end && from->id < id) {
-                *to++ = *from++;
-            }
-            if ((from != end && from->id == id) || id == viewer.entity_id ||
-                policy.denies(viewer.client_id, id)) {
-                continue;
-            }
-            *to++ = {id, kHeardTier};
-            ++added;
+            *to_heard++ = ids_[word * 64 + static_cast<std::size_t>(std::countr_zero(w))];
         }
     }
+    policy.erase_denied(viewer.client_id, heard);
+    if (heard.empty()) {
+        return 0;
+    }
+    // The two lists merged in two halves, split at the middle of the policy's answer
+    // (an id and the heard ids at or above it fall in the second half, so an entity both
+    // sent and heard is met once); the halves' steps interleave, their loads overlap.
+    merged.resize(std::max(merged.size(), out.size() + heard.size()));
+    const Interest* const middle = out.data() + out.size() / 2;
+    const std::uint32_t* const heard_middle =
+        middle == out.data() + out.size()
+            ? heard.data() + heard.size()
+            : std::lower_bound(heard.data(), heard.data() + heard.size(), middle->id);
+    const auto low_size = static_cast<std::size_t>(middle - out.data()) +
+                          static_cast<std::size_t>(heard_middle - heard.data());
+    HeardMerge low{out.data(), middle, heard.data(), heard_middle, merged.data()};
+    HeardMerge high{middle, out.data() + out.size(), heard_middle, heard.data() + heard.size(),
+                    merged.data() + low_size};
+    while (low.both_left() && high.both_left()) {
+        low.step();
+        high.step();
+    }
+    Interest* const low_end = low.finish();
+    Interest* const high_end = high.finish();
+    const auto merged_size = static_cast<std::size_t>(low_end - merged.data()) +
+                             static_cast<std::size_t>(high_end - (merged.data() + low_size));
+    const std::size_t added = merged_size - out.size();
     if (added == 0) {
         return 0;
     }
-    to = std::copy(from, end, to);
-    merged.resize(static_cast<std::size_t>(to - merged.data()));
-    out.swap(merged); // the two buffers trade places; both keep their capacity
+    out.assign(merged.data(), low_end);
+    out.insert(out.end(), merged.data() + low_size, high_end);
     return added;
 }
 

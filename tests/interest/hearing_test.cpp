@@ -32,8 +32,10 @@ public:
     void select(const WorldView&, const Viewer&, std::vector<Interest>& out) override {
         out.clear();
     }
-    [[nodiscard]] bool denies(std::uint32_t, std::uint32_t entity) const override {
-        return std::find(denied_.begin(), denied_.end(), entity) != denied_.end();
+    void erase_denied(std::uint32_t, std::vector<std::uint32_t>& ids) const override {
+        std::erase_if(ids, [this](std::uint32_t id) {
+            return std::find(denied_.begin(), denied_.end(), id) != denied_.end();
+        });
     }
 
 private:
@@ -99,7 +101,6 @@ TEST(Hearing, AddsExactlyTheSoundingEntitiesWithinRangeTheAnswerLacks) {
     std::mt19937 rng(23);
     std::uniform_real_distribution<float> coord(-3000.0f, 3000.0f);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-    const Denying policy;
     std::size_t added = 0;
     std::size_t kept_out = 0;
     for (int round = 0; round < 200; ++round) {
@@ -113,18 +114,26 @@ TEST(Hearing, AddsExactlyTheSoundingEntitiesWithinRangeTheAnswerLacks) {
         Hearing hearing;
         hearing.begin_tick(world);
         const Viewer viewer = viewer_at({coord(rng), coord(rng), 0.0f}, entities[7].id);
+        // Answers from empty to everything, and a few denied pairs every other round.
+        const float sent_share = round % 5 == 0 ? 0.0f : unit(rng);
         std::vector<Interest> sent;
+        std::vector<std::uint32_t> denied;
         for (const EntityView& e : entities) {
-            if (unit(rng) < 0.3f) {
+            if (unit(rng) < sent_share) {
                 sent.push_back({e.id, static_cast<std::uint8_t>(rng() % 3)});
             }
+            if (round % 2 == 1 && unit(rng) < 0.05f) {
+                denied.push_back(e.id);
+            }
         }
+        const Denying policy(denied);
         // The rule, plainly.
         std::vector<Interest> expected = sent;
         for (const EntityView& e : entities) {
             const bool in_set = std::any_of(sent.begin(), sent.end(),
                                             [&](const Interest& i) { return i.id == e.id; });
-            if (e.sound_range > 0.0f && !in_set && e.id != viewer.entity_id &&
+            const bool is_denied = std::find(denied.begin(), denied.end(), e.id) != denied.end();
+            if (e.sound_range > 0.0f && !in_set && e.id != viewer.entity_id && !is_denied &&
                 within_radius(e.box, viewer.eye, e.sound_range)) {
                 expected.push_back({e.id, kHeardTier});
             }

@@ -6,7 +6,7 @@
 // box. Hearing adds to a policy's answer and never takes from it: an entity the policy
 // sends for sight (or for its team) keeps its tier, so it is precise the tick it is
 // seen, and the sight guarantee is the policy's alone. A pair the policy denies
-// (InterestPolicy::denies: a `never` rule) is not heard either.
+// (InterestPolicy::erase_denied: a `never` rule) is not heard either.
 //
 // Threading: begin_tick() is serial; add_heard() may then run concurrently for
 // distinct viewers (it only reads what begin_tick() took).
@@ -27,7 +27,7 @@ public:
 
     /// Adds to `out` (a policy's answer for `viewer`: increasing ids) every sounding
     /// entity the viewer hears that `out` lacks, on kHeardTier, keeping the order; the
-    /// viewer's own entity and pairs `policy` denies are left out. Returns how many it
+    /// viewer's own entity and what `policy` denies are left out. Returns how many it
     /// added.
     std::size_t add_heard(const Viewer& viewer, const InterestPolicy& policy,
                           std::vector<Interest>& out) const;

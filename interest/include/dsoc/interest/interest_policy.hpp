@@ -85,13 +85,12 @@ public:
     virtual void add_viewer(std::uint32_t /*client_id*/, std::uint32_t /*entity_id*/) {}
     /// A client left: forget any per-client state.
     virtual void remove_viewer(std::uint32_t /*client_id*/) {}
-    /// Whether a pair rule keeps entity `entity_id` from client `client_id` whatever it
-    /// sees or hears (visibility::Relevance::never), for a policy with such rules (the
-    /// built-in ones have only teams, which never deny). Safe beside select().
-    [[nodiscard]] virtual bool denies(std::uint32_t /*client_id*/,
-                                      std::uint32_t /*entity_id*/) const {
-        return false;
-    }
+    /// Removes from `entity_ids` every entity a pair rule keeps from client `client_id`
+    /// whatever it sees or hears (visibility::Relevance::never), keeping the order, for a
+    /// policy with such rules (the built-in ones have only teams, which never deny:
+    /// default, nothing). One call per viewer and tick; safe beside select().
+    virtual void erase_denied(std::uint32_t /*client_id*/,
+                              std::vector<std::uint32_t>& /*entity_ids*/) const {}
     /// Live TBV groups over all viewers (0 for policies without TBVs); for metrics.
     /// Serialized with begin_tick().
     [[nodiscard]] virtual std::size_t tbvs_alive() const { return 0; }
