@@ -1,6 +1,7 @@
 #include "dsoc/interest/hearing.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cstring>
 #include <type_traits>
@@ -74,8 +75,8 @@ void in_range_bits(std::size_t n, const float* min_x, const float* min_y, const 
 /// `to`: the answer's entries as they are, the heard ids it lacks on kHeardTier. Each step
 /// is arithmetic, not a branch (the two lists interleave at random), and an Interest moves
 /// as one 8-byte word, so that picking one of two is a cmov; what bounds a step is then
-/// the latency of the loads its pointers wait for, so add_heard() runs two merges side by
-/// side.
+/// the latency of the loads its pointers wait for, so add_heard() runs several merges
+/// side by side.
 struct HeardMerge {
     const Interest* sent;
     const Interest* sent_end;
@@ -148,34 +149,50 @@ std::size_t Hearing::add_heard(const Viewer& viewer, const InterestPolicy& polic
     if (heard.empty()) {
         return 0;
     }
-    // The two lists merged in two halves, split at the middle of the policy's answer
-    // (an id and the heard ids at or above it fall in the second half, so an entity both
-    // sent and heard is met once); the halves' steps interleave, their loads overlap.
+    // The two lists merged in kParts parts, split at even points of the policy's answer
+    // (an id and the heard ids at or above it fall in the part it starts, so an entity
+    // both sent and heard is met once); the parts' steps interleave, so that their loads
+    // overlap.
+    constexpr std::size_t kParts = 4;
     merged.resize(std::max(merged.size(), out.size() + heard.size()));
-    const Interest* const middle = out.data() + out.size() / 2;
-    const std::uint32_t* const heard_middle =
-        middle == out.data() + out.size()
-            ? heard.data() + heard.size()
-            : std::lower_bound(heard.data(), heard.data() + heard.size(), middle->id);
-    const auto low_size = static_cast<std::size_t>(middle - out.data()) +
-                          static_cast<std::size_t>(heard_middle - heard.data());
-    HeardMerge low{out.data(), middle, heard.data(), heard_middle, merged.data()};
-    HeardMerge high{middle, out.data() + out.size(), heard_middle, heard.data() + heard.size(),
-                    merged.data() + low_size};
-    while (low.both_left() && high.both_left()) {
-        low.step();
-        high.step();
+    std::array<HeardMerge, kParts> parts{};
+    std::array<Interest*, kParts> part_start{};
+    {
+        const Interest* sent_from = out.data();
+        const Interest* const sent_end = out.data() + out.size();
+        const std::uint32_t* heard_from = heard.data();
+        const std::uint32_t* const heard_end = heard.data() + heard.size();
+        Interest* to = merged.data();
+        for (std::size_t p = 0; p < kParts; ++p) {
+            const Interest* sent_to = out.data() + out.size() * (p + 1) / kParts;
+            const std::uint32_t* heard_to =
+                sent_to == sent_end ? heard_end
+                                    : std::lower_bound(heard_from, heard_end, sent_to->id);
+            parts[p] = {sent_from, sent_to, heard_from, heard_to, to};
+            part_start[p] = to;
+            to += (sent_to - sent_from) + (heard_to - heard_from);
+            sent_from = sent_to;
+            heard_from = heard_to;
+        }
     }
-    Interest* const low_end = low.finish();
-    Interest* const high_end = high.finish();
-    const auto merged_size = static_cast<std::size_t>(low_end - merged.data()) +
-                             static_cast<std::size_t>(high_end - (merged.data() + low_size));
+    while (std::all_of(parts.begin(), parts.end(),
+                       [](const HeardMerge& m) { return m.both_left(); })) {
+        for (HeardMerge& m : parts) {
+            m.step();
+        }
+    }
+    std::size_t merged_size = 0;
+    for (std::size_t p = 0; p < kParts; ++p) {
+        merged_size += static_cast<std::size_t>(parts[p].finish() - part_start[p]);
+    }
     const std::size_t added = merged_size - out.size();
     if (added == 0) {
         return 0;
     }
-    out.assign(merged.data(), low_end);
-    out.insert(out.end(), merged.data() + low_size, high_end);
+    out.clear();
+    for (std::size_t p = 0; p < kParts; ++p) {
+        out.insert(out.end(), part_start[p], parts[p].to);
+    }
     return added;
 }
 
