@@ -5,8 +5,9 @@
 // (maps/air_paths.hpp).
 // Quake 3's mixer plays a sound by the straight line alone, through walls; this
 // measures how many of the pairs it lets hear each other a path rule would silence:
-//   pairs            pairs of a listener (one of --listeners places) and any other
-//                    place, within the range in a straight line
+//   pairs            ordered pairs of a listener (one of --listeners places) and any
+//                    other place, within the range in a straight line (two listeners
+//                    make two pairs, one each way: the same path)
 //   path within      of those, the share whose air path is within the range too
 //   median ratio     air path over straight line, median over the pairs (paths longer
 //                    than twice the range count as twice the range)
@@ -78,7 +79,7 @@ int main(int argc, char** argv) {
     std::uint64_t seed = 1;
     bool json = false;
     CLI::App app{"dsoc-sound-paths: sound's path around walls against the straight line, between "
-                 "spawn points within earshot"};
+                 "places bots stand within earshot"};
     dsoc::cli::set_up(app, "dsoc-sound-paths");
     app.add_option("maps", map_specs,
                    "Maps (names, files or gen: specs; default: every map found)");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cstddef>
 #include <cstring>
 #include <type_traits>
 
@@ -77,6 +78,15 @@ void in_range_bits(std::size_t n, const float* min_x, const float* min_y, const 
 /// as one 8-byte word, so that picking one of two is a cmov; what bounds a step is then
 /// the latency of the loads its pointers wait for, so add_heard() runs several merges
 /// side by side.
+/// An Interest's bytes as one word: the id, then the tier, then zeros where its padding
+/// is (checked below), so that one store writes a whole entry.
+constexpr std::uint64_t as_word(std::uint32_t id, std::uint8_t tier) {
+    return static_cast<std::uint64_t>(id) | static_cast<std::uint64_t>(tier) << 32;
+}
+static_assert(std::endian::native == std::endian::little && sizeof(Interest) == 8 &&
+              offsetof(Interest, id) == 0 && offsetof(Interest, tier) == 4 &&
+              std::is_trivially_copyable_v<Interest>);
+
 struct HeardMerge {
     const Interest* sent;
     const Interest* sent_end;
@@ -86,15 +96,12 @@ struct HeardMerge {
 
     [[nodiscard]] bool both_left() const { return sent != sent_end && heard != heard_end; }
     void step() {
-        static_assert(sizeof(Interest) == sizeof(std::uint64_t) &&
-                      std::is_trivially_copyable_v<Interest>);
         const std::uint32_t sent_id = sent->id;
         const std::uint32_t heard_id = *heard;
-        const auto sent_word = std::bit_cast<std::uint64_t>(*sent);
-        const auto heard_word = std::bit_cast<std::uint64_t>(Interest{heard_id, kHeardTier});
         const bool take_sent = sent_id <= heard_id;
-        const std::uint64_t word = take_sent ? sent_word : heard_word;
-        std::memcpy(static_cast<void*>(to++), &word, sizeof word); // one store, padding too
+        const std::uint64_t word =
+            take_sent ? as_word(sent_id, sent->tier) : as_word(heard_id, kHeardTier);
+        std::memcpy(static_cast<void*>(to++), &word, sizeof word); // one store
         sent += static_cast<std::ptrdiff_t>(take_sent);
         heard += static_cast<std::ptrdiff_t>(heard_id <= sent_id); // both when equal
     }

@@ -20,8 +20,10 @@ glm::vec3 AirGrid::centre_of(glm::ivec3 v) const {
 
 namespace {
 
-/// Whether the closed box [lo, hi] meets the brush (every plane has a corner of the box
-/// on its inner side; exact with the brush's axial bevels).
+/// Whether the closed box [lo, hi] may meet the brush: every plane has a corner of the
+/// box on its inner side. Never false when they meet; true for some boxes that only
+/// come near an edge the brush's bevels do not cut (so a voxel may be solid for
+/// nothing, never open with a wall in it).
 bool box_meets_brush(glm::vec3 lo, glm::vec3 hi, const CollisionBrush& brush) {
     for (const visibility::Plane& p : brush.planes) {
         const glm::vec3 nearest{p.normal.x >= 0.0f ? lo.x : hi.x, p.normal.y >= 0.0f ? lo.y : hi.y,
@@ -71,28 +73,66 @@ std::vector<Step> make_steps() {
     return steps;
 }
 
-/// The open voxel nearest `p` within two voxels of its own, with the distance from `p`
-/// to its centre; none: {-1, 0}.
+/// Whether the segment p-q meets one of the walls (clipped by each brush's planes).
+bool segment_meets_wall(const std::vector<CollisionBrush>& walls, glm::vec3 p, glm::vec3 q) {
+    const glm::vec3 lo = glm::min(p, q);
+    const glm::vec3 hi = glm::max(p, q);
+    for (const CollisionBrush& wall : walls) {
+        if (glm::any(glm::lessThan(hi, wall.bounds.min)) ||
+            glm::any(glm::greaterThan(lo, wall.bounds.max))) {
+            continue;
+        }
+        float enter = 0.0f;
+        float leave = 1.0f;
+        for (const visibility::Plane& plane : wall.planes) {
+            const float dp = plane.signed_distance(p);
+            const float dq = plane.signed_distance(q);
+            if (dp > 0.0f && dq > 0.0f) {
+                leave = -1.0f; // wholly outside this plane
+                break;
+            }
+            if (dp > 0.0f) {
+                enter = std::max(enter, dp / (dp - dq));
+            } else if (dq > 0.0f) {
+                leave = std::min(leave, dp / (dp - dq));
+            }
+        }
+        if (enter <= leave) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/// The open voxel where a path from `p` starts (or ends), with the distance from `p` to
+/// its centre: `p`'s own voxel when open, or else the nearest open voxel within two of
+/// it whose centre a straight line from `p` reaches without meeting a wall; none:
+/// {-1, 0}.
 std::pair<std::ptrdiff_t, float> open_voxel_near(const AirGrid& grid, glm::vec3 p) {
     const glm::ivec3 home = grid.voxel_of(p);
-    std::ptrdiff_t best = -1;
-    float best_distance = kNoAirPath;
+    if (grid.inside(home) && grid.solid[grid.index(home)] == 0) {
+        return {static_cast<std::ptrdiff_t>(grid.index(home)),
+                glm::length(grid.centre_of(home) - p)};
+    }
+    std::vector<std::pair<float, glm::ivec3>> candidates;
     for (int z = -2; z <= 2; ++z) {
         for (int y = -2; y <= 2; ++y) {
             for (int x = -2; x <= 2; ++x) {
                 const glm::ivec3 v = home + glm::ivec3(x, y, z);
-                if (!grid.inside(v) || grid.solid[grid.index(v)] != 0) {
-                    continue;
-                }
-                const float d = glm::length(grid.centre_of(v) - p);
-                if (d < best_distance) {
-                    best_distance = d;
-                    best = static_cast<std::ptrdiff_t>(grid.index(v));
+                if (grid.inside(v) && grid.solid[grid.index(v)] == 0) {
+                    candidates.emplace_back(glm::length(grid.centre_of(v) - p), v);
                 }
             }
         }
     }
-    return {best, best < 0 ? 0.0f : best_distance};
+    std::sort(candidates.begin(), candidates.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (const auto& [distance, v] : candidates) {
+        if (!segment_meets_wall(grid.walls, p, grid.centre_of(v))) {
+            return {static_cast<std::ptrdiff_t>(grid.index(v)), distance};
+        }
+    }
+    return {-1, 0.0f};
 }
 
 } // namespace
@@ -131,6 +171,7 @@ AirGrid air_grid(const Map& map, float voxel) {
         if (!stops_sound(brush)) {
             continue;
         }
+        grid.walls.push_back(brush);
         const glm::ivec3 lo = glm::max(grid.voxel_of(brush.bounds.min), glm::ivec3(0));
         const glm::ivec3 hi = glm::min(grid.voxel_of(brush.bounds.max), grid.size - 1);
         for (int z = lo.z; z <= hi.z; ++z) {
@@ -150,6 +191,18 @@ AirGrid air_grid(const Map& map, float voxel) {
 }
 
 AirPathSearch::AirPathSearch(const AirGrid& grid) : grid_(&grid) {
+    for (int z = 0; z < grid.size.z; ++z) {
+        for (int y = 0; y < grid.size.y; ++y) {
+            for (int x = 0; x < grid.size.x; ++x) {
+                const bool outermost = x == 0 || y == 0 || z == 0 || x == grid.size.x - 1 ||
+                                       y == grid.size.y - 1 || z == grid.size.z - 1;
+                if (outermost && grid.solid[grid.index({x, y, z})] == 0) {
+                    throw std::invalid_argument("air path search: the grid's outermost layer "
+                                                "must be solid");
+                }
+            }
+        }
+    }
     const auto nx = static_cast<std::ptrdiff_t>(grid.size.x);
     const auto nxy = nx * static_cast<std::ptrdiff_t>(grid.size.y);
     const auto linear = [&](glm::ivec3 o) { return o.x + o.y * nx + o.z * nxy; };
@@ -190,7 +243,7 @@ std::vector<float> AirPathSearch::lengths(glm::vec3 from, std::span<const glm::v
     const auto first = static_cast<std::size_t>(start);
     distance_[first] = start_detour / grid.voxel;
     touched_.push_back(first);
-    std::array<std::vector<std::size_t>, 3> buckets;
+    std::array<std::vector<std::size_t>, 3>& buckets = buckets_;
     for (auto& b : buckets) {
         b.clear();
     }
@@ -198,8 +251,7 @@ std::vector<float> AirPathSearch::lengths(glm::vec3 from, std::span<const glm::v
     buckets[bucket_of(distance_[first]) % 3].push_back(first);
     std::size_t pending = 1;
     const std::uint8_t* solid = grid.solid.data();
-    for (std::size_t k = bucket_of(distance_[first]); pending > 0 && static_cast<float>(k) <= bound;
-         ++k) {
+    for (std::size_t k = bucket_of(distance_[first]); pending > 0; ++k) {
         std::vector<std::size_t>& now = buckets[k % 3];
         while (!now.empty()) {
             const std::size_t i = now.back();

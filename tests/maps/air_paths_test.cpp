@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
+#include <queue>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -121,6 +123,124 @@ TEST(AirPaths, InAnEmptyRoomEveryPathIsItsLineWithinTheGridsError) {
             EXPECT_LE(lengths[j], longest_grid_path(straight, voxel)) << i << " " << j;
         }
     }
+}
+
+TEST(AirPaths, APointInAWallsVoxelStartsOnItsOwnSideOfTheWall) {
+    // A sealed wall 1 unit thick at x 12..13; a point at x 11 is in a voxel the wall
+    // makes solid, and the open voxel centre nearest it (x 24) is behind the wall.
+    const AirGrid grid = air_grid(room("box solid 12 -512 0 13 512 256\n"), 16.0f);
+    ASSERT_NE(grid.solid[grid.index(grid.voxel_of({11.0f, 0.0f, 80.0f}))], 0);
+    EXPECT_EQ(path(grid, {11.0f, 0.0f, 80.0f}, {400.0f, 0.0f, 80.0f}), kNoAirPath);
+    EXPECT_EQ(path(grid, {400.0f, 0.0f, 80.0f}, {11.0f, 0.0f, 80.0f}), kNoAirPath);
+    EXPECT_LT(path(grid, {11.0f, 0.0f, 80.0f}, {-400.0f, 0.0f, 80.0f}), 450.0f);
+}
+
+/// The rule written plainly: Dijkstra with a heap over every voxel, a step to any of
+/// the 26 neighbours that is open, as is every voxel it grazes. [Units: voxels]
+std::vector<float> plain_distances(const AirGrid& grid, glm::ivec3 from) {
+    std::vector<float> distance(grid.solid.size(), kNoAirPath);
+    using Entry = std::pair<float, std::size_t>;
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
+    distance[grid.index(from)] = 0.0f;
+    open.push({0.0f, grid.index(from)});
+    while (!open.empty()) {
+        const auto [d, i] = open.top();
+        open.pop();
+        if (d > distance[i]) {
+            continue;
+        }
+        const glm::ivec3 v{static_cast<int>(i % static_cast<std::size_t>(grid.size.x)),
+                           static_cast<int>(i / static_cast<std::size_t>(grid.size.x) %
+                                            static_cast<std::size_t>(grid.size.y)),
+                           static_cast<int>(i / static_cast<std::size_t>(grid.size.x) /
+                                            static_cast<std::size_t>(grid.size.y))};
+        for (int dz = -1; dz <= 1; ++dz) {
+            for (int dy = -1; dy <= 1; ++dy) {
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const glm::ivec3 w = v + glm::ivec3(dx, dy, dz);
+                    if (!grid.inside(w) || grid.solid[grid.index(w)] != 0) {
+                        continue;
+                    }
+                    bool clear = true; // every voxel between: a corner of the step's box
+                    for (int k = 0; k < 8; ++k) {
+                        const glm::ivec3 c{(k & 1) != 0 ? w.x : v.x, (k & 2) != 0 ? w.y : v.y,
+                                           (k & 4) != 0 ? w.z : v.z};
+                        clear = clear && grid.solid[grid.index(c)] == 0;
+                    }
+                    const float dw = d + std::sqrt(static_cast<float>(dx * dx + dy * dy + dz * dz));
+                    if (clear && dw < distance[grid.index(w)]) {
+                        distance[grid.index(w)] = dw;
+                        open.push({dw, grid.index(w)});
+                    }
+                }
+            }
+        }
+    }
+    return distance;
+}
+
+TEST(AirPaths, TheBucketedSearchAgreesWithAPlainDijkstraOnRandomGrids) {
+    std::mt19937 rng(7);
+    std::size_t compared = 0;
+    std::size_t unreachable = 0;
+    for (int round = 0; round < 12; ++round) {
+        AirGrid grid;
+        grid.voxel = 8.0f;
+        grid.size = {18, 14, 9};
+        grid.solid.assign(static_cast<std::size_t>(18 * 14 * 9), 0);
+        const float density = 0.1f + 0.04f * static_cast<float>(round);
+        std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+        for (int z = 0; z < grid.size.z; ++z) {
+            for (int y = 0; y < grid.size.y; ++y) {
+                for (int x = 0; x < grid.size.x; ++x) {
+                    const bool outermost = x == 0 || y == 0 || z == 0 || x == grid.size.x - 1 ||
+                                           y == grid.size.y - 1 || z == grid.size.z - 1;
+                    grid.solid[grid.index({x, y, z})] = outermost || unit(rng) < density ? 1 : 0;
+                }
+            }
+        }
+        std::vector<glm::ivec3> open;
+        for (int z = 1; z + 1 < grid.size.z; ++z) {
+            for (int y = 1; y + 1 < grid.size.y; ++y) {
+                for (int x = 1; x + 1 < grid.size.x; ++x) {
+                    if (grid.solid[grid.index({x, y, z})] == 0) {
+                        open.push_back({x, y, z});
+                    }
+                }
+            }
+        }
+        AirPathSearch search(grid); // reused: each search forgets the last
+        for (int s = 0; s < 6; ++s) {
+            const glm::ivec3 from = open[rng() % open.size()];
+            std::vector<glm::vec3> to;
+            for (const glm::ivec3 v : open) {
+                to.push_back(grid.centre_of(v));
+            }
+            const std::vector<float> fast = search.lengths(grid.centre_of(from), to, 1e6f);
+            const std::vector<float> plain = plain_distances(grid, from);
+            for (std::size_t k = 0; k < open.size(); ++k) {
+                const float expected = plain[grid.index(open[k])];
+                if (expected == kNoAirPath) {
+                    EXPECT_EQ(fast[k], kNoAirPath);
+                    ++unreachable;
+                } else {
+                    EXPECT_NEAR(fast[k], expected * grid.voxel, 1e-3f * expected * grid.voxel);
+                    ++compared;
+                }
+            }
+        }
+    }
+    // Both outcomes met often: paths found, and places walled off.
+    EXPECT_GT(compared, 5000u);
+    EXPECT_GT(unreachable, 500u);
+}
+
+TEST(AirPaths, ASearchRefusesAGridWhoseOutermostLayerIsOpen) {
+    AirGrid grid;
+    grid.voxel = 8.0f;
+    grid.size = {4, 4, 4};
+    grid.solid.assign(64, 0);
+    EXPECT_THROW(AirPathSearch{grid}, std::invalid_argument);
 }
 
 TEST(AirPaths, AGridTooLargeOrAVoxelNotPositiveIsRefusedNamingTheMap) {

@@ -88,7 +88,8 @@ public:
     /// Removes from `entity_ids` every entity a pair rule keeps from client `client_id`
     /// whatever it sees or hears (visibility::Relevance::never), keeping the order, for a
     /// policy with such rules (the built-in ones have only teams, which never deny:
-    /// default, nothing). One call per viewer and tick; safe beside select().
+    /// default, nothing). Called once per viewer and tick (Hearing::add_heard), for
+    /// distinct viewers concurrently and beside select(): must be safe so.
     virtual void erase_denied(std::uint32_t /*client_id*/,
                               std::vector<std::uint32_t>& /*entity_ids*/) const {}
     /// Live TBV groups over all viewers (0 for policies without TBVs); for metrics.

@@ -33,6 +33,9 @@ struct AirGrid {
     glm::ivec3 size{0, 0, 0}; ///< voxels along x, y, z
     /// 1 where solid, x fastest then y then z.
     std::vector<std::uint8_t> solid;
+    /// The brushes that stop sound, for what the voxels cannot say: whether a point
+    /// in a solid voxel reaches a neighbouring open one without crossing a wall.
+    std::vector<CollisionBrush> walls;
 
     [[nodiscard]] std::size_t index(glm::ivec3 v) const {
         return (static_cast<std::size_t>(v.z) * static_cast<std::size_t>(size.y) +
@@ -62,12 +65,15 @@ inline constexpr float kNoAirPath = std::numeric_limits<float>::infinity();
 /// Path searches over one grid, which must outlive it. Not thread-safe: one per thread.
 class AirPathSearch {
 public:
+    /// Throws std::invalid_argument when the grid's outermost layer is not all solid
+    /// (air_grid()'s always is): the search steps without bounds checks.
     explicit AirPathSearch(const AirGrid& grid);
 
     /// The length of the shortest path through open voxels from `from` to each of `to`
     /// [Units: world units], kNoAirPath where there is none of at most `max_length`. A
     /// point in a solid voxel (an eye beside a wall) starts or ends at the nearest open
-    /// voxel within two voxels of its own, the detour counted; none there: no path.
+    /// voxel within two voxels of its own that a straight line from it reaches without
+    /// meeting a wall (AirGrid::walls), the detour counted; none: no path.
     /// The work is bounded by the voxels within `max_length` of `from`.
     [[nodiscard]] std::vector<float> lengths(glm::vec3 from, std::span<const glm::vec3> to,
                                              float max_length);
@@ -84,6 +90,7 @@ private:
     std::vector<float> distance_;       ///< per voxel [Units: voxels], kNoAirPath where not reached
     std::vector<std::uint8_t> settled_; ///< per voxel: its distance is final
     std::vector<std::size_t> touched_;  ///< the voxels the last search reached
+    std::array<std::vector<std::size_t>, 3> buckets_; ///< Dial's, kept for their capacity
 };
 
 } // namespace dsoc::maps
