@@ -99,8 +99,10 @@ struct HeardMerge {
         const std::uint32_t sent_id = sent->id;
         const std::uint32_t heard_id = *heard;
         const bool take_sent = sent_id <= heard_id;
-        const std::uint64_t word =
-            take_sent ? as_word(sent_id, sent->tier) : as_word(heard_id, kHeardTier);
+        // Both words made, one kept by a mask: a select, never a branch.
+        const std::uint64_t keep_sent = std::uint64_t{0} - static_cast<std::uint64_t>(take_sent);
+        const std::uint64_t word = (as_word(sent_id, sent->tier) & keep_sent) |
+                                   (as_word(heard_id, kHeardTier) & ~keep_sent);
         std::memcpy(static_cast<void*>(to++), &word, sizeof word); // one store
         sent += static_cast<std::ptrdiff_t>(take_sent);
         heard += static_cast<std::ptrdiff_t>(heard_id <= sent_id); // both when equal
