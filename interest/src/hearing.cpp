@@ -72,12 +72,6 @@ void in_range_bits(std::size_t n, const float* min_x, const float* min_y, const 
     }
 }
 
-/// A merge of part of a policy's answer (increasing ids) with heard ids (increasing) into
-/// `to`: the answer's entries as they are, the heard ids it lacks on kHeardTier. Each step
-/// is arithmetic, not a branch (the two lists interleave at random), and an Interest moves
-/// as one 8-byte word, so that picking one of two is a cmov; what bounds a step is then
-/// the latency of the loads its pointers wait for, so add_heard() runs several merges
-/// side by side.
 /// An Interest's bytes as one word: the id, then the tier, then zeros where its padding
 /// is (checked below), so that one store writes a whole entry.
 constexpr std::uint64_t as_word(std::uint32_t id, std::uint8_t tier) {
@@ -87,6 +81,12 @@ static_assert(std::endian::native == std::endian::little && sizeof(Interest) == 
               offsetof(Interest, id) == 0 && offsetof(Interest, tier) == 4 &&
               std::is_trivially_copyable_v<Interest>);
 
+/// A merge of part of a policy's answer (increasing ids) with heard ids (increasing) into
+/// `to`: the answer's entries as they are, the heard ids it lacks on kHeardTier. Each step
+/// is arithmetic, not a branch (the two lists interleave at random), and an entry moves
+/// as one 8-byte word (as_word), picked by a mask; what bounds a step is then
+/// the latency of the loads its pointers wait for, so add_heard() runs several merges
+/// side by side.
 struct HeardMerge {
     const Interest* sent;
     const Interest* sent_end;
