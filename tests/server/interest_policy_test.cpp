@@ -40,6 +40,14 @@ ServerConfig bots(int n) {
     return c;
 }
 
+/// 200 bots, policy `kind`, and `distance`'s radius (the hiding policies' tests).
+ServerConfig bots_under(interest::PolicyKind kind, float distance_radius) {
+    ServerConfig c = bots(200);
+    c.policy = kind;
+    c.distance_radius = distance_radius;
+    return c;
+}
+
 /// oa_dm4, or null when it is not installed (the caller skips).
 std::shared_ptr<const maps::Map> oa_dm4() {
     auto loaded = maps::load_map("oa_dm4", maps::MapSearch::from_environment());
@@ -315,9 +323,7 @@ TEST(InterestPolicyWhileRespawning, EveryPolicyAnswersForTheEyeNowAndTheArrivalE
             GTEST_SKIP() << "oa_dm4 not available (scripts/setup installs openarena-081-maps)";
         }
         GameWorld& world = *dying->world;
-        ServerConfig config = bots(200);
-        config.policy = kind;
-        config.distance_radius = 600.0f;
+        ServerConfig config = bots_under(kind, 600.0f);
         auto policy = make_policy(config, world);
         constexpr std::uint32_t kClient = 3;
         policy->add_viewer(kClient, dying->player);
@@ -438,9 +444,7 @@ TEST(InterestPolicyWithTeams, EveryPolicySendsTheViewersTeammatesOverWhatItSees)
     }
     for (const auto kind : kHidingPolicies) {
         SCOPED_TRACE(std::string(interest::name_of(kind)));
-        ServerConfig config = bots(200);
-        config.policy = kind;
-        config.distance_radius = 800.0f;
+        ServerConfig config = bots_under(kind, 800.0f);
         ServerConfig teamed = config;
         teamed.teams = 2;
         TwinWorlds twins(config, teamed, map);
@@ -481,9 +485,7 @@ TEST(InterestPolicyWithSounds, EveryPolicySendsWhatTheViewerHearsCoarseAndWhatIt
     }
     for (const auto kind : kHidingPolicies) {
         SCOPED_TRACE(std::string(interest::name_of(kind)));
-        ServerConfig config = bots(200);
-        config.policy = kind;
-        config.distance_radius = 600.0f;
+        ServerConfig config = bots_under(kind, 600.0f);
         config.sounds = false;
         ServerConfig loud = config;
         loud.sounds = true;
