@@ -36,4 +36,31 @@ DecodeError decode_payload(std::span<const std::uint8_t> payload, pb::Envelope& 
     return DecodeError::none;
 }
 
+namespace {
+
+google::protobuf::ArenaOptions first_block_options(char* block, std::size_t bytes) {
+    google::protobuf::ArenaOptions options;
+    options.initial_block = block;
+    options.initial_block_size = bytes;
+    return options;
+}
+
+} // namespace
+
+EnvelopeArena::EnvelopeArena(std::size_t first_block_bytes)
+    : first_block_(std::make_unique<char[]>(first_block_bytes)),
+      arena_(first_block_options(first_block_.get(), first_block_bytes)) {}
+
+DecodeError EnvelopeArena::decode(std::span<const std::uint8_t> payload,
+                                  const pb::Envelope*& message) {
+    message = nullptr;
+    arena_.Reset(); // the previous message, and any block beyond the first
+    auto* parsed = google::protobuf::Arena::CreateMessage<pb::Envelope>(&arena_);
+    const DecodeError error = decode_payload(payload, *parsed);
+    if (error == DecodeError::none) {
+        message = parsed;
+    }
+    return error;
+}
+
 } // namespace dsoc::protocol

@@ -191,6 +191,8 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
         r.kind = e.kind();
         if (!replica_.try_emplace(e.id(), r).second) {
             problems.push_back({"duplicate_enter", entity(e.id()) + " entered while known"});
+        } else if (r.tier == kHeardTier) {
+            ++heard_;
         }
     }
 
@@ -261,6 +263,8 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
                         {"malformed_update", where() + ": rebase yaw step " + std::to_string(yaw)});
                     continue;
                 }
+                heard_ -= r.tier == kHeardTier ? 1 : 0;
+                heard_ += tier == kHeardTier ? 1 : 0;
                 r.tier = static_cast<std::uint8_t>(tier);
                 r.quantized = {values[at + 1], values[at + 2], values[at + 3], yaw, values[at + 5]};
                 continue;
@@ -304,9 +308,13 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
     }
 
     for (const std::uint32_t id : s.leave()) {
-        if (!replica_.erase(id)) {
+        const ReplicaEntity* const known = replica_.find(id);
+        if (known == nullptr) {
             problems.push_back({"leave_for_unknown_entity", entity(id) + " left while unknown"});
+            continue;
         }
+        heard_ -= known->tier == kHeardTier ? 1 : 0;
+        replica_.erase(id);
     }
     return problems;
 }

@@ -72,7 +72,6 @@ struct Player {
     protocol::pb::Envelope envelope;
     std::vector<std::uint8_t> frame;
     protocol::SnapshotDecoder decoder; // the client's side
-    protocol::pb::Envelope received;
     float heading_deg = 0.0f;
     int ticks_until_turn = 0;
 };
@@ -147,6 +146,7 @@ int main(int argc, char** argv) {
     std::uint64_t updates = 0;
     std::uint64_t bytes = 0;
     std::uint64_t decode_problems = 0;
+    protocol::EnvelopeArena incoming(256 * 1024); // as the simulated clients decode
     for (int t = 1; t <= warm_up + ticks; ++t) {
         const auto tick = static_cast<std::uint64_t>(t);
         const bool measured = t > warm_up;
@@ -203,10 +203,12 @@ int main(int argc, char** argv) {
             protocol::encode_frame(c->envelope, c->frame);
             lap(p.encode);
             const std::span<const std::uint8_t> payload(c->frame.data() + 4, c->frame.size() - 4);
-            if (protocol::decode_payload(payload, c->received) != protocol::DecodeError::none) {
+            const protocol::pb::Envelope* received = nullptr;
+            if (incoming.decode(payload, received) != protocol::DecodeError::none) {
                 ++decode_problems;
+            } else {
+                decode_problems += c->decoder.apply(received->snapshot()).size();
             }
-            decode_problems += c->decoder.apply(c->received.snapshot()).size();
             lap(p.decode);
             if (measured) {
                 const auto& s = c->envelope.snapshot();

@@ -18,6 +18,9 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 constexpr auto kCloseGrace = std::chrono::seconds(2);
+/// The first block of a thread's decoding arena: a snapshot of every entity of a
+/// large arena, audit poses included, fits.
+constexpr std::size_t kIncomingArenaBytes = 256 * 1024;
 
 double ms_between(Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double, std::milli>(b - a).count();
@@ -181,11 +184,15 @@ void SimClient::consume(std::span<const std::uint8_t> bytes) {
             close();
             return;
         }
-        if (protocol::decode_payload(payload, incoming_) != protocol::DecodeError::none) {
+        // Each message is handled before the next is decoded, so one arena per thread
+        // serves every session the thread runs (a snapshot fits in its first block).
+        thread_local protocol::EnvelopeArena incoming(kIncomingArenaBytes);
+        const pb::Envelope* message = nullptr;
+        if (incoming.decode(payload, message) != protocol::DecodeError::none) {
             error("undecodable_message");
             continue;
         }
-        handle(incoming_);
+        handle(*message);
     }
 }
 
@@ -297,11 +304,7 @@ void SimClient::apply_snapshot(const pb::Snapshot& s) {
         stats_.saw_own_entity = true;
     }
     stats_.known_samples.add(static_cast<double>(replica_.size()));
-    std::size_t heard = 0;
-    replica_.entities().for_each([&](std::uint32_t, const protocol::ReplicaEntity& e) {
-        heard += e.tier == protocol::kHeardTier ? 1 : 0;
-    });
-    stats_.heard_samples.add(static_cast<double>(heard));
+    stats_.heard_samples.add(static_cast<double>(replica_.heard()));
 }
 
 void SimClient::schedule_input() {

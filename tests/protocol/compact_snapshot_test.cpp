@@ -264,8 +264,9 @@ TEST(CompactSnapshot, UpdateColumnBytesMatchTheRealEncoder) {
     }
 }
 
-/// A server-side world of walking entities: random enters, leaves, tier changes,
-/// turns and jumps, through the wire, into a decoder that must track it exactly.
+/// A server-side world of walking entities: random enters, leaves, tier changes (the
+/// heard tier among them), turns and jumps, through the wire, into a decoder that must
+/// track it exactly, and keep its count of heard entities equal to a scan's.
 TEST(CompactSnapshot, RandomWorldsDecodeWithinHalfAQuantum) {
     QuantizationSettings q;
     q.position_quantum = {0.125f, 0.5f, 2.0f};
@@ -283,6 +284,7 @@ TEST(CompactSnapshot, RandomWorldsDecodeWithinHalfAQuantum) {
     std::map<std::uint32_t, std::uint8_t> known; // id -> tier
     std::uint64_t updates = 0;
     std::uint64_t update_bytes = 0;
+    std::size_t scanned_heard = 0;
     for (std::uint64_t tick = 1; tick <= 400; ++tick) {
         for (auto& p : world) { // walk ~10 units a tick, turn now and then
             p.x += 10.0f * std::cos(p.yaw_deg * 0.0174533f);
@@ -304,12 +306,12 @@ TEST(CompactSnapshot, RandomWorldsDecodeWithinHalfAQuantum) {
                 enc.leave(id, s);
                 known.erase(id);
             } else if (wanted && !known.contains(id)) {
-                const auto tier = static_cast<std::uint8_t>(rng() % 3);
+                const auto tier = static_cast<std::uint8_t>(rng() % kTiers);
                 enc.enter(id, world[id], kHalf, id % 2, tier, s);
                 known[id] = tier;
             } else if (wanted) {
                 if (rng() % 30 == 0) {
-                    known[id] = static_cast<std::uint8_t>(rng() % 3);
+                    known[id] = static_cast<std::uint8_t>(rng() % kTiers);
                 }
                 updates += enc.update(id, world[id], known[id], s) ? 1 : 0;
             }
@@ -318,15 +320,29 @@ TEST(CompactSnapshot, RandomWorldsDecodeWithinHalfAQuantum) {
         const auto problems = dec.apply(through_wire(s));
         ASSERT_TRUE(problems.empty()) << "tick " << tick << ": " << kinds(problems);
         ASSERT_EQ(dec.size(), known.size());
+        std::size_t heard = 0;
         for (const auto& [id, tier] : known) {
             const auto pose = dec.pose(id);
             ASSERT_TRUE(pose.has_value()) << "entity " << id;
+            if (tier == kHeardTier) { // a coarse position, no angles
+                ++heard;
+                Pose flat = world[id];
+                flat.yaw_deg = 0.0f;
+                flat.pitch_deg = 0.0f;
+                ASSERT_LE(quantization_error(*pose, flat, q.heard_quantum, q.angle_steps),
+                          0.5 + 1e-3)
+                    << "tick " << tick << " heard entity " << id;
+                continue;
+            }
             const double error =
                 quantization_error(*pose, world[id], q.position_quantum[tier], q.angle_steps);
             ASSERT_LE(error, 0.5 + 1e-3) << "tick " << tick << " entity " << id;
         }
+        ASSERT_EQ(dec.heard(), heard) << "tick " << tick;
+        scanned_heard = std::max(scanned_heard, heard);
     }
     ASSERT_GT(updates, 30000u);
+    ASSERT_GT(scanned_heard, 10u); // the heard tier was exercised
     // Walking entities (two ~2-byte position deltas, a 1-byte id step, a 1-byte mask):
     // the columns must stay well under the 24 bytes of a raw full state.
     EXPECT_LT(static_cast<double>(update_bytes) / static_cast<double>(updates), 8.0);

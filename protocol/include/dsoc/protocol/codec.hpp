@@ -4,7 +4,10 @@
 
 #include "dsoc/protocol/messages.hpp"
 
+#include <google/protobuf/arena.h>
+
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -27,6 +30,28 @@ std::size_t encode_frame(const pb::Envelope& message, std::vector<std::uint8_t>&
 /// Parses one frame payload into `message` (cleared first).
 [[nodiscard]] DecodeError decode_payload(std::span<const std::uint8_t> payload,
                                          pb::Envelope& message);
+
+/// Decodes frame payloads into a protobuf arena that is reset and reused for each one,
+/// so a stream of snapshots costs no heap allocation per message (a plain Envelope
+/// frees and re-allocates its message, and every repeated field's growth, each time).
+/// Messages larger than the arena's first block spill into blocks freed at the next
+/// decode(). One thread at a time.
+class EnvelopeArena {
+public:
+    /// `first_block_bytes`: kept across decodes (at least a few hundred bytes).
+    explicit EnvelopeArena(std::size_t first_block_bytes);
+    EnvelopeArena(const EnvelopeArena&) = delete;
+    EnvelopeArena& operator=(const EnvelopeArena&) = delete;
+
+    /// Parses `payload`; on DecodeError::none `message` points at the envelope, valid
+    /// until the next decode() or the arena's end (null otherwise).
+    [[nodiscard]] DecodeError decode(std::span<const std::uint8_t> payload,
+                                     const pb::Envelope*& message);
+
+private:
+    std::unique_ptr<char[]> first_block_;
+    google::protobuf::Arena arena_;
+};
 
 /// Readable name of a disconnect reason without the enum prefix, e.g. "frame_too_large".
 std::string disconnect_reason_name(pb::DisconnectReason reason);

@@ -114,6 +114,8 @@ public:
 
     [[nodiscard]] bool knows(std::uint32_t id) const { return replica_.contains(id); }
     [[nodiscard]] std::size_t size() const { return replica_.size(); }
+    /// Known entities on the heard tier (kept as snapshots apply: no scan).
+    [[nodiscard]] std::size_t heard() const { return heard_; }
     /// The replica's pose of `id`, or nothing when the entity is not known.
     [[nodiscard]] std::optional<Pose> pose(std::uint32_t id) const;
     /// Every known entity (iterate with for_each(f(id, entity))).
@@ -122,6 +124,7 @@ public:
 private:
     QuantizationSettings settings_;
     FlatIdMap<ReplicaEntity> replica_;
+    std::size_t heard_ = 0; ///< entries of replica_ with tier == kHeardTier
 };
 
 } // namespace dsoc::protocol

@@ -103,10 +103,9 @@ private:
     std::optional<DelayLine> delay_in_;
     protocol::FrameDecoder decoder_;
     std::array<std::uint8_t, 16 * 1024> read_buffer_{}; // a read may hold several frames
-    protocol::pb::Envelope incoming_;
-    std::vector<std::uint8_t> pending_;   // frames not yet handed to the socket
-    std::vector<std::uint8_t> in_flight_; // the frames of the write in progress
-    std::vector<std::uint8_t> frame_;     // one encoded frame on its way to a delay line
+    std::vector<std::uint8_t> pending_;                 // frames not yet handed to the socket
+    std::vector<std::uint8_t> in_flight_;               // the frames of the write in progress
+    std::vector<std::uint8_t> frame_; // one encoded frame on its way to a delay line
     bool writing_ = false;
     bool goodbye_sent_ = false;
     protocol::SnapshotDecoder replica_;
