@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <map>
 #include <random>
 
 namespace dsoc::visibility {
@@ -397,7 +398,8 @@ private:
 
 /// Two managers over the same table and the same wandering entities: one takes the
 /// bulk path (the table says every prepared test is its coarse one), the other asks
-/// entity by entity. Boxes set after begin_update() (no preparation) and the cheapest
+/// entity by entity. Boxes set after begin_update() (no preparation), entities that
+/// leave and join (some after begin_update(), as the slots grow) and the cheapest
 /// effort are mixed in. Every decision must be the same. With `scene`, the exact
 /// stages answer where the table does not cover (`where_uncovered`), and must be
 /// asked as often by both.
@@ -433,12 +435,15 @@ void expect_bulk_answers_are_one_by_one(std::shared_ptr<const CellVisibilityTabl
         return glm::clamp(c, area.min + half, glm::max(area.min + half, area.max - half));
     };
     constexpr EntityId kEntities = 40;
-    std::vector<glm::vec3> centre(kEntities + 1);
-    for (EntityId id = 1; id <= kEntities; ++id) {
+    std::map<EntityId, glm::vec3> centre; // the live entities
+    const auto join = [&](EntityId id) {
         centre[id] = inside(area.min + area.size() * glm::vec3(unit(rng), unit(rng), unit(rng)));
         const Aabb box = Aabb::from_center_half_extents(centre[id], half);
         ASSERT_TRUE(bulk.add_entity(id, EntityDesc{half, {}}, box));
         ASSERT_TRUE(one.add_entity(id, EntityDesc{half, {}}, box));
+    };
+    for (EntityId id = 1; id <= kEntities; ++id) {
+        join(id);
     }
     for (ClientId c = 1; c <= 6; ++c) {
         ClientDesc d;
@@ -454,16 +459,29 @@ void expect_bulk_answers_are_one_by_one(std::shared_ptr<const CellVisibilityTabl
     };
     std::size_t visible = 0;
     std::size_t hidden = 0;
+    EntityId next_id = kEntities + 1;
     for (std::uint64_t tick = 1; tick <= 150; ++tick) {
-        for (EntityId id = 1; id <= kEntities; ++id) {
+        if (tick % 15 == 0) { // one leaves (never a viewer): its slot is reused
+            const EntityId gone = static_cast<EntityId>(1 + 6 * (tick / 15) % 35);
+            if (gone % 6 != 0 && centre.erase(gone) == 1) {
+                ASSERT_TRUE(bulk.remove_entity(gone));
+                ASSERT_TRUE(one.remove_entity(gone));
+            }
+        }
+        for (const auto& [id, c] : centre) {
             move(id);
         }
         bulk.begin_update(tick);
         one.begin_update(tick);
         if (tick % 5 == 0) {
             for (EntityId id = 1; id <= kEntities; id += 7) {
-                move(id); // after begin_update(): a box with no preparation
+                if (centre.contains(id)) {
+                    move(id); // after begin_update(): a box with no preparation
+                }
             }
+        }
+        if (tick % 10 == 0) {
+            join(next_id++); // after begin_update(): a slot with no preparation
         }
         for (std::size_t i = 0; i < bulk.client_count(); ++i) {
             const UpdateEffort effort =
@@ -483,7 +501,7 @@ void expect_bulk_answers_are_one_by_one(std::shared_ptr<const CellVisibilityTabl
             ASSERT_EQ(a.leave, o.leave) << "tick " << tick;
             ASSERT_EQ(bulk.stats(c)->box_tests, one.stats(c)->box_tests);
             visible += a.replicated.size();
-            hidden += kEntities - a.replicated.size();
+            hidden += centre.size() - a.replicated.size();
         }
         bulk.require_valid_state("at tick " + std::to_string(tick));
         one.require_valid_state("at tick " + std::to_string(tick));

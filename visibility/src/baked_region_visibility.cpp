@@ -102,9 +102,9 @@ void BakedRegionVisibility::build(const Aabb& region) {
     }
 }
 
-bool BakedRegionVisibility::hidden(const std::vector<std::int32_t>& words) const {
+bool BakedRegionVisibility::hidden(const std::int32_t* words, std::size_t count) const {
     std::uint64_t seen = 0;
-    for (std::size_t k = 0; k + 2 < words.size(); k += 3) {
+    for (std::size_t k = 0; k + 2 < count; k += 3) {
         const std::uint64_t mask = static_cast<std::uint32_t>(words[k + 1]) |
                                    std::uint64_t{static_cast<std::uint32_t>(words[k + 2])} << 32;
         seen |= visible_[static_cast<std::size_t>(words[k])] & mask;
@@ -223,18 +223,20 @@ Visibility BakedRegionVisibility::test_prepared_coarse(const PreparedBox& p) con
     return prepared_hidden(p) ? Visibility::occluded : Visibility::visible;
 }
 
-void BakedRegionVisibility::coarse_hidden_all(std::span<const PreparedBox* const> boxes,
+void BakedRegionVisibility::coarse_hidden_all(const PackedPreparedBoxes& boxes,
                                               std::span<std::uint8_t> answers) const {
-    // test_prepared_coarse() for every box, with the table's bit tests inline: only a
-    // box the table cannot answer (behind the table alone, where it does not cover)
-    // takes the call.
+    // test_prepared_coarse() for every box, with the table's bit tests inline on the
+    // packed keys: only a box the table cannot answer (behind the table alone, where it
+    // does not cover) takes the call.
     const bool answer_rest = next_for_ == NextFor::where_uncovered;
+    const std::int32_t* keys = boxes.keys.data();
     for (std::size_t i = 0; i < boxes.size(); ++i) {
-        const PreparedBox* p = boxes[i];
+        const PreparedBox* p = boxes.boxes[i];
         if (p == nullptr) {
             answers[i] = 0;
-        } else if (active_ && p->prepared) {
-            answers[i] = hidden(p->keys) ? 1 : 0;
+        } else if (active_ && boxes.prepared[i] != 0) {
+            const std::uint32_t start = boxes.key_start[i];
+            answers[i] = hidden(keys + start, boxes.key_start[i + 1] - start) ? 1 : 0;
         } else {
             answers[i] = answer_rest && fallback().test_box(p->box) == Visibility::occluded ? 1 : 0;
         }

@@ -67,6 +67,12 @@ bool InterestManager::add_entity(EntityId id, const EntityDesc& desc, const Aabb
             c->states.resize(entities_.size(), PairState::unknown);
             c->rules.resize(entities_.size(), 0);
         }
+        // The slots may have moved: the packed boxes of this tick point at them again.
+        for (std::size_t i = 0; i < packed_boxes_.size(); ++i) {
+            if (packed_boxes_.boxes[i] != nullptr) {
+                packed_boxes_.boxes[i] = &entities_[i].prepared;
+            }
+        }
     }
     EntitySlot& e = entities_[slot];
     e = EntitySlot{};

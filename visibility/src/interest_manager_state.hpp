@@ -170,7 +170,6 @@ struct InterestManager::ClientSlot {
     /// By cluster, this tick: 0 not proven hidden, 1 proven hidden, 2 members decided.
     std::vector<std::uint8_t> cluster_hidden;
     std::vector<std::uint32_t> cluster_members; // hide_cluster()'s scratch
-    std::vector<const PreparedBox*> bulk_boxes; // test_entities_in_bulk()'s scratch
     std::vector<std::uint8_t> bulk_hidden;      // by slot
     std::vector<EntityId> previous;             // replicated ids of the last update, increasing
     std::vector<std::uint32_t> kept_slots;      // decide()'s scratch

@@ -77,6 +77,10 @@ void InterestManager::begin_update(std::uint64_t tick) {
             e.prepared_is_current();
         refresh_tbv_candidates(e);
     }
+    packed_boxes_.clear();
+    for (const EntitySlot& e : entities_) {
+        packed_boxes_.add(e.alive ? &e.prepared : nullptr);
+    }
     build_clusters();
 }
 
@@ -311,15 +315,11 @@ void InterestManager::test_entities_in_bulk(ClientSlot& c, const RegionVisibilit
     // What test_entities() does when no pair holds a TBV, no entity is in a cluster,
     // hide() only marks the pair, and every kind of test is the coarse one: the boxes
     // prepared this tick are answered first, all together, then the pairs are set.
+    // The answers of boxes changed or added since begin_update() are not read below.
     const std::size_t n = entities_.size();
-    c.bulk_boxes.resize(n);
-    c.bulk_hidden.resize(n);
-    for (std::uint32_t slot = 0; slot < n; ++slot) {
-        const EntityView& view = views_[slot];
-        c.bulk_boxes[slot] =
-            view.alive && view.prepared_current ? &entities_[slot].prepared : nullptr;
-    }
-    now.coarse_hidden_all(c.bulk_boxes, c.bulk_hidden);
+    c.bulk_hidden.assign(n, 0);
+    now.coarse_hidden_all(packed_boxes_,
+                          std::span<std::uint8_t>(c.bulk_hidden).first(packed_boxes_.size()));
     for (std::uint32_t slot = 0; slot < n; ++slot) {
         const EntityView& view = views_[slot];
         if (!view.alive) {
@@ -364,9 +364,9 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
             continue;
         }
         // The preparation (and the cluster's box) is current unless the box was set
-        // after begin_update().
+        // after begin_update(); a slot added since has neither (nor a cluster entry).
         const bool fresh = view.prepared_current;
-        const std::uint32_t cluster = cluster_of_[slot];
+        const std::uint32_t cluster = fresh ? cluster_of_[slot] : kNoCluster;
         if (fresh && cluster != kNoCluster && c.cluster_hidden[cluster] != 0) {
             // Hidden with its cluster (whose box holds this one's current box).
             if (c.cluster_hidden[cluster] == 1) {

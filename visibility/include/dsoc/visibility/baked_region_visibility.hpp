@@ -58,7 +58,7 @@ public:
     [[nodiscard]] bool prepared_tests_are_coarse() const override {
         return next_ == nullptr || next_for_ == NextFor::where_uncovered;
     }
-    void coarse_hidden_all(std::span<const PreparedBox* const> boxes,
+    void coarse_hidden_all(const PackedPreparedBoxes& boxes,
                            std::span<std::uint8_t> hidden) const override;
     /// Keys are row words of open cells (CellVisibilityTable::open_words_of): the union
     /// of both lists, one triple per word, masks ORed.
@@ -73,7 +73,11 @@ public:
 private:
     /// True when the table proves every open cell of `words` (open_words_of()'s
     /// triples) hidden from the built region.
-    [[nodiscard]] bool hidden(const std::vector<std::int32_t>& words) const;
+    [[nodiscard]] bool hidden(const std::vector<std::int32_t>& words) const {
+        return hidden(words.data(), words.size());
+    }
+    /// The same for `count` ints of triples at `words`.
+    [[nodiscard]] bool hidden(const std::int32_t* words, std::size_t count) const;
     [[nodiscard]] bool box_hidden(const Aabb& box) const;
     /// The table proves a box prepared by this stage hidden from the built region.
     [[nodiscard]] bool prepared_hidden(const PreparedBox& p) const;

@@ -327,6 +327,9 @@ private:
     /// By slot, beside entities_: what every client's steps read of each entity,
     /// packed (see EntityView).
     std::vector<EntityView> views_;
+    /// By entity slot, at begin_update(): the boxes prepared that tick (null when not
+    /// alive), for test_entities_in_bulk().
+    PackedPreparedBoxes packed_boxes_;
     std::vector<std::uint32_t> free_entity_slots_;
     std::unordered_map<EntityId, std::uint32_t> entity_slot_;
     std::vector<std::unique_ptr<ClientSlot>> clients_;

@@ -28,6 +28,33 @@ struct PreparedBox {
     std::vector<PreparedBox> inner;
 };
 
+/// A tick's prepared boxes side by side, for RegionVisibility::coarse_hidden_all(): the
+/// keys of box i are keys[key_start[i] .. key_start[i + 1]), so that a pass over all
+/// of them reads memory in order instead of each box's own vectors.
+struct PackedPreparedBoxes {
+    std::vector<const PreparedBox*> boxes; ///< null: no box to answer
+    std::vector<std::uint8_t> prepared;    ///< boxes[i]->prepared (0 for a null box)
+    std::vector<std::int32_t> keys;
+    std::vector<std::uint32_t> key_start{0}; ///< boxes.size() + 1 entries
+
+    void clear() {
+        boxes.clear();
+        prepared.clear();
+        keys.clear();
+        key_start.assign(1, 0);
+    }
+    /// Appends `box` (may be null), copying its keys; `box` must outlive the pack.
+    void add(const PreparedBox* box) {
+        boxes.push_back(box);
+        prepared.push_back(box != nullptr && box->prepared ? 1 : 0);
+        if (box != nullptr) {
+            keys.insert(keys.end(), box->keys.begin(), box->keys.end());
+        }
+        key_start.push_back(static_cast<std::uint32_t>(keys.size()));
+    }
+    [[nodiscard]] std::size_t size() const { return boxes.size(); }
+};
+
 class RegionVisibility {
 public:
     virtual ~RegionVisibility() = default;
@@ -100,15 +127,15 @@ public:
     /// touches a hint (a cheap stage with nothing behind it): the caller may then
     /// answer a tick's prepared boxes in bulk with coarse_hidden_all().
     [[nodiscard]] virtual bool prepared_tests_are_coarse() const { return false; }
-    /// For every i: hidden[i] = 1 when boxes[i] (prepared by this culler) is `occluded`
-    /// by test_prepared_coarse(), else 0; 0 for a null box. `hidden` has boxes.size()
-    /// elements. The default asks box by box; a stage may answer without a branch per
-    /// box, so that the cache misses of many boxes overlap.
-    virtual void coarse_hidden_all(std::span<const PreparedBox* const> boxes,
+    /// For every i: hidden[i] = 1 when boxes.boxes[i] (prepared by this culler) is
+    /// `occluded` by test_prepared_coarse(), else 0; 0 for a null box. `hidden` has
+    /// boxes.size() elements. The default asks box by box; a stage may read the packed
+    /// keys instead.
+    virtual void coarse_hidden_all(const PackedPreparedBoxes& boxes,
                                    std::span<std::uint8_t> hidden) const {
         for (std::size_t i = 0; i < boxes.size(); ++i) {
-            hidden[i] =
-                boxes[i] != nullptr && test_prepared_coarse(*boxes[i]) == Visibility::occluded;
+            const PreparedBox* box = boxes.boxes[i];
+            hidden[i] = box != nullptr && test_prepared_coarse(*box) == Visibility::occluded;
         }
     }
 };
