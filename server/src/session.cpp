@@ -22,6 +22,9 @@ namespace {
 constexpr auto kCloseGrace = std::chrono::seconds(1);
 constexpr std::size_t kMaxNameBytes = 64;
 constexpr std::size_t kKernelSlack = 16 * 1024; ///< [Units: bytes]
+/// The first block of a thread's decoding arena: a client's messages (inputs, pings,
+/// a hello with its token) are small. [Units: bytes]
+constexpr std::size_t kIncomingArenaBytes = 4 * 1024;
 
 std::string body_name(const pb::Envelope& message) {
     const auto* field = pb::Envelope::descriptor()->FindFieldByNumber(message.body_case());
@@ -102,14 +105,18 @@ void Session::receive(std::span<const std::uint8_t> bytes) {
                            " bytes; the limit is " + std::to_string(config_.max_frame_bytes));
             break;
         }
-        const auto error = protocol::decode_payload(payload, incoming_);
+        // Each message is handled before the next is decoded (handle() copies what it
+        // keeps), so one arena per thread serves every session it reads for.
+        thread_local protocol::EnvelopeArena incoming(kIncomingArenaBytes);
+        const pb::Envelope* message = nullptr;
+        const auto error = incoming.decode(payload, message);
         if (error != protocol::DecodeError::none) {
             disconnect(pb::DISCONNECT_REASON_PROTOCOL_ERROR,
                        std::string("frame of ") + std::to_string(payload.size()) +
                            " bytes: " + protocol::to_string(error) + " envelope");
             break;
         }
-        handle(incoming_);
+        handle(*message);
     }
 }
 

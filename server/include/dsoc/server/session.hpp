@@ -148,7 +148,6 @@ private:
     State state_ = State::awaiting_hello;
     protocol::FrameDecoder decoder_;
     std::array<std::uint8_t, 16 * 1024> read_buffer_{};
-    protocol::pb::Envelope incoming_;
     struct QueuedFrame {
         std::vector<std::uint8_t> bytes;
         bool snapshot = false;
