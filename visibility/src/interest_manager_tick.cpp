@@ -78,8 +78,10 @@ void InterestManager::begin_update(std::uint64_t tick) {
         refresh_tbv_candidates(e);
     }
     packed_boxes_.clear();
-    for (const EntitySlot& e : entities_) {
-        packed_boxes_.add(e.alive ? &e.prepared : nullptr);
+    if (!tbvs_enabled_ && !clusters_enabled_) { // test_entities_in_bulk() may run
+        for (const EntitySlot& e : entities_) {
+            packed_boxes_.add(e.alive ? &e.prepared : nullptr);
+        }
     }
     build_clusters();
 }

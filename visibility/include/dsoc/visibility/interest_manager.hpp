@@ -328,7 +328,7 @@ private:
     /// packed (see EntityView).
     std::vector<EntityView> views_;
     /// By entity slot, at begin_update(): the boxes prepared that tick (null when not
-    /// alive), for test_entities_in_bulk().
+    /// alive), for test_entities_in_bulk(); empty when TBVs or clusters are on.
     PackedPreparedBoxes packed_boxes_;
     std::vector<std::uint32_t> free_entity_slots_;
     std::unordered_map<EntityId, std::uint32_t> entity_slot_;
