@@ -85,9 +85,13 @@ std::size_t update_column_bytes(const pb::Snapshot& s) {
 
 // --- encoder ---
 
-void SnapshotEncoder::begin(std::uint64_t tick, pb::Snapshot& out) {
+void SnapshotEncoder::begin(std::uint64_t tick, pb::Snapshot& out, UpdateColumns* columns) {
     out.Clear();
     out.set_server_tick(tick);
+    columns_ = columns;
+    if (columns_ != nullptr) {
+        columns_->clear();
+    }
     any_update_ = false;
     last_update_id_ = 0;
 }
@@ -120,36 +124,48 @@ bool SnapshotEncoder::update(std::uint32_t id, const Pose& pose, std::uint8_t ti
 bool SnapshotEncoder::update_quantized(std::uint32_t id, const QuantizedPose& q, std::uint8_t tier,
                                        pb::Snapshot& out) {
     Baseline& base = baseline_[id];
+    std::array<std::int32_t, UpdateColumns::kMaxValuesPerEntry> values{};
+    std::size_t count = 0;
     std::uint32_t fields = 0;
-    auto* values = out.mutable_update_values();
     if (tier != base.tier) {
         fields = kFieldRebase;
-        for (const std::int32_t v :
-             {static_cast<std::int32_t>(tier), q.x, q.y, q.z, q.yaw, q.pitch}) {
-            values->Add(v);
-        }
+        values = {static_cast<std::int32_t>(tier), q.x, q.y, q.z, q.yaw, q.pitch};
+        count = values.size();
     } else {
-        auto delta = [&](std::uint32_t bit, std::int32_t now, std::int32_t then) {
-            if (now != then) {
-                fields |= bit;
-                values->Add(static_cast<std::int32_t>(static_cast<std::int64_t>(now) - then));
-            }
+        // Each value is written and kept only when it changed: a select, not a branch
+        // (which fields changed is a coin toss from entity to entity).
+        const auto delta = [&](std::uint32_t bit, std::int32_t now, std::int32_t then,
+                               std::int32_t value) {
+            const bool changed = now != then;
+            values[count] = value;
+            count += changed ? 1 : 0;
+            fields |= changed ? bit : 0;
         };
-        delta(kFieldX, q.x, base.pose.x);
-        delta(kFieldY, q.y, base.pose.y);
-        delta(kFieldZ, q.z, base.pose.z);
-        if (q.yaw != base.pose.yaw) {
-            fields |= kFieldYaw;
-            values->Add(wrap_angle_delta(static_cast<std::int64_t>(q.yaw) - base.pose.yaw,
-                                         settings_.angle_steps));
-        }
-        delta(kFieldPitch, q.pitch, base.pose.pitch);
+        const auto difference = [](std::int32_t now, std::int32_t then) {
+            return static_cast<std::int32_t>(static_cast<std::int64_t>(now) - then);
+        };
+        delta(kFieldX, q.x, base.pose.x, difference(q.x, base.pose.x));
+        delta(kFieldY, q.y, base.pose.y, difference(q.y, base.pose.y));
+        delta(kFieldZ, q.z, base.pose.z, difference(q.z, base.pose.z));
+        delta(kFieldYaw, q.yaw, base.pose.yaw,
+              wrap_angle_delta(static_cast<std::int64_t>(q.yaw) - base.pose.yaw,
+                               settings_.angle_steps));
+        delta(kFieldPitch, q.pitch, base.pose.pitch, difference(q.pitch, base.pose.pitch));
     }
     if (fields == 0) {
         return false;
     }
-    out.add_update_id(any_update_ ? id - last_update_id_ : id);
-    out.add_update_fields(fields);
+    const std::uint32_t id_delta = any_update_ ? id - last_update_id_ : id;
+    if (columns_ != nullptr) {
+        columns_->add(id_delta, fields, std::span<const std::int32_t>(values.data(), count));
+    } else {
+        auto* column = out.mutable_update_values();
+        for (std::size_t k = 0; k < count; ++k) {
+            column->Add(values[k]);
+        }
+        out.add_update_id(id_delta);
+        out.add_update_fields(fields);
+    }
     any_update_ = true;
     last_update_id_ = id;
     base = {q, tier};

@@ -45,11 +45,16 @@ void run_one(const interest::GameWorld& world, interest::InterestPolicy& policy,
         }
     }
     if (job.build) {
+        protocol::UpdateColumns* columns = job.frame != nullptr ? job.columns : nullptr;
         job.replication->build_snapshot(world, interest, tick, job.audit,
-                                        *job.envelope->mutable_snapshot(), job.poses);
+                                        *job.envelope->mutable_snapshot(), job.poses, columns);
         if (job.frame != nullptr) {
             job.frame->clear();
-            protocol::encode_frame(*job.envelope, *job.frame);
+            if (columns != nullptr) {
+                protocol::encode_snapshot_frame(*job.envelope, *columns, *job.frame);
+            } else {
+                protocol::encode_frame(*job.envelope, *job.frame);
+            }
         }
     }
 }

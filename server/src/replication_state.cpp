@@ -32,7 +32,9 @@ void SharedPoses::compute(const interest::GameWorld& world,
                           const protocol::QuantizationSettings& quantization) {
     quantization_ = quantization;
     poses_.clear();
+    ids_.clear();
     for (const interest::Entity& e : world.entities()) {
+        ids_.push_back(e.id);
         const protocol::Pose pose = pose_of(e);
         for (std::uint8_t tier = 0; tier < protocol::kTiers; ++tier) {
             poses_.push_back(protocol::quantize(pose, quantization, tier));
@@ -43,28 +45,32 @@ void SharedPoses::compute(const interest::GameWorld& world,
 void ReplicationState::build_snapshot(const interest::GameWorld& world,
                                       std::span<const interest::Interest> interest,
                                       std::uint64_t tick, bool audit,
-                                      protocol::pb::Snapshot& snapshot, const SharedPoses* poses) {
+                                      protocol::pb::Snapshot& snapshot, const SharedPoses* poses,
+                                      protocol::UpdateColumns* columns) {
     assert(poses == nullptr ||
            (poses->size() == world.entities().size() &&
             poses->quantization().angle_steps == encoder_.settings().angle_steps &&
             poses->quantization().position_quantum == encoder_.settings().position_quantum &&
             poses->quantization().heard_quantum == encoder_.settings().heard_quantum));
-    encoder_.begin(tick, snapshot);
+    encoder_.begin(tick, snapshot, columns);
     next_known_.clear();
 
     // Merge two increasing id lists (protocol::merge_interest): old knowledge and the
     // new interest set. The world's entities are in increasing id order too, so each wanted entity
     // is found by walking forward (no per-entity lookup: this loop runs for every entity of every
     // client every tick).
+    // The walk reads the tick's side-by-side ids when there are shared poses, not each
+    // whole entity.
     const std::vector<interest::Entity>& entities = world.entities();
+    const std::uint32_t* ids = poses != nullptr ? poses->ids().data() : nullptr;
     std::size_t next_entity = 0;
+    const auto id_at = [&](std::size_t k) { return ids != nullptr ? ids[k] : entities[k].id; };
     const auto find_entity = [&](std::uint32_t id) -> const interest::Entity* {
-        while (next_entity < entities.size() && entities[next_entity].id < id) {
+        while (next_entity < entities.size() && id_at(next_entity) < id) {
             ++next_entity;
         }
-        return next_entity < entities.size() && entities[next_entity].id == id
-                   ? &entities[next_entity]
-                   : nullptr;
+        return next_entity < entities.size() && id_at(next_entity) == id ? &entities[next_entity]
+                                                                         : nullptr;
     };
     const auto leave = [&](std::uint32_t id) { // no longer of interest (or gone from the world)
         encoder_.leave(id, snapshot);

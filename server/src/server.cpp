@@ -271,6 +271,7 @@ void Server::prepare_client_ticks() {
         job.interest = &client.interest;
         job.envelope = &client.envelope;
         job.frame = &client.frame;
+        job.columns = &client.columns;
         job.poses = &shared_poses_;
         job.build = build;
         job.audit = client.audit_every > 0 && tick_ % client.audit_every == 0;
@@ -308,7 +309,7 @@ void Server::send_snapshots() {
         }
         const pb::Snapshot& snapshot = job.envelope->snapshot();
         stats_.entity_updates_sent +=
-            static_cast<std::uint64_t>(snapshot.enter_size() + snapshot.update_id_size());
+            static_cast<std::uint64_t>(snapshot.enter_size()) + client.columns.count();
         stats_.heard_entities_sent += client.heard;
         ++stats_.snapshots_sent;
         if (client.session->writable_now()) {
@@ -441,10 +442,9 @@ void Server::on_hello(Session& session, const pb::ClientHello& client_hello) {
     auto it = sessions_.find(session.client_id());
     Client& client =
         clients_
-            .try_emplace(
-                session.client_id(),
-                Client{
-                    it->second, ReplicationState(quantization(config_)), {}, {}, 0, {}, {}, false})
+            .try_emplace(session.client_id(),
+                         Client{.session = it->second,
+                                .replication = ReplicationState(quantization(config_))})
             .first->second;
     client.audit_every = client_hello.audit_every_ticks();
     pending_joins_.push_back(session.client_id());

@@ -71,6 +71,7 @@ struct Player {
     std::vector<interest::Interest> interest;
     protocol::pb::Envelope envelope;
     std::vector<std::uint8_t> frame;
+    protocol::UpdateColumns columns;   // the update entries in wire form, as the server keeps them
     protocol::SnapshotDecoder decoder; // the client's side
     float heading_deg = 0.0f;
     int ticks_until_turn = 0;
@@ -197,10 +198,10 @@ int main(int argc, char** argv) {
             lap(p.hearing);
             server::add_own_entity(c->interest, c->entity_id);
             c->replication.build_snapshot(world, c->interest, tick, false,
-                                          *c->envelope.mutable_snapshot(), &poses);
+                                          *c->envelope.mutable_snapshot(), &poses, &c->columns);
             lap(p.snapshot);
             c->frame.clear();
-            protocol::encode_frame(c->envelope, c->frame);
+            protocol::encode_snapshot_frame(c->envelope, c->columns, c->frame);
             lap(p.encode);
             const std::span<const std::uint8_t> payload(c->frame.data() + 4, c->frame.size() - 4);
             const protocol::pb::Envelope* received = nullptr;
@@ -212,7 +213,7 @@ int main(int argc, char** argv) {
             lap(p.decode);
             if (measured) {
                 const auto& s = c->envelope.snapshot();
-                updates += static_cast<std::uint64_t>(s.enter_size() + s.update_id_size());
+                updates += static_cast<std::uint64_t>(s.enter_size()) + c->columns.count();
                 bytes += c->frame.size();
             }
         }

@@ -5,18 +5,31 @@
 #include "interest_manager_state.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace dsoc::visibility {
 
 namespace {
 
+/// max(0, v) by its sign bit, without a compare: the compiler turns a compare with 0
+/// that feeds a square into a branch on the sign, which is a coin toss from entity to
+/// entity. (A negative NaN gives 0, a positive one stays NaN.)
+float zero_if_negative(float v) {
+    const auto bits = std::bit_cast<std::int32_t>(v);
+    return std::bit_cast<float>(bits & ~(bits >> 31)); // >> 31: all ones when negative
+}
+
 /// Squared distance between the nearest points of `region` and `box` (0 when they
 /// touch): no eye the client can reach is nearer to the entity. [Units: world units²]
 float conservative_distance_squared(const Aabb& region, const Aabb& box) {
-    const glm::vec3 gap =
-        glm::max(glm::vec3(0.0f), glm::max(region.min - box.max, box.min - region.max));
-    return glm::dot(gap, gap);
+    const auto gap = [](float region_min, float region_max, float box_min, float box_max) {
+        return zero_if_negative(std::max(region_min - box_max, box_min - region_max));
+    };
+    const float x = gap(region.min.x, region.max.x, box.min.x, box.max.x);
+    const float y = gap(region.min.y, region.max.y, box.min.y, box.max.y);
+    const float z = gap(region.min.z, region.max.z, box.min.z, box.max.z);
+    return x * x + y * y + z * z;
 }
 
 /// The level of detail for an entity whose squared distance from the eye region is
@@ -84,13 +97,15 @@ void InterestManager::decide(ClientSlot& c) {
                      replicated_under(rule_of(c, slot), c.states[slot] == PairState::visible));
     }
     kept.resize(count);
-    d.replicated.clear();
+    d.replicated.resize(count);
     bool increasing = true; // slots are reused, so ids need not follow slot order
-    for (const std::uint32_t slot : kept) {
-        const EntityView& e = views_[slot];
-        increasing = increasing && (d.replicated.empty() || d.replicated.back().id < e.id);
-        d.replicated.push_back({e.id, level_of_detail(conservative_distance_squared(region, e.box),
-                                                      near_squared, far_squared)});
+    EntityId last = 0;
+    for (std::size_t k = 0; k < count; ++k) {
+        const EntityView& e = views_[kept[k]];
+        increasing = increasing && (k == 0 || last < e.id);
+        last = e.id;
+        d.replicated[k] = {e.id, level_of_detail(conservative_distance_squared(region, e.box),
+                                                 near_squared, far_squared)};
     }
     if (!increasing) {
         std::sort(d.replicated.begin(), d.replicated.end(),

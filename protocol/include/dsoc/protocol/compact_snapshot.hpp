@@ -13,6 +13,7 @@
 #include "dsoc/protocol/flat_id_map.hpp"
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/protocol/quantization.hpp"
+#include "dsoc/protocol/update_columns.hpp"
 
 #include <array>
 #include <cstdint>
@@ -41,8 +42,10 @@ public:
     /// `settings` must have passed validate().
     explicit SnapshotEncoder(const QuantizationSettings& settings) : settings_(settings) {}
 
-    /// Clears `out` and starts the snapshot of `tick`.
-    void begin(std::uint64_t tick, pb::Snapshot& out);
+    /// Clears `out` and starts the snapshot of `tick`. `columns` (optional; cleared
+    /// here): until the next begin(), update entries go there in wire form rather than
+    /// into `out`'s repeated fields (frame the two with encode_snapshot_frame()).
+    void begin(std::uint64_t tick, pb::Snapshot& out, UpdateColumns* columns = nullptr);
     /// `id` (unknown to the connection) enters with its full state on `tier`
     /// (< kTiers; kHeardTier: position at the heard quantum, no angles). `half_extents`
     /// in world units.
@@ -74,6 +77,7 @@ private:
     };
     QuantizationSettings settings_;
     FlatIdMap<Baseline> baseline_;
+    UpdateColumns* columns_ = nullptr; ///< this snapshot's, or null: into its repeated fields
     std::uint32_t last_update_id_ = 0;
     bool any_update_ = false;
 };

@@ -9,6 +9,7 @@
 #include "dsoc/interest/hearing.hpp"
 #include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/protocol/messages.hpp"
+#include "dsoc/protocol/update_columns.hpp"
 #include "dsoc/server/replication_state.hpp"
 #include "dsoc/server/worker_pool.hpp"
 
@@ -32,6 +33,10 @@ struct ClientTick {
     /// When not null and `build`: receives the snapshot encoded as one wire frame
     /// (cleared first; its capacity is reused), so serialization runs on the pool too.
     std::vector<std::uint8_t>* frame = nullptr;
+    /// Optional, with `frame`: the snapshot's update entries are written here in wire
+    /// form and framed by protocol::encode_snapshot_frame() (the same bytes, without a
+    /// second pass over them); `envelope`'s snapshot then holds no update entries.
+    protocol::UpdateColumns* columns = nullptr;
     /// Optional: this tick's poses quantized once for all clients (same bytes).
     const SharedPoses* poses = nullptr;
     /// false: select() still runs (the culler keeps its per-tick state) but no

@@ -35,11 +35,15 @@ public:
     [[nodiscard]] const protocol::QuantizationSettings& quantization() const {
         return quantization_;
     }
-    [[nodiscard]] std::size_t size() const { return poses_.size() / protocol::kTiers; }
+    [[nodiscard]] std::size_t size() const { return ids_.size(); }
+    /// The ids of world.entities() side by side (increasing, as the world keeps them):
+    /// what a snapshot walks to find its entities without touching each whole entity.
+    [[nodiscard]] const std::vector<std::uint32_t>& ids() const { return ids_; }
 
 private:
     protocol::QuantizationSettings quantization_;
     std::vector<protocol::QuantizedPose> poses_;
+    std::vector<std::uint32_t> ids_;
 };
 
 class ReplicationState {
@@ -58,11 +62,14 @@ public:
     /// knows exactly `interest`. `audit`: also fill snapshot.audit with the exact pose
     /// of every entity made current but those on the heard tier. `poses`
     /// (optional): this tick's SharedPoses of `world`, computed with this state's
-    /// quantization; the bytes are the same with or without it.
+    /// quantization; the bytes are the same with or without it. `columns` (optional):
+    /// the update entries go there in wire form instead of into `snapshot` (frame both
+    /// with protocol::encode_snapshot_frame(); the same bytes).
     void build_snapshot(const interest::GameWorld& world,
                         std::span<const interest::Interest> interest, std::uint64_t tick,
                         bool audit, protocol::pb::Snapshot& snapshot,
-                        const SharedPoses* poses = nullptr);
+                        const SharedPoses* poses = nullptr,
+                        protocol::UpdateColumns* columns = nullptr);
 
     [[nodiscard]] std::size_t known_count() const { return known_.size(); }
     [[nodiscard]] const std::vector<std::uint32_t>& known() const { return known_; }

@@ -147,6 +147,7 @@ private:
         protocol::pb::Envelope envelope;          // this tick's snapshot, written by the job
         std::uint32_t audit_every = 0;            // ClientHello.audit_every_ticks
         std::vector<std::uint8_t> frame;          // this tick's snapshot frame, written by the job
+        protocol::UpdateColumns columns;          // its update entries in wire form (the job's)
         protocol::pb::ClientInput input;          // the latest input, for the next tick start
         bool input_pending = false;               // `input` not handed to the world yet
         std::uint32_t heard = 0;                  // this tick's entities sent only because heard

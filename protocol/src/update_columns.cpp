@@ -1,0 +1,115 @@
+#include "dsoc/protocol/update_columns.hpp"
+
+#include "dsoc/protocol/framing.hpp"
+
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/wire_format_lite.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cstring>
+
+namespace dsoc::protocol {
+
+namespace {
+
+using google::protobuf::internal::WireFormatLite;
+using google::protobuf::io::CodedOutputStream;
+
+std::uint32_t length_delimited_tag(int field_number) {
+    return WireFormatLite::MakeTag(field_number, WireFormatLite::WIRETYPE_LENGTH_DELIMITED);
+}
+
+/// Bytes of a packed field holding `payload` bytes: protobuf writes none when empty.
+std::size_t packed_field_bytes(int field_number, std::size_t payload) {
+    if (payload == 0) {
+        return 0;
+    }
+    return CodedOutputStream::VarintSize32(length_delimited_tag(field_number)) +
+           CodedOutputStream::VarintSize32(static_cast<std::uint32_t>(payload)) + payload;
+}
+
+std::uint8_t* write_packed_field(int field_number, std::span<const std::uint8_t> payload,
+                                 std::uint8_t* out) {
+    if (payload.empty()) {
+        return out;
+    }
+    out = CodedOutputStream::WriteVarint32ToArray(length_delimited_tag(field_number), out);
+    out = CodedOutputStream::WriteVarint32ToArray(static_cast<std::uint32_t>(payload.size()), out);
+    std::memcpy(out, payload.data(), payload.size());
+    return out + payload.size();
+}
+
+} // namespace
+
+void UpdateColumns::clear() {
+    ids_.used = 0;
+    fields_.used = 0;
+    values_.used = 0;
+    count_ = 0;
+}
+
+void UpdateColumns::grow() {
+    // Room for `capacity_` entries of the largest size from the start: whatever was
+    // written takes no more than that, so the rest has room for the entries left.
+    capacity_ = std::max<std::size_t>(64, 2 * capacity_);
+    ids_.bytes.resize(capacity_ * kMaxVarintBytes);
+    fields_.bytes.resize(capacity_ * kMaxVarintBytes);
+    values_.bytes.resize(capacity_ * kMaxValuesPerEntry * kMaxVarintBytes);
+}
+
+std::size_t UpdateColumns::wire_bytes() const {
+    return packed_field_bytes(pb::Snapshot::kUpdateIdFieldNumber, ids_.used) +
+           packed_field_bytes(pb::Snapshot::kUpdateFieldsFieldNumber, fields_.used) +
+           packed_field_bytes(pb::Snapshot::kUpdateValuesFieldNumber, values_.used);
+}
+
+std::uint8_t* UpdateColumns::write(std::uint8_t* out) const {
+    out =
+        write_packed_field(pb::Snapshot::kUpdateIdFieldNumber, {ids_.bytes.data(), ids_.used}, out);
+    out = write_packed_field(pb::Snapshot::kUpdateFieldsFieldNumber,
+                             {fields_.bytes.data(), fields_.used}, out);
+    return write_packed_field(pb::Snapshot::kUpdateValuesFieldNumber,
+                              {values_.bytes.data(), values_.used}, out);
+}
+
+std::size_t encode_snapshot_frame(pb::Envelope& envelope, const UpdateColumns& columns,
+                                  std::vector<std::uint8_t>& out) {
+    assert(envelope.has_snapshot());
+    pb::Snapshot& snapshot = *envelope.mutable_snapshot();
+    assert(snapshot.update_id_size() == 0 && snapshot.update_fields_size() == 0 &&
+           snapshot.update_values_size() == 0);
+    static_assert(pb::Snapshot::kAuditFieldNumber > pb::Snapshot::kUpdateValuesFieldNumber,
+                  "the audit poses follow the update columns on the wire");
+    // Protobuf writes fields in number order: the audit poses (8) come after the
+    // columns (5-7), so they wait in `tail` (only on the ticks a client audits).
+    pb::Snapshot tail;
+    const bool audited = snapshot.audit_size() > 0;
+    if (audited) {
+        tail.mutable_audit()->Swap(snapshot.mutable_audit());
+    }
+    const std::size_t head_bytes = snapshot.ByteSizeLong();
+    const std::size_t tail_bytes = audited ? tail.ByteSizeLong() : 0;
+    const std::size_t body = head_bytes + columns.wire_bytes() + tail_bytes;
+    const std::uint32_t tag = length_delimited_tag(pb::Envelope::kSnapshotFieldNumber);
+    const std::size_t payload = CodedOutputStream::VarintSize32(tag) +
+                                CodedOutputStream::VarintSize32(static_cast<std::uint32_t>(body)) +
+                                body;
+    const std::size_t start = out.size();
+    out.resize(start + kFrameHeaderBytes + payload);
+    std::uint8_t* p = out.data() + start;
+    write_frame_header(p, static_cast<std::uint32_t>(payload));
+    p = CodedOutputStream::WriteVarint32ToArray(tag, p + kFrameHeaderBytes);
+    p = CodedOutputStream::WriteVarint32ToArray(static_cast<std::uint32_t>(body), p);
+    p = snapshot.SerializeWithCachedSizesToArray(p);
+    p = columns.write(p);
+    if (audited) {
+        p = tail.SerializeWithCachedSizesToArray(p);
+        snapshot.mutable_audit()->Swap(tail.mutable_audit());
+    }
+    assert(p == out.data() + out.size());
+    (void)p;
+    return kFrameHeaderBytes + payload;
+}
+
+} // namespace dsoc::protocol
