@@ -168,7 +168,10 @@ bool SnapshotEncoder::update_quantized(std::uint32_t id, const QuantizedPose& q,
     }
     any_update_ = true;
     last_update_id_ = id;
-    base = {q, tier};
+    // Field by field: a whole-struct temporary is built on the stack and copied back
+    // with overlapping loads that wait for its stores to retire.
+    base.pose = q;
+    base.tier = tier;
     return true;
 }
 
