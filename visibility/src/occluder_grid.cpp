@@ -6,15 +6,53 @@
 
 namespace dsoc::visibility {
 
+namespace {
+
+/// Cells per axis at most: a larger world gets its last cells stretched to its edge
+/// (every lookup clamps to the grid the same way, so the lists stay right).
+constexpr int kMaxDimension = 512;
+
+int dimension(float extent, float cell_size) {
+    return std::clamp(static_cast<int>(std::ceil(extent / cell_size)), 1, kMaxDimension);
+}
+
+/// Entries the cell lists of `world` would hold with cells of `cell_size`.
+std::uint64_t list_entries(const OccluderWorld& world, const Aabb& bounds, float cell_size) {
+    int dims[3];
+    for (int a = 0; a < 3; ++a) {
+        dims[a] = dimension(bounds.max[a] - bounds.min[a], cell_size);
+    }
+    std::uint64_t entries = 0;
+    for (OccluderId id = 0; id < world.size(); ++id) {
+        const Aabb& b = world.occluder(id).bounds();
+        std::uint64_t cells = 1;
+        for (int a = 0; a < 3; ++a) {
+            const auto at = [&](float v) {
+                return std::clamp(static_cast<int>(std::floor((v - bounds.min[a]) / cell_size)), 0,
+                                  dims[a] - 1);
+            };
+            cells *= static_cast<std::uint64_t>(at(b.max[a]) - at(b.min[a]) + 1);
+        }
+        entries += cells;
+    }
+    return entries;
+}
+
+} // namespace
+
 OccluderGrid::OccluderGrid(const OccluderWorld& world, float cell_size)
     : world_(&world), bounds_(world.bounds()), cell_size_(cell_size) {
     if (bounds_.is_empty()) {
         cell_start_.assign(2, 0);
         return;
     }
+    // Coarser until the lists fit their bound: large brushes over fine cells are
+    // listed in every cell they overlap.
+    while (list_entries(world, bounds_, cell_size_) > kMaxListEntries) {
+        cell_size_ *= 2.0f;
+    }
     for (int a = 0; a < 3; ++a) {
-        dims_[a] = std::clamp(
-            static_cast<int>(std::ceil((bounds_.max[a] - bounds_.min[a]) / cell_size_)), 1, 512);
+        dims_[a] = dimension(bounds_.max[a] - bounds_.min[a], cell_size_);
     }
     const std::size_t cells = static_cast<std::size_t>(dims_[0]) *
                               static_cast<std::size_t>(dims_[1]) *

@@ -26,7 +26,7 @@ inline constexpr std::uint32_t kBakeFormatVersion = 4;
 /// Part of every key: bumped on any change to what the bake may prove (the bake, the
 /// exact region tests it runs, the open-cell rules, the PVS pruner), so that tables
 /// baked by older code are baked again, never trusted.
-inline constexpr std::uint32_t kBakeAlgorithmVersion = 1;
+inline constexpr std::uint32_t kBakeAlgorithmVersion = 2;
 /// Grids larger than this many cells are refused (2^24: 16.7M cells, 128 MiB of
 /// per-cell indexes when loaded). [Units: cells]
 inline constexpr std::uint64_t kMaxBakeGridCells = std::uint64_t{1} << 24;

@@ -16,8 +16,20 @@ namespace dsoc::visibility {
 /// construction; queries are const and thread-safe given a caller-owned scratch.
 class OccluderGrid {
 public:
-    /// `cell_size` in world units (> 0).
-    explicit OccluderGrid(const OccluderWorld& world, float cell_size = 256.0f);
+    /// The finest cell edge the scene's grid uses (docs/RESULTS.md: how it was chosen
+    /// for the bake and the exact stages). [Units: world units]
+    static constexpr float kDefaultCellSize = 128.0f;
+    /// Entries all cells' lists may hold (4 bytes each); a world that would need more
+    /// gets coarser cells. [Units: occluder ids]
+    static constexpr std::uint64_t kMaxListEntries = std::uint64_t{1} << 23;
+
+    /// `cell_size` in world units (> 0): the finest cell edge; doubled until the lists
+    /// hold at most kMaxListEntries. What a query promises to find does not depend on
+    /// it, only the order it finds them in and the time it takes.
+    explicit OccluderGrid(const OccluderWorld& world, float cell_size = kDefaultCellSize);
+
+    /// The cell edge in use (after any doubling). [Units: world units]
+    [[nodiscard]] float cell_size() const { return cell_size_; }
 
     /// Scratch for one querying thread (a visit stamp per occluder).
     struct Scratch {
