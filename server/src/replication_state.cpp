@@ -58,9 +58,7 @@ void ReplicationState::build_snapshot(const interest::GameWorld& world,
     // Merge two increasing id lists (protocol::merge_interest): old knowledge and the
     // new interest set. The world's entities are in increasing id order too, so each wanted entity
     // is found by walking forward (no per-entity lookup: this loop runs for every entity of every
-    // client every tick).
-    // The walk reads the tick's side-by-side ids when there are shared poses, not each
-    // whole entity.
+    // client every tick), over the tick's side-by-side ids when there are shared poses.
     const std::vector<interest::Entity>& entities = world.entities();
     const std::uint32_t* ids = poses != nullptr ? poses->ids().data() : nullptr;
     std::size_t next_entity = 0;

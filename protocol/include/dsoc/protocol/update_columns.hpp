@@ -10,6 +10,9 @@
 
 #include "dsoc/protocol/messages.hpp"
 
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/wire_format_lite.h>
+
 #include <cassert>
 #include <cstddef>
 #include <cstdint>
@@ -33,7 +36,8 @@ public:
         ids_.used = write_varint(id_delta, ids_);
         fields_.used = write_varint(fields, fields_);
         for (const std::int32_t value : values) {
-            values_.used = write_varint(zigzag(value), values_);
+            values_.used = write_varint(
+                google::protobuf::internal::WireFormatLite::ZigZagEncode32(value), values_);
         }
         ++count_;
     }
@@ -60,18 +64,11 @@ private:
     /// The most bytes a 32-bit varint takes.
     static constexpr std::size_t kMaxVarintBytes = 5;
 
-    static std::uint32_t zigzag(std::int32_t v) {
-        return (static_cast<std::uint32_t>(v) << 1) ^ static_cast<std::uint32_t>(v >> 31);
-    }
     /// Writes `v` at the end of `to` (which has room) and returns the new length.
     static std::size_t write_varint(std::uint32_t v, Varints& to) {
-        std::uint8_t* p = to.bytes.data() + to.used;
-        while (v >= 0x80) {
-            *p++ = static_cast<std::uint8_t>(v | 0x80);
-            v >>= 7;
-        }
-        *p++ = static_cast<std::uint8_t>(v);
-        return static_cast<std::size_t>(p - to.bytes.data());
+        std::uint8_t* end = google::protobuf::io::CodedOutputStream::WriteVarint32ToArray(
+            v, to.bytes.data() + to.used);
+        return static_cast<std::size_t>(end - to.bytes.data());
     }
     /// Room for twice as many entries (at least 64) of the largest size.
     void grow();
