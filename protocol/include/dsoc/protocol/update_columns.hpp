@@ -40,6 +40,8 @@ public:
                 google::protobuf::internal::WireFormatLite::ZigZagEncode32(value), values_);
         }
         ++count_;
+        assert(ids_.used <= ids_.bytes.size() && fields_.used <= fields_.bytes.size() &&
+               values_.used <= values_.bytes.size());
     }
 
     /// Update entries added since clear().
