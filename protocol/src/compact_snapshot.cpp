@@ -11,24 +11,6 @@ namespace {
 constexpr std::uint32_t kKnownFields =
     kFieldX | kFieldY | kFieldZ | kFieldYaw | kFieldPitch | kFieldRebase;
 
-std::size_t varint_size(std::uint64_t v) {
-    std::size_t n = 1;
-    while (v >= 0x80) {
-        v >>= 7;
-        ++n;
-    }
-    return n;
-}
-
-std::uint32_t zigzag(std::int32_t v) {
-    return (static_cast<std::uint32_t>(v) << 1) ^ static_cast<std::uint32_t>(v >> 31);
-}
-
-/// A packed repeated field: tag (field numbers 5..7 fit one byte), length, payload.
-std::size_t packed_size(std::size_t payload) {
-    return payload == 0 ? 0 : 1 + varint_size(payload) + payload;
-}
-
 /// `delta` wrapped into [steps/2 - steps, steps/2) (integer halves).
 std::int32_t wrap_angle_delta(std::int64_t delta, std::uint32_t steps) {
     const auto n = static_cast<std::int64_t>(steps);
@@ -66,22 +48,6 @@ std::string entity(std::uint32_t id) {
 }
 
 } // namespace
-
-std::size_t update_column_bytes(const pb::Snapshot& s) {
-    std::size_t ids = 0;
-    for (const std::uint32_t v : s.update_id()) {
-        ids += varint_size(v);
-    }
-    std::size_t fields = 0;
-    for (const std::uint32_t v : s.update_fields()) {
-        fields += varint_size(v);
-    }
-    std::size_t values = 0;
-    for (const std::int32_t v : s.update_values()) {
-        values += varint_size(zigzag(v));
-    }
-    return packed_size(ids) + packed_size(fields) + packed_size(values);
-}
 
 // --- encoder ---
 

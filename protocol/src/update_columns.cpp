@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cstring>
+#include <optional>
 
 namespace dsoc::protocol {
 
@@ -73,6 +74,24 @@ std::uint8_t* UpdateColumns::write(std::uint8_t* out) const {
                               {values_.bytes.data(), values_.used}, out);
 }
 
+std::size_t update_column_bytes(const pb::Snapshot& s) {
+    std::size_t ids = 0;
+    for (const std::uint32_t v : s.update_id()) {
+        ids += CodedOutputStream::VarintSize32(v);
+    }
+    std::size_t fields = 0;
+    for (const std::uint32_t v : s.update_fields()) {
+        fields += CodedOutputStream::VarintSize32(v);
+    }
+    std::size_t values = 0;
+    for (const std::int32_t v : s.update_values()) {
+        values += CodedOutputStream::VarintSize32(WireFormatLite::ZigZagEncode32(v));
+    }
+    return packed_field_bytes(pb::Snapshot::kUpdateIdFieldNumber, ids) +
+           packed_field_bytes(pb::Snapshot::kUpdateFieldsFieldNumber, fields) +
+           packed_field_bytes(pb::Snapshot::kUpdateValuesFieldNumber, values);
+}
+
 std::size_t encode_snapshot_frame(pb::Envelope& envelope, const UpdateColumns& columns,
                                   std::vector<std::uint8_t>& out) {
     assert(envelope.has_snapshot());
@@ -83,13 +102,12 @@ std::size_t encode_snapshot_frame(pb::Envelope& envelope, const UpdateColumns& c
                   "the audit poses follow the update columns on the wire");
     // Protobuf writes fields in number order: the audit poses (8) come after the
     // columns (5-7), so they wait in `tail` (only on the ticks a client audits).
-    pb::Snapshot tail;
-    const bool audited = snapshot.audit_size() > 0;
-    if (audited) {
-        tail.mutable_audit()->Swap(snapshot.mutable_audit());
+    std::optional<pb::Snapshot> tail;
+    if (snapshot.audit_size() > 0) {
+        tail.emplace().mutable_audit()->Swap(snapshot.mutable_audit());
     }
     const std::size_t head_bytes = snapshot.ByteSizeLong();
-    const std::size_t tail_bytes = audited ? tail.ByteSizeLong() : 0;
+    const std::size_t tail_bytes = tail ? tail->ByteSizeLong() : 0;
     const std::size_t body = head_bytes + columns.wire_bytes() + tail_bytes;
     const std::uint32_t tag = length_delimited_tag(pb::Envelope::kSnapshotFieldNumber);
     const std::size_t payload = CodedOutputStream::VarintSize32(tag) +
@@ -103,9 +121,9 @@ std::size_t encode_snapshot_frame(pb::Envelope& envelope, const UpdateColumns& c
     p = CodedOutputStream::WriteVarint32ToArray(static_cast<std::uint32_t>(body), p);
     p = snapshot.SerializeWithCachedSizesToArray(p);
     p = columns.write(p);
-    if (audited) {
-        p = tail.SerializeWithCachedSizesToArray(p);
-        snapshot.mutable_audit()->Swap(tail.mutable_audit());
+    if (tail) {
+        p = tail->SerializeWithCachedSizesToArray(p);
+        snapshot.mutable_audit()->Swap(tail->mutable_audit());
     }
     assert(p == out.data() + out.size());
     (void)p;

@@ -16,6 +16,12 @@ int dimension(float extent, float cell_size) {
     return std::clamp(static_cast<int>(std::ceil(extent / cell_size)), 1, kMaxDimension);
 }
 
+/// The cell along one axis that holds coordinate `v`, clamped to the grid (so points
+/// past its edge fall in its last cells, as the lists were filled).
+int cell_at(float v, float grid_min, float cell_size, int dimension) {
+    return std::clamp(static_cast<int>(std::floor((v - grid_min) / cell_size)), 0, dimension - 1);
+}
+
 /// Entries the cell lists of `world` would hold with cells of `cell_size`.
 std::uint64_t list_entries(const OccluderWorld& world, const Aabb& bounds, float cell_size) {
     int dims[3];
@@ -27,11 +33,9 @@ std::uint64_t list_entries(const OccluderWorld& world, const Aabb& bounds, float
         const Aabb& b = world.occluder(id).bounds();
         std::uint64_t cells = 1;
         for (int a = 0; a < 3; ++a) {
-            const auto at = [&](float v) {
-                return std::clamp(static_cast<int>(std::floor((v - bounds.min[a]) / cell_size)), 0,
-                                  dims[a] - 1);
-            };
-            cells *= static_cast<std::uint64_t>(at(b.max[a]) - at(b.min[a]) + 1);
+            cells *= static_cast<std::uint64_t>(
+                cell_at(b.max[a], bounds.min[a], cell_size, dims[a]) -
+                cell_at(b.min[a], bounds.min[a], cell_size, dims[a]) + 1);
         }
         entries += cells;
     }
@@ -60,12 +64,8 @@ OccluderGrid::OccluderGrid(const OccluderWorld& world, float cell_size)
     std::vector<std::vector<OccluderId>> lists(cells);
     const auto cell_range = [&](const Aabb& b, int lo[3], int hi[3]) {
         for (int a = 0; a < 3; ++a) {
-            lo[a] =
-                std::clamp(static_cast<int>(std::floor((b.min[a] - bounds_.min[a]) / cell_size_)),
-                           0, dims_[a] - 1);
-            hi[a] =
-                std::clamp(static_cast<int>(std::floor((b.max[a] - bounds_.min[a]) / cell_size_)),
-                           0, dims_[a] - 1);
+            lo[a] = cell_at(b.min[a], bounds_.min[a], cell_size_, dims_[a]);
+            hi[a] = cell_at(b.max[a], bounds_.min[a], cell_size_, dims_[a]);
         }
     };
     for (OccluderId id = 0; id < world.size(); ++id) {
@@ -105,10 +105,8 @@ void OccluderGrid::query(const Aabb& box, Scratch& scratch) const {
     int lo[3];
     int hi[3];
     for (int a = 0; a < 3; ++a) {
-        lo[a] = std::clamp(static_cast<int>(std::floor((box.min[a] - bounds_.min[a]) / cell_size_)),
-                           0, dims_[a] - 1);
-        hi[a] = std::clamp(static_cast<int>(std::floor((box.max[a] - bounds_.min[a]) / cell_size_)),
-                           0, dims_[a] - 1);
+        lo[a] = cell_at(box.min[a], bounds_.min[a], cell_size_, dims_[a]);
+        hi[a] = cell_at(box.max[a], bounds_.min[a], cell_size_, dims_[a]);
     }
     for (int z = lo[2]; z <= hi[2]; ++z) {
         for (int y = lo[1]; y <= hi[1]; ++y) {
@@ -135,8 +133,7 @@ std::span<const OccluderId> OccluderGrid::items_at(glm::vec3 p) const {
     }
     int cell[3];
     for (int a = 0; a < 3; ++a) {
-        cell[a] = std::clamp(static_cast<int>(std::floor((p[a] - bounds_.min[a]) / cell_size_)), 0,
-                             dims_[a] - 1);
+        cell[a] = cell_at(p[a], bounds_.min[a], cell_size_, dims_[a]);
     }
     const std::size_t index =
         static_cast<std::size_t>((cell[2] * dims_[1] + cell[1]) * dims_[0] + cell[0]);
@@ -195,8 +192,7 @@ bool OccluderGrid::walk_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch, 
     float t_max[3];
     float t_delta[3];
     for (int a = 0; a < 3; ++a) {
-        cell[a] = std::clamp(static_cast<int>(std::floor((start[a] - bounds_.min[a]) / cell_size_)),
-                             0, dims_[a] - 1);
+        cell[a] = cell_at(start[a], bounds_.min[a], cell_size_, dims_[a]);
         if (dir[a] > 0.0f) {
             step[a] = 1;
             const float border = bounds_.min[a] + static_cast<float>(cell[a] + 1) * cell_size_;

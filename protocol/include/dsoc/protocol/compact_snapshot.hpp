@@ -33,10 +33,6 @@ enum UpdateField : std::uint32_t {
     kFieldRebase = 1u << 5, ///< tier changed: the new tier, then all five fields absolute
 };
 
-/// Wire bytes of a snapshot's three update columns (field tags and lengths
-/// included): what the updates cost, enters, leaves and the tick left out.
-[[nodiscard]] std::size_t update_column_bytes(const pb::Snapshot& snapshot);
-
 class SnapshotEncoder {
 public:
     /// `settings` must have passed validate().

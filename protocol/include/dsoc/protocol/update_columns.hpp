@@ -83,6 +83,11 @@ private:
                                ///< counted from empty
 };
 
+/// Wire bytes of a snapshot's three update columns held as repeated fields (field
+/// tags and lengths included): what the updates cost, enters, leaves and the tick left
+/// out. UpdateColumns::wire_bytes() of the same entries.
+[[nodiscard]] std::size_t update_column_bytes(const pb::Snapshot& snapshot);
+
 /// Appends one frame (framing.hpp) holding `envelope`, whose body is a snapshot with
 /// no update entries of its own, with `columns` as that snapshot's update columns;
 /// the bytes are those encode_frame() appends for the snapshot holding the same
