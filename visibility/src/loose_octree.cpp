@@ -1,5 +1,6 @@
 #include "dsoc/visibility/loose_octree.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace dsoc::visibility {
@@ -14,8 +15,8 @@ LooseOctree::LooseOctree(const LooseOctreeConfig& config) : config_(config) {
     const glm::vec3 size = wb.size();
     root_size_ = std::max(std::max(size.x, size.y), std::max(size.z, 1.0f));
     origin_ = wb.center() - glm::vec3(root_size_ * 0.5f);
-    items_.resize(config_.max_items);
-    nodes_.reserve(1024);
+    // Item and node storage grows with use (insert()): a client's tree is built when it
+    // joins, and most hold few TBVs, so nothing is allocated for max_items up front.
     const std::uint32_t zero[3] = {0, 0, 0};
     allocate_node(-1, 0, zero);
 }
@@ -152,8 +153,13 @@ std::int32_t LooseOctree::descend(std::int32_t from, const Target& target) {
 }
 
 bool LooseOctree::insert(ItemId id, const Aabb& bounds) {
-    if (id >= items_.size() || items_[id].node >= 0 || !valid_box(bounds)) {
+    if (id >= config_.max_items || contains(id) || !valid_box(bounds)) {
         return false;
+    }
+    if (id >= items_.size()) { // doubling, up to max_items
+        items_.resize(std::min<std::size_t>(
+            config_.max_items,
+            std::max<std::size_t>({std::size_t{id} + 1, 2 * items_.size(), 64})));
     }
     touched_.clear();
     const Target t = target_for(bounds);

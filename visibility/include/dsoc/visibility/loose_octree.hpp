@@ -26,7 +26,7 @@ struct LooseOctreeConfig {
     Aabb world_bounds{glm::vec3(-4096.0f), glm::vec3(4096.0f)};
     /// Depth of the finest cells (root = 0). [Units: levels] [Limit: 0..15]
     int max_depth = 7;
-    /// Ids must be below this; storage for them is allocated up front.
+    /// Ids must be below this; storage for them grows with the largest id inserted.
     /// [Units: items] [Limit: >= 1]
     std::uint32_t max_items = 4096;
 };
@@ -61,6 +61,7 @@ public:
     [[nodiscard]] bool contains(ItemId id) const {
         return id < items_.size() && items_[id].node >= 0;
     }
+    /// The box of a present item (contains(id)).
     [[nodiscard]] const Aabb& bounds_of(ItemId id) const { return items_[id].bounds; }
     [[nodiscard]] std::size_t size() const { return item_count_; }
 
