@@ -108,20 +108,23 @@ TEST(LooseOctree, InsertRemoveAndQueriesMatchBruteForce) {
 }
 
 TEST(LooseOctree, TakesIdsInAnyOrderUpToMaxItems) {
-    // Storage grows with the largest id inserted: a high id first, then lower ones.
+    // Storage grows with the largest id inserted: doubling (7, then 70), then straight
+    // to the limit (4999), then a lower id again.
     Fixture fx;
     LooseOctreeConfig config;
     config.max_items = 5000;
     LooseOctree tree(config);
     EXPECT_FALSE(tree.contains(4999));
-    ASSERT_TRUE(tree.insert(4999, fx.random_box()));
     ASSERT_TRUE(tree.insert(7, fx.random_box()));
     ASSERT_TRUE(tree.insert(70, fx.random_box()));
+    ASSERT_TRUE(tree.insert(4999, fx.random_box()));
+    ASSERT_TRUE(tree.insert(4000, fx.random_box()));
     EXPECT_FALSE(tree.insert(5000, fx.random_box())); // out of range
     EXPECT_FALSE(tree.contains(5000));
     EXPECT_FALSE(tree.contains(8));
-    EXPECT_TRUE(tree.contains(4999) && tree.contains(7) && tree.contains(70));
-    EXPECT_EQ(tree.size(), 3u);
+    EXPECT_TRUE(tree.contains(4999) && tree.contains(7) && tree.contains(70) &&
+                tree.contains(4000));
+    EXPECT_EQ(tree.size(), 4u);
     ASSERT_TRUE(tree.remove(4999));
     EXPECT_FALSE(tree.remove(4999));
     expect_invariants(tree);

@@ -1,6 +1,5 @@
 #include "dsoc/visibility/loose_octree.hpp"
 
-#include <algorithm>
 #include <cmath>
 
 namespace dsoc::visibility {

@@ -98,6 +98,7 @@ public:
         return nodes_[static_cast<std::size_t>(index)];
     }
     [[nodiscard]] std::size_t live_nodes() const { return nodes_.size() - free_nodes_.size(); }
+    /// The node holding a present item (contains(id)).
     [[nodiscard]] std::int32_t node_of(ItemId id) const { return items_[id].node; }
     /// Nodes modified by the last insert/remove/move, and that move's common ancestor.
     [[nodiscard]] const std::vector<std::int32_t>& last_update_touched() const { return touched_; }
