@@ -14,6 +14,7 @@
 #include "dsoc/protocol/connect_token.hpp"
 #include "dsoc/server/config_file.hpp"
 #include "dsoc/server/dsoc_settings.hpp"
+#include "dsoc/server/io_loop.hpp"
 #include "dsoc/server/logging.hpp"
 #include "dsoc/server/metrics_endpoint.hpp"
 #include "dsoc/server/process_metrics.hpp"
@@ -139,6 +140,10 @@ void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
         ->capture_default_str();
     app.add_option("--socket-send-buffer-bytes", config.socket_send_buffer_bytes,
                    "SO_SNDBUF of client sockets; 0 keeps the OS default [bytes]")
+        ->capture_default_str();
+    app.add_option("--io-gather-us", config.io_gather_us,
+                   "After each wakeup the I/O thread lets socket events gather this long, "
+                   "reading many clients' inputs in one wakeup (0: wake for each) [us]")
         ->capture_default_str();
     app.add_option("--max-inputs-per-second", config.max_inputs_per_second,
                    "Messages a client may send per second; more are dropped, twice that "
@@ -359,6 +364,8 @@ int serve(const ServerConfig& config, const ProgramOptions& options) {
         }
     }
 
+    // Before the server, which wakes it from its workers until it is destroyed.
+    dsoc::server::IoLoop io_loop(io, std::chrono::microseconds(config.io_gather_us));
     std::unique_ptr<dsoc::server::Server> server;
     {
         const IoDuringStartup probes(io, config.metrics_port >= 0);
@@ -385,6 +392,7 @@ int serve(const ServerConfig& config, const ProgramOptions& options) {
         server = std::make_unique<dsoc::server::Server>(io, config, checked.map);
     }
     live = server.get();
+    server->set_io_loop(&io_loop);
     std::uint16_t port = 0;
     try {
         port = server->start();
@@ -422,7 +430,7 @@ int serve(const ServerConfig& config, const ProgramOptions& options) {
         });
     }
 
-    io.run();
+    io_loop.run();
 
     std::cout << dsoc::server::format_summary(server->stats(), config);
     if (!options.stats_json.empty()) {

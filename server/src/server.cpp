@@ -166,6 +166,9 @@ void Server::start_tick() {
         [this](std::exception_ptr error) {
             const auto phase_end = Clock::now();
             asio::post(io_, [this, phase_end, error] { finish_tick(phase_end, error); });
+            if (io_loop_ != nullptr) {
+                io_loop_->wake();
+            }
         },
         &culling_budget_);
 }

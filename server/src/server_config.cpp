@@ -71,6 +71,8 @@ std::vector<std::string> validate(const ServerConfig& c) {
     for (auto& problem : protocol::validate(quantization(c))) {
         p.push_back(std::move(problem));
     }
+    check(p, c.io_gather_us >= 0 && c.io_gather_us <= 20000, "io_gather_us",
+          "must be 0..20000 µs, got " + std::to_string(c.io_gather_us));
     check(p, c.slow_client_timeout_ms >= 100 && c.slow_client_timeout_ms <= 60000,
           "slow_client_timeout_ms",
           "must be 100..60000 ms, got " + std::to_string(c.slow_client_timeout_ms));

@@ -18,6 +18,16 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 constexpr auto kCloseGrace = std::chrono::seconds(2);
+
+/// When an input due at `due` leaves: the next whole millisecond of the steady clock.
+/// Clients whose inputs fall due within the same millisecond then share one wakeup of
+/// this process (and their arrival one of the server's I/O thread): at most 1,000 a
+/// second, where one timer per input woke it clients x tick rate times a second (15,000
+/// for 500 clients at 30 Hz). Each client keeps its own phase within the tick, and the
+/// delay, under 1 ms, is less than any network's jitter.
+Clock::time_point on_whole_millisecond(Clock::time_point due) {
+    return std::chrono::ceil<std::chrono::milliseconds>(due);
+}
 /// The first block of a thread's decoding arena: a snapshot of every entity of a
 /// large arena, audit poses included, fits.
 constexpr std::size_t kIncomingArenaBytes = 256 * 1024;
@@ -309,7 +319,7 @@ void SimClient::apply_snapshot(const pb::Snapshot& s) {
 
 void SimClient::schedule_input() {
     next_input_at_ += std::chrono::nanoseconds(1'000'000'000LL / tick_rate_);
-    input_timer_.expires_at(next_input_at_);
+    input_timer_.expires_at(on_whole_millisecond(next_input_at_));
     input_timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
         if (ec || self->state_ != State::active) {
             return;

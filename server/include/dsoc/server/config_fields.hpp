@@ -49,6 +49,7 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("handshake_timeout_ms", config.handshake_timeout_ms);
     visit("slow_client_timeout_ms", config.slow_client_timeout_ms);
     visit("socket_send_buffer_bytes", config.socket_send_buffer_bytes);
+    visit("io_gather_us", config.io_gather_us);
     visit("max_inputs_per_second", config.max_inputs_per_second);
     visit("insecure", config.insecure);
     visit("token_key_file", config.token_key_file);

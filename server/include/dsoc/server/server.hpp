@@ -33,6 +33,7 @@
 #include "dsoc/protocol/connect_token.hpp"
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/server/client_tick.hpp"
+#include "dsoc/server/io_loop.hpp"
 #include "dsoc/server/metrics.hpp"
 #include "dsoc/server/metrics_endpoint.hpp"
 #include "dsoc/server/replication_state.hpp"
@@ -121,6 +122,11 @@ public:
     /// std::runtime_error when the trace file or the token key cannot be read.
     std::uint16_t start();
 
+    /// The loop that runs the I/O thread, when it gathers events (io_loop.hpp): woken
+    /// when a tick's parallel phase ends, so that the hand-over does not wait out a
+    /// gather. Set before start(); null (the default) for a plain io_context::run().
+    void set_io_loop(IoLoop* loop) { io_loop_ = loop; }
+
     /// Stops accepting, stops ticking, tells every client `server_shutdown`, and lets
     /// the connections drain; io_context::run() then returns once all are closed.
     /// `on_done` (optional) runs when the last connection has closed.
@@ -177,6 +183,7 @@ private:
     void on_closed(Session& session) override;
 
     boost::asio::io_context& io_;
+    IoLoop* io_loop_ = nullptr;
     ServerConfig config_;
     boost::asio::ip::tcp::acceptor acceptor_;
     boost::asio::steady_timer tick_timer_;

@@ -141,6 +141,11 @@ struct ServerConfig {
     /// (Linux autotunes it up to net.ipv4.tcp_wmem's maximum, several MiB per client).
     /// [Units: bytes] [Limit: 0 or 4096..16 MiB]
     int socket_send_buffer_bytes = 0;
+    /// How long the I/O thread lets socket events gather after each wakeup before it
+    /// waits for them again (io_loop.hpp): one wakeup reads what many clients sent
+    /// meanwhile. 0: it wakes for each arrival. Timers and pings may be late by this
+    /// much. [Units: µs] [Limit: 0..20000]
+    int io_gather_us = 1000;
     /// Messages (inputs and pings) a client may send per second; a burst of one
     /// second's worth is allowed. Beyond it messages are dropped, and a client whose
     /// dropped messages within one second exceed this cap again is disconnected with

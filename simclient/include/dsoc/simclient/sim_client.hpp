@@ -117,6 +117,8 @@ private:
     std::chrono::steady_clock::time_point started_at_;
     std::chrono::steady_clock::time_point active_since_;
     std::chrono::steady_clock::time_point last_snapshot_at_;
+    /// When the next input falls due (one tick after the last); it leaves at the next
+    /// whole millisecond, with the other clients' inputs due in that millisecond.
     std::chrono::steady_clock::time_point next_input_at_;
 };
 
