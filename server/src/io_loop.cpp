@@ -14,6 +14,12 @@ void IoLoop::run() {
     // while the thread gathers, nothing waits on the sockets, so arrivals wake nobody.
     while (io_.run_one() > 0) {
         ++wakeups_;
+        // A wake() from before now is spent: its handler was posted before it, so
+        // poll() runs it. (Left set, it would cut the next gather short for nothing.)
+        {
+            const std::lock_guard lock(mutex_);
+            wake_ = false;
+        }
         io_.poll();
         if (io_.stopped()) {
             return;
@@ -33,7 +39,6 @@ void IoLoop::wake() {
 void IoLoop::gather() {
     std::unique_lock lock(mutex_);
     woken_.wait_for(lock, gather_, [this] { return wake_; });
-    wake_ = false;
 }
 
 } // namespace dsoc::server

@@ -143,7 +143,8 @@ void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
         ->capture_default_str();
     app.add_option("--io-gather-us", config.io_gather_us,
                    "After each wakeup the I/O thread lets socket events gather this long, "
-                   "reading many clients' inputs in one wakeup (0: wake for each) [us]")
+                   "reading many clients' inputs in one wakeup; timers and pings may be "
+                   "late by as much (0: wake for each) [us]")
         ->capture_default_str();
     app.add_option("--max-inputs-per-second", config.max_inputs_per_second,
                    "Messages a client may send per second; more are dropped, twice that "

@@ -175,6 +175,7 @@ void Server::start_tick() {
 
 void Server::finish_tick(Clock::time_point phase_end, std::exception_ptr error) {
     const auto handover_start = Clock::now();
+    stats_.handover_wait.observe(std::chrono::duration<double>(handover_start - phase_end).count());
     phase_running_ = false;
     phase_work_.reset();
     if (error) {

@@ -4,6 +4,7 @@
 #include "dsoc/server/dsoc_settings.hpp"
 #include "dsoc/visibility/shaft_occlusion.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -73,6 +74,15 @@ std::vector<std::string> validate(const ServerConfig& c) {
     }
     check(p, c.io_gather_us >= 0 && c.io_gather_us <= 20000, "io_gather_us",
           "must be 0..20000 µs, got " + std::to_string(c.io_gather_us));
+    // Timers fire up to a gather late (io_loop.hpp): the tick's must stay well within
+    // its period.
+    check(p,
+          c.tick_rate <= 0 ||
+              static_cast<std::int64_t>(c.io_gather_us) * c.tick_rate * 4 <= 1'000'000,
+          "io_gather_us",
+          "must be at most a quarter of the tick period (" +
+              std::to_string(250'000 / std::max(1, c.tick_rate)) + " µs at " +
+              std::to_string(c.tick_rate) + " Hz), got " + std::to_string(c.io_gather_us));
     check(p, c.slow_client_timeout_ms >= 100 && c.slow_client_timeout_ms <= 60000,
           "slow_client_timeout_ms",
           "must be 100..60000 ms, got " + std::to_string(c.slow_client_timeout_ms));

@@ -38,6 +38,10 @@ std::string Server::render_metrics() const {
                   "Wall time per tick of the hand-over after the parallel phase: snapshot frames "
                   "handed to the sockets, the trace, the leaves.",
                   stats_.handover_duration);
+    out.histogram("dsoc_handover_wait_seconds",
+                  "Wall time per tick from the parallel phase's end to the hand-over's start: how "
+                  "long the finished snapshots waited for the I/O thread.",
+                  stats_.handover_wait);
     out.counter("dsoc_ticks_total", "Ticks run.", d(stats_.ticks));
     out.counter("dsoc_late_ticks_total",
                 "Ticks that started more than one period late, or in place of skipped ones.",

@@ -16,10 +16,13 @@ namespace dsoc::testing {
 
 class RunningServer {
 public:
+    /// Runs the server as dsoc-server does: on an IoLoop with the config's gather.
     explicit RunningServer(server::ServerConfig config)
-        : server_(io_, prepare(std::move(config)), rooms_map()) {
+        : loop_(io_, std::chrono::microseconds(config.io_gather_us)),
+          server_(io_, prepare(std::move(config)), rooms_map()) {
+        server_.set_io_loop(&loop_);
         port_ = server_.start();
-        thread_ = std::thread([this] { io_.run(); });
+        thread_ = std::thread([this] { loop_.run(); });
     }
     ~RunningServer() { stop(); }
     RunningServer(const RunningServer&) = delete;
@@ -50,6 +53,7 @@ private:
     }
 
     boost::asio::io_context io_;
+    server::IoLoop loop_; // before the server, which wakes it until it is destroyed
     server::Server server_;
     std::uint16_t port_ = 0;
     std::thread thread_;

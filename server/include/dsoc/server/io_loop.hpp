@@ -1,23 +1,27 @@
 #pragma once
 // The I/O thread's loop: io_context::run(), except that after each wakeup that ran
 // handlers the thread lets socket events gather for a while before it waits for them
-// again, so that what arrives meanwhile (hundreds of clients' inputs, each sent at its
-// own moment within the tick) is read in one wakeup instead of one each. Every input a
-// client sends wakes a thread sleeping on the socket, and on a virtual machine each of
-// those wakeups costs an interrupt between cores and a context switch, on the
-// clients' side too; on this project's two-core machine 500 clients at 30 Hz caused
-// about 15,000 a second. A gathered event waits at most `gather`: an input is applied
-// at the next tick start anyway, and a ping's answer is late by less than that.
+// again, so that what arrives meanwhile (many clients' inputs, each sent at its own
+// moment within the tick) is read in one wakeup instead of one each. A thread that
+// sleeps on the sockets is woken for nearly every arrival, and each wakeup costs the
+// sender an interrupt between cores (dear on a virtual machine) and the server a
+// context switch.
 //
-// What a gather must not delay is handed over with wake(): the server calls it when a
-// tick's parallel phase ends (its hand-over is posted from a worker thread). Timers,
-// the tick's included, fire up to `gather` late; a tick's start moves by that much,
-// its duration and the tick rate do not.
+// The contract, with `gather` the setting (ServerConfig::io_gather_us):
+// - a socket event waits at most `gather` before its handler runs: an input reaches
+//   the next tick start all the same, a ping's answer is late by at most `gather`;
+// - timers fire up to `gather` late, the tick's too: a tick's start moves by that
+//   much, its duration does not, and as long as `gather` is well below the tick
+//   period (validate() allows a quarter) the tick rate does not;
+// - a handler posted from another thread also waits out the gather unless the poster
+//   calls wake() after posting: the server does so when a tick's parallel phase ends,
+//   so that the hand-over starts at once.
 
 #include <boost/asio/io_context.hpp>
 
 #include <chrono>
 #include <condition_variable>
+#include <cstdint>
 #include <mutex>
 
 namespace dsoc::server {

@@ -97,6 +97,10 @@ struct ServerStats {
     /// Per tick, wall time of the hand-over after the phase: the snapshot frames handed
     /// to the sockets (on the pool), the trace, the leaves.
     DurationHistogram handover_duration;
+    /// Per tick, wall time from the parallel phase's end to the hand-over's start: how
+    /// long the finished snapshots waited for the I/O thread (busy with sockets, or
+    /// gathering events without a wake; io_loop.hpp). Not part of the tick's work.
+    DurationHistogram handover_wait;
     /// Client-ticks served the policy's cheapest answer: their turn came after the
     /// tick's culling budget (ServerConfig::culling_budget).
     std::uint64_t cheapest_client_ticks = 0;

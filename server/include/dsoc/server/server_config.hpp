@@ -142,9 +142,9 @@ struct ServerConfig {
     /// [Units: bytes] [Limit: 0 or 4096..16 MiB]
     int socket_send_buffer_bytes = 0;
     /// How long the I/O thread lets socket events gather after each wakeup before it
-    /// waits for them again (io_loop.hpp): one wakeup reads what many clients sent
-    /// meanwhile. 0: it wakes for each arrival. Timers and pings may be late by this
-    /// much. [Units: µs] [Limit: 0..20000]
+    /// waits for them again; what may be late by this much is in io_loop.hpp. 0: it
+    /// wakes for each arrival. [Units: µs] [Limit: 0..20000, and at most a quarter of
+    /// the tick period]
     int io_gather_us = 1000;
     /// Messages (inputs and pings) a client may send per second; a burst of one
     /// second's worth is allowed. Beyond it messages are dropped, and a client whose
