@@ -24,10 +24,11 @@ constexpr auto kCloseGrace = std::chrono::seconds(2);
 /// this process (and their arrival one of the server's I/O thread): at most 1,000 a
 /// second, where one timer per input woke it clients x tick rate times a second (15,000
 /// for 500 clients at 30 Hz). Each client keeps its own phase within the tick, and the
-/// delay, under 1 ms, is less than any network's jitter.
+/// delay, under 1 ms, is below the jitter of any network a game is played over.
 Clock::time_point on_whole_millisecond(Clock::time_point due) {
     return std::chrono::ceil<std::chrono::milliseconds>(due);
 }
+
 /// The first block of a thread's decoding arena: a snapshot of every entity of a
 /// large arena, audit poses included, fits.
 constexpr std::size_t kIncomingArenaBytes = 256 * 1024;
