@@ -53,16 +53,18 @@ pb::Envelope client_hello() {
     return m;
 }
 
-/// A server and its metrics endpoint on one io_context, run on one thread (as
-/// dsoc-server runs them).
+/// A server and its metrics endpoint on one io_context, run on one thread by an
+/// IoLoop with the config's gather (as dsoc-server runs them).
 class ServerWithMetrics {
 public:
     ServerWithMetrics(server::ServerConfig config, std::shared_ptr<const maps::Map> map)
-        : server_(io_, std::move(config), std::move(map)),
+        : loop_(io_, std::chrono::microseconds(config.io_gather_us)),
+          server_(io_, std::move(config), std::move(map)),
           metrics_(io_, [this] { return server_.render_metrics(); }) {
+        server_.set_io_loop(&loop_);
         port_ = server_.start();
         metrics_port_ = metrics_.start("127.0.0.1", 0);
-        thread_ = std::thread([this] { io_.run(); });
+        thread_ = std::thread([this] { loop_.run(); });
     }
     ~ServerWithMetrics() { stop(); }
     ServerWithMetrics(const ServerWithMetrics&) = delete;
@@ -96,6 +98,7 @@ public:
 
 private:
     asio::io_context io_;
+    server::IoLoop loop_; // before the server, which wakes it until it is destroyed
     server::Server server_;
     server::MetricsEndpoint metrics_;
     std::uint16_t port_ = 0;
