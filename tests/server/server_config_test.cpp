@@ -65,5 +65,25 @@ TEST(ServerConfig, InputCapMustLetAnHonestClientThrough) {
     EXPECT_TRUE(validate(c).empty());
 }
 
+/// Timers fire up to a gather late (io_loop.hpp): the gather stays within a quarter of
+/// the tick period.
+TEST(ServerConfig, TheIoThreadsGatherStaysWellWithinTheTickPeriod) {
+    ServerConfig c;
+    c.insecure = true;
+    c.tick_rate = 30; // a quarter of the period: 8,333 µs
+    c.io_gather_us = 8'333;
+    EXPECT_TRUE(validate(c).empty());
+    c.io_gather_us = 8'400;
+    const auto problems = validate(c);
+    ASSERT_EQ(problems.size(), 1u);
+    EXPECT_EQ(problems[0].rfind("io_gather_us: must be at most a quarter of the tick period", 0),
+              0u)
+        << problems[0];
+    c.io_gather_us = 0; // wakes for each arrival
+    EXPECT_TRUE(validate(c).empty());
+    c.io_gather_us = -1;
+    EXPECT_FALSE(validate(c).empty());
+}
+
 } // namespace
 } // namespace dsoc::server
