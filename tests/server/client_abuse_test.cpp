@@ -195,7 +195,7 @@ TEST(ClientAbuse, GoodClientsGetEveryFrameWholeAndATicksPartsAddUp) {
 TEST(ClientAbuse, TheHandOverDoesNotWaitOutTheIoThreadsGather) {
     server::ServerConfig c = base_config();
     c.tick_rate = 10;
-    c.io_gather_us = 20'000; // the most validate() allows
+    c.io_gather_us = 20'000;                          // the most validate() allows
     for (const auto& problem : server::validate(c)) { // the fixture fills in the rest
         EXPECT_EQ(problem.find("io_gather_us"), std::string::npos) << problem;
     }
