@@ -18,12 +18,32 @@ constexpr auto kControlPeriod = std::chrono::milliseconds(20);
 constexpr int kFailuresBeforeGivingUp = 3;
 } // namespace
 
-LoadRun::LoadRun(asio::io_context& io, LoadConfig config)
-    : io_(io), config_(std::move(config)),
+int shard_share(int total, Shard shard) {
+    // The clients 0..total-1 dealt round the shards: shard i has those equal to i
+    // modulo count, so the shards' clients are named by the stride below.
+    return total > shard.index ? (total - shard.index + shard.count - 1) / shard.count : 0;
+}
+
+std::vector<int> shard_group_shares(int total, const std::vector<ClientGroup>& groups,
+                                    Shard shard) {
+    std::vector<int> shares = split_by_weight(total, groups);
+    for (std::size_t g = 0; g < shares.size(); ++g) {
+        const int first = static_cast<int>(g % static_cast<std::size_t>(shard.count));
+        const int dealt = (shard.index - first + shard.count) % shard.count;
+        shares[g] = shard_share(shares[g], Shard{dealt, shard.count});
+    }
+    return shares;
+}
+
+LoadRun::LoadRun(asio::io_context& io, LoadConfig config, Shard shard,
+                 std::shared_ptr<SharedRunState> shared)
+    : io_(io), config_(std::move(config)), shard_(shard),
+      shared_(shared ? std::move(shared) : std::make_shared<SharedRunState>()),
       scenario_(config_.scenario
                     ? *config_.scenario
                     : implicit_scenario(config_.clients, config_.duration_s, config_.ramp_up_s)),
-      groups_(scenario_.groups.size()), control_timer_(io), second_timer_(io), rng_(config_.seed) {
+      groups_(scenario_.groups.size()), control_timer_(io), second_timer_(io),
+      rng_(config_.seed + static_cast<std::uint64_t>(shard.index)), next_index_(shard.index) {
     if (config_.connect_timeout_s) {
         scenario_.connect_timeout_s = *config_.connect_timeout_s;
     }
@@ -39,6 +59,10 @@ void LoadRun::on_finished(std::function<void()> callback) {
     on_finished_ = std::move(callback);
 }
 
+void LoadRun::on_stopping(std::function<void(const std::string&)> callback) {
+    on_stopping_ = std::move(callback);
+}
+
 double LoadRun::elapsed_s() const {
     return std::chrono::duration<double>(Clock::now() - started_).count();
 }
@@ -48,6 +72,9 @@ void LoadRun::start() {
     last_control_ = started_;
     started_once_ = true;
     control();
+    if (sample_externally_) {
+        return;
+    }
     second_timer_.expires_at(started_ + std::chrono::seconds(1));
     second_timer_.async_wait([this](const boost::system::error_code& ec) {
         if (!ec) {
@@ -68,17 +95,28 @@ void LoadRun::control() {
     }
     const double dt = std::chrono::duration<double>(now - last_control_).count();
     last_control_ = now;
-    target_ = target_at(scenario_.stages, t);
-    const std::vector<int> shares = split_by_weight(target_, scenario_.groups);
+    const std::vector<int> shares =
+        shard_group_shares(target_at(scenario_.stages, t), scenario_.groups, shard_);
+    target_ = 0;
     int connected = 0;
     for (std::size_t g = 0; g < groups_.size(); ++g) {
+        target_ += shares[g];
         follow(g, shares[g], now, dt);
         for (const Slot& s : groups_[g].slots) {
             connected += s.client->connected() ? 1 : 0;
         }
     }
     peak_connected_ = std::max(peak_connected_, connected);
-    ever_connected_ = std::max(ever_connected_, connected);
+    if (connected > 0) {
+        shared_->any_hello = true;
+    }
+    const int run_connected =
+        shared_->connected.fetch_add(connected - connected_told_) + (connected - connected_told_);
+    connected_told_ = connected;
+    int peak = shared_->peak_connected.load();
+    while (run_connected > peak &&
+           !shared_->peak_connected.compare_exchange_weak(peak, run_connected)) {
+    }
     control_timer_.expires_at(now + kControlPeriod);
     control_timer_.async_wait([this](const boost::system::error_code& ec) {
         if (!ec) {
@@ -100,7 +138,7 @@ void LoadRun::follow(std::size_t g, int share, Clock::time_point now, double dt_
         }
     }
     // Churn: a connected session leaves for good; a new client takes its place below.
-    gs.churn_owed += group.churn_per_s * dt_s;
+    gs.churn_owed += group.churn_per_s * dt_s / shard_.count; // the shards share it
     while (gs.churn_owed >= 1.0) {
         std::vector<std::size_t> candidates;
         for (std::size_t i = 0; i < gs.slots.size(); ++i) {
@@ -129,7 +167,7 @@ void LoadRun::follow(std::size_t g, int share, Clock::time_point now, double dt_
             index = gs.respawning_indexes.back();
             gs.respawning_indexes.pop_back();
         } else {
-            ++next_index_;
+            next_index_ += shard_.count;
         }
         start_session(g, index);
     }
@@ -139,7 +177,8 @@ void LoadRun::start_session(std::size_t g, int index) {
     SessionSetup setup;
     setup.group = &scenario_.groups[g];
     setup.index = index;
-    setup.session = clients_.size();
+    setup.session = clients_.size() * static_cast<std::size_t>(shard_.count) +
+                    static_cast<std::size_t>(shard_.index);
     setup.connect_timeout_s = scenario_.connect_timeout_s;
     setup.run_end =
         started_ + std::chrono::microseconds(static_cast<long>(scenario_.length_s() * 1e6));
@@ -162,6 +201,7 @@ void LoadRun::start_session(std::size_t g, int index) {
 void LoadRun::on_session_failure(SimClient& client) {
     const ClientStats& s = client.stats();
     ++failures_;
+    const std::uint64_t run_failures = ++shared_->failures;
     ++failures_by_reason_[s.failure];
     ++second_failures_[s.failure];
     if (failures_by_reason_[s.failure] == 1 && config_.progress) {
@@ -177,11 +217,12 @@ void LoadRun::on_session_failure(SimClient& client) {
         return;
     }
     const int needed = std::min(kFailuresBeforeGivingUp, std::max(1, scenario_.peak_target()));
-    bool any_hello = ever_connected_ > 0;
     for (const auto& c : clients_) {
-        any_hello = any_hello || c->stats().hello_received;
+        if (c->stats().hello_received) {
+            shared_->any_hello = true;
+        }
     }
-    if (!any_hello && failures_ >= static_cast<std::uint64_t>(needed)) {
+    if (!shared_->any_hello && run_failures >= static_cast<std::uint64_t>(needed)) {
         stop(fmt::format("no client could connect ({})", join_counts(failures_by_reason_)));
     }
 }
@@ -209,13 +250,19 @@ void LoadRun::stop(const std::string& why) {
     stopped_ = Clock::now();
     if (!why.empty()) {
         stopped_early_ = why;
-        if (config_.progress) {
+        if (config_.progress && !sample_externally_) { // else the owner says it, once
             std::fprintf(stderr, "[%5.1fs] stopping early: %s\n", elapsed_s(), why.c_str());
         }
     }
     control_timer_.cancel();
     second_timer_.cancel();
-    if (started_once_) {
+    if (on_stopping_) {
+        on_stopping_(stopped_early_);
+    }
+    if (started_once_ && sample_externally_) {
+        last_second_ = count_second(); // before the sessions are told to stop
+    }
+    if (started_once_ && !sample_externally_) {
         const SecondSample last = take_sample();
         if (last.interval_s > 0.05 && on_second_) {
             on_second_(last);
@@ -244,10 +291,31 @@ void LoadRun::maybe_finished() {
 }
 
 SecondSample LoadRun::take_sample() {
-    SecondSample s;
+    ShardSecond counts = count_second();
+    SecondSample& s = counts.sample;
     s.t_s = elapsed_s();
     s.interval_s = s.t_s - last_sample_s_;
     last_sample_s_ = s.t_s;
+    s.interarrival_ms = counts.interarrival_ms.summary();
+    return s;
+}
+
+ShardSecond LoadRun::take_shard_second() {
+    return stopping_ ? ShardSecond{} : count_second();
+}
+
+ShardSecond LoadRun::take_last_second() {
+    if (!last_second_) {
+        return count_second();
+    }
+    ShardSecond last = std::move(*last_second_);
+    last_second_.reset();
+    return last;
+}
+
+ShardSecond LoadRun::count_second() {
+    ShardSecond out;
+    SecondSample& s = out.sample;
     s.target = target_;
     std::uint64_t down = 0;
     std::uint64_t up = 0;
@@ -268,13 +336,13 @@ SecondSample LoadRun::take_sample() {
     last_bytes_down_ = down;
     last_bytes_up_ = up;
     last_snapshots_ = snapshots;
-    s.interarrival_ms = second_interarrival_.summary();
+    out.interarrival_ms = std::move(second_interarrival_);
     second_interarrival_ = SampleHistogram{};
     s.failures.swap(second_failures_);
     second_failures_.clear();
     s.failures_total = failures_;
     peak_connected_ = std::max(peak_connected_, s.connected);
-    return s;
+    return out;
 }
 
 void LoadRun::sample_second() {

@@ -1,7 +1,7 @@
 // dsoc-simclient: headless simulated clients; a load generator and protocol checker.
 
 #include "dsoc/cli/program.hpp"
-#include "dsoc/simclient/load_run.hpp"
+#include "dsoc/simclient/parallel_load_run.hpp"
 #include "dsoc/simclient/report_figures.hpp"
 #include "dsoc/simclient/scenario_file.hpp"
 
@@ -62,6 +62,7 @@ int main(int argc, char** argv) {
     std::vector<std::string> threshold_texts;
     bool quiet = false;
     bool list_figures = false;
+    int threads = 1;
 
     CLI::App app{"dsoc-simclient: simulated clients that load a dsoc server and check the "
                  "protocol.\nExits 0 when the run passed; 1 when it failed (a session failed "
@@ -112,6 +113,11 @@ int main(int argc, char** argv) {
                    "Announce this protocol version in the hello (testing aid: a server refuses "
                    "any other than its own)")
         ->capture_default_str();
+    app.add_option("--threads", threads,
+                   "Threads, each running its share of the clients (at most one per client; "
+                   "a load generator on a machine of its own wants one per core)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 1024));
     app.add_flag("--quiet", quiet, "No progress lines");
     std::string token_key_file;
     std::string token_hex;
@@ -179,7 +185,7 @@ int main(int argc, char** argv) {
     }
 
     boost::asio::io_context io;
-    dsoc::simclient::LoadRun run(io, config);
+    dsoc::simclient::ParallelLoadRun run(io, config, threads);
     boost::asio::signal_set signals(io, SIGINT, SIGTERM);
     signals.async_wait([&](const boost::system::error_code& ec, int number) {
         if (!ec) {

@@ -257,9 +257,10 @@ latency = "20ms"
 )");
     LightServer server;
     json report;
+    // On two threads: the stages, the groups' shares and the seconds are the run's.
     const ProgramRun run = simclient(files,
                                      {"--server", server.address(), "--scenario", scenario,
-                                      "--timeseries", files.path("series.jsonl")},
+                                      "--timeseries", files.path("series.jsonl"), "--threads", "2"},
                                      report);
     EXPECT_EQ(run.status, 0) << run.out << run.err;
     EXPECT_EQ(report["clients"], 6) << report.dump(2);

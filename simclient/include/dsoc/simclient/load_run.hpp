@@ -7,34 +7,97 @@
 // (the run fails), when no session could connect (the first min(3, peak target)
 // sessions all failed), or on stop(). A session that fails is not replaced: its place
 // stays taken until the stages lower the count.
+//
+// A LoadRun may be one shard of a parallel run (ParallelLoadRun): it then follows its
+// share of every stage's target (shard_share) and names its clients index, index +
+// count, ..., so that the shards together are the whole scenario.
 
 #include "dsoc/simclient/load_config.hpp"
 #include "dsoc/simclient/load_report.hpp"
+#include "dsoc/simclient/sample_histogram.hpp"
 #include "dsoc/simclient/sim_client.hpp"
 #include "dsoc/simclient/timeseries.hpp"
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/steady_timer.hpp>
 
+#include <atomic>
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
 
 namespace dsoc::simclient {
 
+/// Which part of a parallel run a LoadRun is: shard `index` of `count`.
+struct Shard {
+    int index = 0; ///< [Limit: 0..count-1]
+    int count = 1; ///< [Limit: >= 1]
+};
+
+/// The shard's part of `total` clients: the clients 0..total-1 whose number is the
+/// shard's index modulo the count. The parts of all shards sum to `total` and differ
+/// by at most one.
+[[nodiscard]] int shard_share(int total, Shard shard);
+
+/// The shard's clients of each group when the run wants `total`: the run's total split
+/// by weight (split_by_weight), then each group's clients dealt round the shards,
+/// group g's first to shard g modulo the count (so that small groups spread out). Over
+/// all shards, each group gets its split.
+[[nodiscard]] std::vector<int> shard_group_shares(int total, const std::vector<ClientGroup>& groups,
+                                                  Shard shard);
+
+/// What the shards of one run share, so that the run's rules are the run's and not a
+/// shard's: whether any session got its hello and how many failed (the run gives up
+/// when its first sessions all failed), and how many are connected at once.
+/// Thread-safe.
+struct SharedRunState {
+    std::atomic<bool> any_hello{false};
+    std::atomic<std::uint64_t> failures{0};
+    std::atomic<int> connected{0}; ///< the shards' counts at their last control step
+    std::atomic<int> peak_connected{0};
+};
+
+/// One shard's second, for its owner to merge with the others' (the interarrivals as a
+/// histogram: percentiles do not add up).
+struct ShardSecond {
+    SecondSample sample; ///< t_s, interval_s and interarrival_ms not set
+    SampleHistogram interarrival_ms;
+};
+
 class LoadRun {
 public:
     /// `config.scenario` (or the implicit one of its plain fields) must be valid
     /// (validate()).
-    LoadRun(boost::asio::io_context& io, LoadConfig config);
+    /// `shared`: the state of the whole run when this is one of its shards (nullptr:
+    /// a run of its own).
+    LoadRun(boost::asio::io_context& io, LoadConfig config, Shard shard = {},
+            std::shared_ptr<SharedRunState> shared = nullptr);
+
+    /// The owner samples the run (take_shard_second) instead of the run's own timer, and
+    /// says why the run stopped early: no progress lines but a session's first failure
+    /// of each kind, no on_second. Before start().
+    void sample_externally() { sample_externally_ = true; }
+    /// The counts since the last call (or the start), up to when the run started to
+    /// stop (after that: nothing). On the run's io_context.
+    [[nodiscard]] ShardSecond take_shard_second();
+    /// Once the run has started to stop: the counts from the last take_shard_second()
+    /// to that moment (as a single run's last sample). On the run's io_context.
+    [[nodiscard]] ShardSecond take_last_second();
+    /// Why the run stopped before the scenario's end; "" when it did not.
+    [[nodiscard]] const std::string& stopped_early() const { return stopped_early_; }
 
     /// Called with every second's sample (and the last, shorter one at the end).
     void on_second(std::function<void(const SecondSample&)> callback);
     /// Called once, when the run is over and every session has closed.
     void on_finished(std::function<void()> callback);
+    /// Called once, when the run starts to stop (at the scenario's end, early, or on
+    /// stop()), with the reason it stops early ("" at the scenario's end or a plain
+    /// stop()).
+    void on_stopping(std::function<void(const std::string& why)> callback);
 
     /// Schedules everything; io_context::run() returns when the run is over.
     void start();
@@ -70,11 +133,14 @@ private:
     void on_session_closed(SimClient& client);
     void sample_second();
     [[nodiscard]] SecondSample take_sample();
+    [[nodiscard]] ShardSecond count_second();
     void maybe_finished();
     [[nodiscard]] double elapsed_s() const;
 
     boost::asio::io_context& io_;
     LoadConfig config_;
+    Shard shard_;
+    std::shared_ptr<SharedRunState> shared_;
     Scenario scenario_;
     std::vector<GroupState> groups_;
     std::vector<std::shared_ptr<SimClient>> clients_;
@@ -82,6 +148,7 @@ private:
     boost::asio::steady_timer second_timer_;
     std::function<void(const SecondSample&)> on_second_;
     std::function<void()> on_finished_;
+    std::function<void(const std::string&)> on_stopping_;
     std::mt19937_64 rng_;
     Clock::time_point started_;
     Clock::time_point stopped_;
@@ -89,11 +156,13 @@ private:
     bool started_once_ = false;
     bool stopping_ = false;
     bool finished_ = false;
+    bool sample_externally_ = false;
+    std::optional<ShardSecond> last_second_; ///< taken as the run starts to stop
     std::string stopped_early_;
     int next_index_ = 0;
     int target_ = 0;
     int peak_connected_ = 0;
-    int ever_connected_ = 0;
+    int connected_told_ = 0; ///< this shard's part of shared_->connected
     std::uint64_t failures_ = 0;
     std::map<std::string, std::uint64_t> failures_by_reason_;
     // the current second
