@@ -42,17 +42,13 @@ LoadRun::LoadRun(asio::io_context& io, LoadConfig config, Shard shard,
       scenario_(config_.scenario
                     ? *config_.scenario
                     : implicit_scenario(config_.clients, config_.duration_s, config_.ramp_up_s)),
-      groups_(scenario_.groups.size()), control_timer_(io), second_timer_(io),
+      groups_(scenario_.groups.size()), control_timer_(io),
       rng_(config_.seed + static_cast<std::uint64_t>(shard.index)), next_index_(shard.index) {
     if (config_.connect_timeout_s) {
         scenario_.connect_timeout_s = *config_.connect_timeout_s;
     }
     scenario_.thresholds.insert(scenario_.thresholds.end(), config_.thresholds.begin(),
                                 config_.thresholds.end());
-}
-
-void LoadRun::on_second(std::function<void(const SecondSample&)> callback) {
-    on_second_ = std::move(callback);
 }
 
 void LoadRun::on_finished(std::function<void()> callback) {
@@ -72,15 +68,6 @@ void LoadRun::start() {
     last_control_ = started_;
     started_once_ = true;
     control();
-    if (sample_externally_) {
-        return;
-    }
-    second_timer_.expires_at(started_ + std::chrono::seconds(1));
-    second_timer_.async_wait([this](const boost::system::error_code& ec) {
-        if (!ec) {
-            sample_second();
-        }
-    });
 }
 
 void LoadRun::control() {
@@ -248,25 +235,13 @@ void LoadRun::stop(const std::string& why) {
     }
     stopping_ = true;
     stopped_ = Clock::now();
-    if (!why.empty()) {
-        stopped_early_ = why;
-        if (config_.progress && !sample_externally_) { // else the owner says it, once
-            std::fprintf(stderr, "[%5.1fs] stopping early: %s\n", elapsed_s(), why.c_str());
-        }
-    }
+    stopped_early_ = why;
     control_timer_.cancel();
-    second_timer_.cancel();
     if (on_stopping_) {
         on_stopping_(stopped_early_);
     }
-    if (started_once_ && sample_externally_) {
+    if (started_once_) {
         last_second_ = count_second(); // before the sessions are told to stop
-    }
-    if (started_once_ && !sample_externally_) {
-        const SecondSample last = take_sample();
-        if (last.interval_s > 0.05 && on_second_) {
-            on_second_(last);
-        }
     }
     for (auto& c : clients_) {
         c->stop();
@@ -288,16 +263,6 @@ void LoadRun::maybe_finished() {
     if (on_finished_) {
         on_finished_();
     }
-}
-
-SecondSample LoadRun::take_sample() {
-    ShardSecond counts = count_second();
-    SecondSample& s = counts.sample;
-    s.t_s = elapsed_s();
-    s.interval_s = s.t_s - last_sample_s_;
-    last_sample_s_ = s.t_s;
-    s.interarrival_ms = counts.interarrival_ms.summary();
-    return s;
 }
 
 ShardSecond LoadRun::take_shard_second() {
@@ -343,22 +308,6 @@ ShardSecond LoadRun::count_second() {
     s.failures_total = failures_;
     peak_connected_ = std::max(peak_connected_, s.connected);
     return out;
-}
-
-void LoadRun::sample_second() {
-    const SecondSample s = take_sample();
-    if (config_.progress) {
-        std::fprintf(stderr, "%s\n", format_progress_line(s).c_str());
-    }
-    if (on_second_) {
-        on_second_(s);
-    }
-    second_timer_.expires_at(second_timer_.expiry() + std::chrono::seconds(1));
-    second_timer_.async_wait([this](const boost::system::error_code& ec) {
-        if (!ec && !stopping_) {
-            sample_second();
-        }
-    });
 }
 
 LoadReport LoadRun::report() const {

@@ -21,7 +21,6 @@ ParallelLoadRun::ParallelLoadRun(asio::io_context& io, LoadConfig config, int th
     for (int i = 0; i < count; ++i) {
         auto shard = std::make_unique<ShardRun>();
         shard->run = std::make_unique<LoadRun>(shard->io, config_, Shard{i, count}, shared_);
-        shard->run->sample_externally();
         ShardRun* raw = shard.get();
         shard->run->on_stopping([this](const std::string& why) {
             asio::post(io_, [this, why] { on_shard_stopping(why); });

@@ -1,16 +1,17 @@
 #pragma once
-// A load run: sessions of simulated clients on one io_context, started and stopped to
-// follow a scenario's stages, shared among its groups by weight (with their churn and
-// respawns), sampled every second, stopped cleanly at the end, then summarized.
+// A load run on one thread: sessions of simulated clients on one io_context, started
+// and stopped to follow a scenario's stages, shared among its groups by weight (with
+// their churn and respawns), stopped cleanly at the end, then summarized. Its owner
+// (ParallelLoadRun, which runs one or more of them) takes its counts every second.
 //
 // The run ends at the scenario's end, or early: when the server shuts down before it
 // (the run fails), when no session could connect (the first min(3, peak target)
 // sessions all failed), or on stop(). A session that fails is not replaced: its place
 // stays taken until the stages lower the count.
 //
-// A LoadRun may be one shard of a parallel run (ParallelLoadRun): it then follows its
-// share of every stage's target (shard_share) and names its clients index, index +
-// count, ..., so that the shards together are the whole scenario.
+// A LoadRun may be one shard of several: it then follows its share of every group's
+// target (shard_group_shares) and names its clients index, index + count, ..., so that
+// the shards together are the whole scenario.
 
 #include "dsoc/simclient/load_config.hpp"
 #include "dsoc/simclient/load_report.hpp"
@@ -77,21 +78,15 @@ public:
     LoadRun(boost::asio::io_context& io, LoadConfig config, Shard shard = {},
             std::shared_ptr<SharedRunState> shared = nullptr);
 
-    /// The owner samples the run (take_shard_second) instead of the run's own timer, and
-    /// says why the run stopped early: no progress lines but a session's first failure
-    /// of each kind, no on_second. Before start().
-    void sample_externally() { sample_externally_ = true; }
     /// The counts since the last call (or the start), up to when the run started to
     /// stop (after that: nothing). On the run's io_context.
     [[nodiscard]] ShardSecond take_shard_second();
     /// Once the run has started to stop: the counts from the last take_shard_second()
-    /// to that moment (as a single run's last sample). On the run's io_context.
+    /// to that moment. On the run's io_context.
     [[nodiscard]] ShardSecond take_last_second();
     /// Why the run stopped before the scenario's end; "" when it did not.
     [[nodiscard]] const std::string& stopped_early() const { return stopped_early_; }
 
-    /// Called with every second's sample (and the last, shorter one at the end).
-    void on_second(std::function<void(const SecondSample&)> callback);
     /// Called once, when the run is over and every session has closed.
     void on_finished(std::function<void()> callback);
     /// Called once, when the run starts to stop (at the scenario's end, early, or on
@@ -131,8 +126,6 @@ private:
     void start_session(std::size_t group, int index);
     void on_session_failure(SimClient& client);
     void on_session_closed(SimClient& client);
-    void sample_second();
-    [[nodiscard]] SecondSample take_sample();
     [[nodiscard]] ShardSecond count_second();
     void maybe_finished();
     [[nodiscard]] double elapsed_s() const;
@@ -145,8 +138,6 @@ private:
     std::vector<GroupState> groups_;
     std::vector<std::shared_ptr<SimClient>> clients_;
     boost::asio::steady_timer control_timer_;
-    boost::asio::steady_timer second_timer_;
-    std::function<void(const SecondSample&)> on_second_;
     std::function<void()> on_finished_;
     std::function<void(const std::string&)> on_stopping_;
     std::mt19937_64 rng_;
@@ -156,7 +147,6 @@ private:
     bool started_once_ = false;
     bool stopping_ = false;
     bool finished_ = false;
-    bool sample_externally_ = false;
     std::optional<ShardSecond> last_second_; ///< taken as the run starts to stop
     std::string stopped_early_;
     int next_index_ = 0;
@@ -166,7 +156,6 @@ private:
     std::uint64_t failures_ = 0;
     std::map<std::string, std::uint64_t> failures_by_reason_;
     // the current second
-    double last_sample_s_ = 0.0;
     std::uint64_t last_bytes_down_ = 0;
     std::uint64_t last_bytes_up_ = 0;
     std::uint64_t last_snapshots_ = 0;
