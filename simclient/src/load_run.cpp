@@ -24,6 +24,11 @@ int shard_share(int total, Shard shard) {
     return total > shard.index ? (total - shard.index + shard.count - 1) / shard.count : 0;
 }
 
+bool SharedRunState::first_failure_of(const std::string& reason) {
+    const std::lock_guard lock(mutex_);
+    return reasons_seen_.insert(reason).second;
+}
+
 std::vector<int> shard_group_shares(int total, const std::vector<ClientGroup>& groups,
                                     Shard shard) {
     std::vector<int> shares = split_by_weight(total, groups);
@@ -191,7 +196,7 @@ void LoadRun::on_session_failure(SimClient& client) {
     const std::uint64_t run_failures = ++shared_->failures;
     ++failures_by_reason_[s.failure];
     ++second_failures_[s.failure];
-    if (failures_by_reason_[s.failure] == 1 && config_.progress) {
+    if (config_.progress && shared_->first_failure_of(s.failure)) {
         std::fprintf(stderr, "[%5.1fs] %s failed: %s: %s\n", elapsed_s(), client.name().c_str(),
                      s.failure.c_str(), s.failure_detail.c_str());
     }

@@ -92,14 +92,26 @@ TEST(SimclientFailures, RefusedUnresolvableAndTimeoutAreNamedAndEndTheRunEarly) 
     const TempDir files("dsoc-simclient-connect");
     json report;
     auto t0 = std::chrono::steady_clock::now();
-    const ProgramRun refused = simclient(
-        files, {"--server", "127.0.0.1:" + closed_port(), "--clients", "2", "--duration", "20"},
-        report);
+    // On two threads, one client each, with progress lines: the run gives up as one,
+    // and says so once.
+    const ProgramRun refused = run_program(
+        {program("dsoc-simclient"), "--report", files.path("report.json"), "--server",
+         "127.0.0.1:" + closed_port(), "--clients", "2", "--duration", "20", "--threads", "2"});
+    report = read_json(files.path("report.json"));
     EXPECT_LT(seconds_since(t0), 10.0); // not the whole --duration
     EXPECT_EQ(refused.status, 1) << refused.out << refused.err;
     EXPECT_NE(refused.out.find("failures               2 (refused=2)"), std::string::npos)
         << refused.out;
     EXPECT_NE(refused.out.find("Connection refused"), std::string::npos) << refused.out;
+    const auto count = [](const std::string& text, const std::string& what) {
+        std::size_t n = 0;
+        for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) {
+            ++n;
+        }
+        return n;
+    };
+    EXPECT_EQ(count(refused.err, "failed: refused"), 1u) << refused.err;
+    EXPECT_EQ(count(refused.err, "stopping early"), 1u) << refused.err;
     EXPECT_EQ(report["failures_by_reason"], json({{"refused", 2}})) << report.dump(2);
     EXPECT_EQ(report["protocol_errors"], 0);
     EXPECT_NE(report["stopped_early"].get<std::string>().find("no client could connect"),

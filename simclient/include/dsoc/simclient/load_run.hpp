@@ -26,8 +26,10 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -60,6 +62,14 @@ struct SharedRunState {
     std::atomic<std::uint64_t> failures{0};
     std::atomic<int> connected{0}; ///< the shards' counts at their last control step
     std::atomic<int> peak_connected{0};
+
+    /// True the first time a session of the run fails for `reason` (its progress line
+    /// is printed once per run, not once per shard).
+    [[nodiscard]] bool first_failure_of(const std::string& reason);
+
+private:
+    std::mutex mutex_;
+    std::set<std::string> reasons_seen_;
 };
 
 /// One shard's second, for its owner to merge with the others' (the interarrivals as a

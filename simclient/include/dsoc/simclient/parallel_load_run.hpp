@@ -11,7 +11,7 @@
 // Threading: the caller's io_context (`io`) takes the samples, prints the progress
 // lines and runs the hooks; each shard's sessions run only on their shard's thread.
 // The shards share nothing but a copy of the config each and the run's counters
-// (SharedRunState, atomics).
+// (SharedRunState: atomics, and the failure reasons already printed).
 //
 // A shard's exception ends the process (std::terminate), as an exception out of a
 // single run's io_context::run() in dsoc-simclient's main did.
