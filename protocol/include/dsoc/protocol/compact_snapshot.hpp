@@ -88,14 +88,17 @@ struct SnapshotProblem {
     std::string detail;
 };
 
-/// One replicated entity as the receiver knows it.
+/// One replicated entity as the receiver knows it. The fields every update touches
+/// come first and the two one-byte fields sit together: 40 bytes, so that a replica
+/// slot (FlatIdMap: id and flag, then this) is 48 bytes and spans fewer cache lines.
 struct ReplicaEntity {
     QuantizedPose quantized;
     std::uint8_t tier = 0;
-    std::array<std::uint32_t, 3> half_extents{}; ///< in quanta of `enter_tier`
-    std::uint8_t enter_tier = 0;                 ///< the tier it entered on
+    std::uint8_t enter_tier = 0; ///< the tier it entered on
     std::uint32_t kind = 0;
+    std::array<std::uint32_t, 3> half_extents{}; ///< in quanta of `enter_tier`
 };
+static_assert(sizeof(ReplicaEntity) == 40);
 
 class SnapshotDecoder {
 public:
