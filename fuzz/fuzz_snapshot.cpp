@@ -5,6 +5,7 @@
 // finite.
 
 #include "dsoc/protocol/compact_snapshot.hpp"
+#include "snapshot_input.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -17,8 +18,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (size < 1) {
         return 0;
     }
-    QuantizationSettings settings;
-    settings.angle_steps = 256u + 255u * data[0]; // 256 .. 65281 steps
+    const QuantizationSettings settings = dsoc::fuzzing::settings_from(data[0]);
     SnapshotDecoder decoder(settings);
     {
         SnapshotEncoder encoder(settings); // a plausible starting replica
@@ -33,18 +33,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         }
     }
     // The rest: [length byte][that many bytes of a serialized Snapshot] ...
-    std::size_t at = 1;
     pb::Snapshot snapshot;
-    while (at < size) {
-        const std::size_t n = std::min<std::size_t>(data[at], size - at - 1);
-        ++at;
-        if (snapshot.ParseFromArray(data + at, static_cast<int>(n))) {
-            (void)decoder.apply(snapshot);
-            double worst = 0.0;
-            (void)decoder.check_audit(snapshot, worst);
-        }
-        at += n;
-    }
+    dsoc::fuzzing::for_each_length_prefixed(
+        data, size, 1, [&](const std::uint8_t* bytes, std::size_t n) {
+            if (snapshot.ParseFromArray(bytes, static_cast<int>(n))) {
+                (void)decoder.apply(snapshot);
+                double worst = 0.0;
+                (void)decoder.check_audit(snapshot, worst);
+            }
+        });
     decoder.entities().for_each([&](std::uint32_t id, const ReplicaEntity& /*entity*/) {
         const auto pose = decoder.pose(id);
         if (!pose || !std::isfinite(pose->x) || !std::isfinite(pose->yaw_deg)) {

@@ -9,9 +9,17 @@
 //                           entity update (enters + updates)
 //   vs full snapshots       frames against sending every replicated entity's full
 //                           state every tick (4-byte header + 9-byte tick + 24 each)
+// Each policy is measured twice in the same run: "reliable" is the TCP wire (deltas
+// against what was last sent); "acked" the unreliable one (protocol::AckedSnapshotEncoder:
+// deltas against the newest frame the client acknowledged, positions as residuals
+// against a prediction) over a simulated link of --link-delay ticks each way losing
+// --loss of the datagrams each way. For "acked", updates are the entities a snapshot
+// carries to a new position (an entry, or a prediction that was exact), and every
+// snapshot the client applies is checked against the server's frame (mismatches: 0).
 // Deterministic: the same scenario and seed give the same bytes.
 
 #include "dsoc/cli/program.hpp"
+#include "dsoc/eval/acked_replication.hpp"
 #include "dsoc/eval/parallel.hpp"
 #include "dsoc/eval/policies.hpp"
 #include "dsoc/eval/replication.hpp"
@@ -41,6 +49,16 @@ struct Totals {
     std::uint64_t full_snapshot_bytes = 0; ///< every replicated entity, full state, every tick
 };
 
+void add(Totals& m, const eval::SnapshotCost& cost, std::uint64_t full_snapshot_bytes) {
+    ++m.client_ticks;
+    m.enters += cost.enters;
+    m.updates += cost.updates;
+    m.moving_updates += cost.moving_updates;
+    m.update_bytes += cost.update_bytes;
+    m.frame_bytes += cost.bytes;
+    m.full_snapshot_bytes += full_snapshot_bytes;
+}
+
 double ratio(double a, double b) {
     return b > 0.0 ? a / b : 0.0;
 }
@@ -53,6 +71,7 @@ int main(int argc, char** argv) {
     std::vector<std::string> policy_names = {"broadcast", "distance", "pvs", "occlusion", "dsoc"};
     double seconds = 20.0;
     int threads = 2;
+    eval::LinkModel link;
     CLI::App app{"dsoc-snapshot-bytes: compact snapshot size per policy on an eval scenario"};
     dsoc::cli::set_up(app, "dsoc-snapshot-bytes");
     app.add_option("--scenario", scenario_name, "Scenario name")->capture_default_str();
@@ -62,6 +81,14 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--threads", threads, "Threads over clients (results do not depend on it)")
         ->capture_default_str();
+    app.add_option("--link-delay", link.one_way_ticks,
+                   "acked: ticks a datagram takes one way (the round trip is twice this)")
+        ->check(CLI::Range(0, static_cast<int>(protocol::kAckedHistory) / 2))
+        ->capture_default_str();
+    app.add_option("--loss", link.loss, "acked: share of datagrams lost, each way")
+        ->check(CLI::Range(0.0, 1.0))
+        ->capture_default_str();
+    app.add_option("--seed", link.seed, "acked: seed of the losses")->capture_default_str();
     if (const auto stop = dsoc::cli::parse(app, argc, argv)) {
         return *stop;
     }
@@ -128,6 +155,9 @@ int main(int argc, char** argv) {
         std::vector<std::vector<std::uint32_t>> heard; ///< of each set, the heard-only ids
         std::vector<eval::SnapshotCost> costs;
         Totals totals;
+        std::vector<eval::AckedClientReplication> acked;
+        std::vector<eval::SnapshotCost> acked_costs;
+        Totals acked_totals;
     };
     std::vector<Run> runs;
     for (const auto& name : policy_names) {
@@ -145,6 +175,10 @@ int main(int argc, char** argv) {
         run.sets.resize(viewers);
         run.heard.resize(viewers);
         run.costs.resize(viewers);
+        for (std::size_t c = 0; c < viewers; ++c) {
+            run.acked.emplace_back(viewers, link, static_cast<std::uint32_t>(c));
+        }
+        run.acked_costs.resize(viewers);
         runs.push_back(std::move(run));
     }
 
@@ -161,20 +195,17 @@ int main(int argc, char** argv) {
             eval::parallel_for(viewers, threads, [&](std::size_t c, int worker) {
                 run.policy->select(c, frame, run.sets[c], run.heard[c]);
                 Scratch& s = scratch[static_cast<std::size_t>(worker)];
-                run.costs[c] =
-                    run.replication[c].send(frame, run.sets[c], run.heard[c],
-                                            static_cast<std::uint64_t>(t), s.envelope, s.buffer);
+                const auto tick = static_cast<std::uint64_t>(t);
+                run.costs[c] = run.replication[c].send(frame, run.sets[c], run.heard[c], tick,
+                                                       s.envelope, s.buffer);
+                run.acked_costs[c] =
+                    run.acked[c].send(frame, run.sets[c], run.heard[c], tick, s.envelope, s.buffer);
             });
             for (std::size_t c = 0; c < viewers; ++c) {
-                const eval::SnapshotCost& cost = run.costs[c];
-                Totals& m = run.totals;
-                ++m.client_ticks;
-                m.enters += cost.enters;
-                m.updates += cost.updates;
-                m.moving_updates += cost.moving_updates;
-                m.update_bytes += cost.update_bytes;
-                m.frame_bytes += cost.bytes;
-                m.full_snapshot_bytes += 4 + 9 + eval::kFullStateBytes * run.sets[c].size();
+                const std::uint64_t full_snapshot =
+                    4 + 9 + eval::kFullStateBytes * run.sets[c].size();
+                add(run.totals, run.costs[c], full_snapshot);
+                add(run.acked_totals, run.acked_costs[c], full_snapshot);
             }
         }
         world.advance();
@@ -185,25 +216,45 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "\n");
 
     std::printf("dsoc-snapshot-bytes: scenario %s (%s), %d viewers, %zu entities, %d ticks "
-                "(%.0f s at %d Hz); compact snapshots, protocol v3, near tier (0.125 units, "
-                "4096 angle steps)\n\n",
+                "(%.0f s at %d Hz); compact snapshots, near tier (0.125 units, 4096 angle "
+                "steps); acked: %d + %d ticks of delay, %.1f%% loss each way\n\n",
                 sc.name.c_str(), sc.map.c_str(), sc.viewers, world.entity_count(), ticks,
-                sc.duration_s, sc.tick_rate);
-    std::printf("| policy | updates/client-tick | moving share | update bytes/update | vs full "
-                "state (24 B) | frame bytes/update | frame bytes/client-tick | vs full "
+                sc.duration_s, sc.tick_rate, link.one_way_ticks, link.one_way_ticks,
+                100.0 * link.loss);
+    std::printf("| policy | wire | moving entities/client-tick | update entries/client-tick | "
+                "update bytes/moving entity | vs reliable | frame bytes/client-tick | vs full "
                 "snapshots |\n|---|---|---|---|---|---|---|---|\n");
+    int status = 0;
     for (const Run& run : runs) {
-        const Totals& m = run.totals;
-        const auto ct = static_cast<double>(m.client_ticks);
-        const double per_update = ratio(static_cast<double>(m.update_bytes), m.updates);
-        std::printf(
-            "| %.*s | %.1f | %.1f%% | %.2f | %.3f | %.2f | %.0f | %.3f |\n",
-            static_cast<int>(run.policy->name().size()), run.policy->name().data(),
-            ratio(m.updates, ct), 100.0 * ratio(m.moving_updates, m.updates), per_update,
-            per_update / eval::kFullStateBytes,
-            ratio(static_cast<double>(m.frame_bytes), m.updates + m.enters),
-            ratio(static_cast<double>(m.frame_bytes), ct),
-            ratio(static_cast<double>(m.frame_bytes), static_cast<double>(m.full_snapshot_bytes)));
+        const double reliable_per_moving =
+            ratio(static_cast<double>(run.totals.update_bytes), run.totals.moving_updates);
+        for (const bool acked : {false, true}) {
+            const Totals& m = acked ? run.acked_totals : run.totals;
+            const auto ct = static_cast<double>(m.client_ticks);
+            const double per_moving = ratio(static_cast<double>(m.update_bytes), m.moving_updates);
+            std::printf("| %.*s | %s | %.1f | %.1f | %.2f | %.3f | %.0f | %.3f |\n",
+                        static_cast<int>(run.policy->name().size()), run.policy->name().data(),
+                        acked ? "acked" : "reliable", ratio(m.moving_updates, ct),
+                        ratio(m.updates, ct), per_moving, ratio(per_moving, reliable_per_moving),
+                        ratio(static_cast<double>(m.frame_bytes), ct),
+                        ratio(static_cast<double>(m.frame_bytes),
+                              static_cast<double>(m.full_snapshot_bytes)));
+        }
+        std::uint64_t mismatches = 0;
+        std::uint64_t full = 0;
+        std::string problem;
+        for (const eval::AckedClientReplication& a : run.acked) {
+            mismatches += a.mismatches();
+            full += a.full_snapshots();
+            problem = problem.empty() ? a.first_problem() : problem;
+        }
+        std::printf("  %.*s acked: %llu snapshots coded against nothing, %llu frames that "
+                    "differed from the server's%s%s\n",
+                    static_cast<int>(run.policy->name().size()), run.policy->name().data(),
+                    static_cast<unsigned long long>(full),
+                    static_cast<unsigned long long>(mismatches),
+                    problem.empty() ? "" : "; first rejected snapshot: ", problem.c_str());
+        status = mismatches == 0 ? status : 1;
     }
-    return 0;
+    return status;
 }

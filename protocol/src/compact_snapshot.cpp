@@ -1,5 +1,7 @@
 #include "dsoc/protocol/compact_snapshot.hpp"
 
+#include "snapshot_rules.hpp"
+
 #include <algorithm>
 #include <bit>
 #include <cstdlib>
@@ -8,44 +10,8 @@ namespace dsoc::protocol {
 
 namespace {
 
-constexpr std::uint32_t kKnownFields =
-    kFieldX | kFieldY | kFieldZ | kFieldYaw | kFieldPitch | kFieldRebase;
-
-/// `delta` wrapped into [steps/2 - steps, steps/2) (integer halves).
-std::int32_t wrap_angle_delta(std::int64_t delta, std::uint32_t steps) {
-    const auto n = static_cast<std::int64_t>(steps);
-    const std::int64_t half = n / 2;
-    std::int64_t d = delta;
-    if (d <= -n || d >= n) {
-        d = ((d % n) + n) % n; // not between two quantized yaws: the general rule
-    }
-    if (d >= half) {
-        d -= n;
-    } else if (d < half - n) {
-        d += n;
-    }
-    return static_cast<std::int32_t>(d);
-}
-
-/// `yaw` + `delta` wrapped into [0, steps). An encoder's deltas keep the sum within
-/// one turn of the range (wrap_angle_delta), so that case costs no division; any other
-/// delta (a hostile sender's) takes the general rule.
-std::int32_t add_angle_steps(std::int32_t yaw, std::int32_t delta, std::int64_t steps) {
-    std::int64_t sum = static_cast<std::int64_t>(yaw) + delta;
-    sum += sum < 0 ? steps : 0;
-    sum -= sum >= steps ? steps : 0;
-    if (sum < 0 || sum >= steps) {
-        sum = ((sum % steps) + steps) % steps;
-    }
-    return static_cast<std::int32_t>(sum);
-}
-
 /// How many update entries ahead the decoder asks the cache for the replica's slot.
 constexpr int kPrefetchAhead = 8;
-
-std::string entity(std::uint32_t id) {
-    return "entity " + std::to_string(id);
-}
 
 } // namespace
 
@@ -65,20 +31,8 @@ void SnapshotEncoder::begin(std::uint64_t tick, pb::Snapshot& out, UpdateColumns
 void SnapshotEncoder::enter(std::uint32_t id, const Pose& pose,
                             const std::array<float, 3>& half_extents, std::uint32_t kind,
                             std::uint8_t tier, pb::Snapshot& out) {
-    const float quantum = settings_.quantum(tier);
     const QuantizedPose q = quantize(pose, settings_, tier);
-    pb::EntityState& s = *out.add_enter();
-    s.set_id(id);
-    s.set_tier(tier);
-    s.set_x(q.x);
-    s.set_y(q.y);
-    s.set_z(q.z);
-    s.set_yaw(static_cast<std::uint32_t>(q.yaw));
-    s.set_pitch(q.pitch);
-    s.set_half_x(quantize_extent(half_extents[0], quantum));
-    s.set_half_y(quantize_extent(half_extents[1], quantum));
-    s.set_half_z(quantize_extent(half_extents[2], quantum));
-    s.set_kind(kind);
+    (void)write_enter(id, q, tier, half_extents, kind, settings_, out);
     baseline_[id] = {q, tier};
 }
 
@@ -152,20 +106,8 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
     std::vector<SnapshotProblem> problems;
     const auto steps = static_cast<std::int64_t>(settings_.angle_steps);
     for (const pb::EntityState& e : s.enter()) {
-        if (e.tier() >= kTiers) {
-            problems.push_back({"bad_tier", entity(e.id()) + " enters on tier " +
-                                                std::to_string(e.tier()) + "; tiers are 0..3"});
-            continue;
-        }
-        if (e.tier() == kHeardTier && (e.yaw() != 0 || e.pitch() != 0)) {
-            problems.push_back(
-                {"angles_on_heard_tier", entity(e.id()) + " enters heard-only with view angles"});
-            continue;
-        }
-        if (static_cast<std::int64_t>(e.yaw()) >= steps) {
-            problems.push_back({"malformed_update", entity(e.id()) + " enters with yaw step " +
-                                                        std::to_string(e.yaw()) +
-                                                        " >= " + std::to_string(steps)});
+        if (auto problem = enter_problem(e, settings_.angle_steps)) {
+            problems.push_back(std::move(*problem));
             continue;
         }
         ReplicaEntity r;
@@ -175,7 +117,7 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
         r.half_extents = {e.half_x(), e.half_y(), e.half_z()};
         r.kind = e.kind();
         if (!replica_.try_emplace(e.id(), r).second) {
-            problems.push_back({"duplicate_enter", entity(e.id()) + " entered while known"});
+            problems.push_back({"duplicate_enter", entity_name(e.id()) + " entered while known"});
         } else if (r.tier == kHeardTier) {
             ++heard_;
         }
@@ -205,19 +147,18 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
             // Built only for a problem: this loop runs for every update a client receives.
             const auto where = [&] {
                 return "update entry " + std::to_string(i) + " (" +
-                       entity(static_cast<std::uint32_t>(id)) + ")";
+                       entity_name(static_cast<std::uint32_t>(id)) + ")";
             };
             if ((i > 0 && step == 0) || id > 0xffffffffu) {
                 problems.push_back({"malformed_update", where() + ": ids must increase"});
                 break;
             }
-            if (fields == 0 || (fields & ~kKnownFields) != 0 ||
-                ((fields & kFieldRebase) != 0 && fields != kFieldRebase)) {
+            if (!valid_update_fields(fields)) {
                 problems.push_back(
                     {"malformed_update", where() + ": bad field mask " + std::to_string(fields)});
                 break;
             }
-            const int needed = (fields & kFieldRebase) != 0 ? 6 : std::popcount(fields);
+            const int needed = update_value_count(fields);
             if (values.size() - v < needed) {
                 problems.push_back({"malformed_update", where() + ": update_values ends early"});
                 break;
@@ -231,23 +172,13 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
             }
             ReplicaEntity& r = *known;
             if ((fields & kFieldRebase) != 0) {
+                if (auto problem =
+                        rebase_problem(values.data() + at, settings_.angle_steps, where())) {
+                    problems.push_back(std::move(*problem));
+                    continue;
+                }
                 const std::int32_t tier = values[at];
                 const std::int32_t yaw = values[at + 4];
-                if (tier < 0 || static_cast<std::size_t>(tier) >= kTiers) {
-                    problems.push_back(
-                        {"bad_tier", where() + ": rebase to tier " + std::to_string(tier)});
-                    continue;
-                }
-                if (tier == kHeardTier && (yaw != 0 || values[at + 5] != 0)) {
-                    problems.push_back(
-                        {"angles_on_heard_tier", where() + ": rebase to heard with view angles"});
-                    continue;
-                }
-                if (yaw < 0 || yaw >= steps) {
-                    problems.push_back(
-                        {"malformed_update", where() + ": rebase yaw step " + std::to_string(yaw)});
-                    continue;
-                }
                 heard_ -= r.tier == kHeardTier ? 1 : 0;
                 heard_ += tier == kHeardTier ? 1 : 0;
                 r.tier = static_cast<std::uint8_t>(tier);
@@ -295,7 +226,8 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
     for (const std::uint32_t id : s.leave()) {
         const ReplicaEntity* const known = replica_.find(id);
         if (known == nullptr) {
-            problems.push_back({"leave_for_unknown_entity", entity(id) + " left while unknown"});
+            problems.push_back(
+                {"leave_for_unknown_entity", entity_name(id) + " left while unknown"});
             continue;
         }
         heard_ -= known->tier == kHeardTier ? 1 : 0;
@@ -312,12 +244,12 @@ std::vector<SnapshotProblem> SnapshotDecoder::check_audit(const pb::Snapshot& s,
     for (const pb::AuditPose& a : s.audit()) {
         const ReplicaEntity* const known = replica_.find(a.id());
         if (known == nullptr) {
-            problems.push_back({"audit_for_unknown_entity", entity(a.id()) + " is not known"});
+            problems.push_back({"audit_for_unknown_entity", entity_name(a.id()) + " is not known"});
             continue;
         }
         if (known->tier == kHeardTier) {
             problems.push_back({"audit_of_heard_entity",
-                                entity(a.id()) + " is heard-only; its exact pose was sent"});
+                                entity_name(a.id()) + " is heard-only; its exact pose was sent"});
             continue;
         }
         const float quantum = settings_.position_quantum[known->tier];
@@ -327,7 +259,7 @@ std::vector<SnapshotProblem> SnapshotDecoder::check_audit(const pb::Snapshot& s,
         max_error = std::max(max_error, error);
         if (error > kAllowed) {
             problems.push_back({"pose_beyond_quantization",
-                                entity(a.id()) + " replica is " + std::to_string(error) +
+                                entity_name(a.id()) + " replica is " + std::to_string(error) +
                                     " quanta from the server's pose (allowed 0.5)"});
         }
     }

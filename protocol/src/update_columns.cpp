@@ -83,13 +83,18 @@ std::size_t update_column_bytes(const pb::Snapshot& s) {
     for (const std::uint32_t v : s.update_fields()) {
         fields += CodedOutputStream::VarintSize32(v);
     }
+    std::size_t heads = 0;
+    for (const std::uint64_t v : s.update_head()) {
+        heads += CodedOutputStream::VarintSize64(v);
+    }
     std::size_t values = 0;
     for (const std::int32_t v : s.update_values()) {
         values += CodedOutputStream::VarintSize32(WireFormatLite::ZigZagEncode32(v));
     }
     return packed_field_bytes(pb::Snapshot::kUpdateIdFieldNumber, ids) +
            packed_field_bytes(pb::Snapshot::kUpdateFieldsFieldNumber, fields) +
-           packed_field_bytes(pb::Snapshot::kUpdateValuesFieldNumber, values);
+           packed_field_bytes(pb::Snapshot::kUpdateValuesFieldNumber, values) +
+           packed_field_bytes(pb::Snapshot::kUpdateHeadFieldNumber, heads);
 }
 
 std::size_t encode_snapshot_frame(pb::Envelope& envelope, const UpdateColumns& columns,

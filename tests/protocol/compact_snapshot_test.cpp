@@ -1,5 +1,7 @@
 #include "dsoc/protocol/compact_snapshot.hpp"
 
+#include "snapshot_wire.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,21 +13,6 @@ namespace dsoc::protocol {
 namespace {
 
 const std::array<float, 3> kHalf{15.0f, 15.0f, 28.0f};
-
-/// Serializes and parses, so that the decoder sees exactly what travels.
-pb::Snapshot through_wire(const pb::Snapshot& s) {
-    pb::Snapshot out;
-    EXPECT_TRUE(out.ParseFromString(s.SerializeAsString()));
-    return out;
-}
-
-std::string kinds(const std::vector<SnapshotProblem>& problems) {
-    std::string out;
-    for (const auto& p : problems) {
-        out += p.kind + " (" + p.detail + ") ";
-    }
-    return out;
-}
 
 TEST(Quantization, RoundTripIsWithinHalfAQuantum) {
     std::mt19937 rng(11);

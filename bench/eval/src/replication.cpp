@@ -5,16 +5,9 @@
 
 namespace dsoc::eval {
 
-namespace {
-
-constexpr std::uint32_t kKindBot = 0;
-constexpr std::uint32_t kKindPlayer = 1;
-
-protocol::Pose pose_of(const EntityFrame& e) {
+protocol::Pose wire_pose(const EntityFrame& e) {
     return {e.position.x, e.position.y, e.position.z, e.yaw_deg, 0.0f};
 }
-
-} // namespace
 
 SnapshotCost ClientReplication::send(const WorldFrame& frame,
                                      std::span<const std::uint32_t> interest,
@@ -45,8 +38,8 @@ SnapshotCost ClientReplication::send(const WorldFrame& frame,
         const std::uint8_t tier = is_heard ? protocol::kHeardTier : 0;
         if (!was_known) {
             const glm::vec3 half = e.box.half_extents();
-            encoder_.enter(id, pose_of(e), {half.x, half.y, half.z},
-                           id < players_ ? kKindPlayer : kKindBot, tier, snapshot);
+            encoder_.enter(id, wire_pose(e), {half.x, half.y, half.z}, wire_kind(id, players_),
+                           tier, snapshot);
             ++cost.enters;
             cost.heard_entries += is_heard ? 1 : 0;
             return;
@@ -54,7 +47,7 @@ SnapshotCost ClientReplication::send(const WorldFrame& frame,
         if (is_heard && (tick + id) % protocol::update_interval(tier) != 0) {
             return; // deferred, as the server does on a coarse tier
         }
-        if (encoder_.update(id, pose_of(e), tier, snapshot)) {
+        if (encoder_.update(id, wire_pose(e), tier, snapshot)) {
             ++cost.updates;
             cost.heard_entries += is_heard ? 1 : 0;
             const int entries = snapshot.update_fields_size();

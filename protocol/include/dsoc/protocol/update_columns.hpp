@@ -83,9 +83,10 @@ private:
                                ///< counted from empty
 };
 
-/// Wire bytes of a snapshot's three update columns held as repeated fields (field
-/// tags and lengths included): what the updates cost, enters, leaves and the tick left
-/// out. UpdateColumns::wire_bytes() of the same entries.
+/// Wire bytes of a snapshot's update columns held as repeated fields (field tags and
+/// lengths included; an acknowledged-delta snapshot's update_head among them): what the
+/// updates cost, enters, leaves and the tick left out. UpdateColumns::wire_bytes() of
+/// the same entries.
 [[nodiscard]] std::size_t update_column_bytes(const pb::Snapshot& snapshot);
 
 /// Appends one frame (framing.hpp) holding `envelope`, whose body is a snapshot with

@@ -38,6 +38,13 @@ struct SnapshotCost {
 /// ratios: a 4-byte id and five 4-byte floats (x, y, z, yaw, pitch). [Units: bytes]
 inline constexpr std::uint32_t kFullStateBytes = 24;
 
+/// The pose an evaluation entity travels with (no pitch: the eval's entities only turn).
+[[nodiscard]] protocol::Pose wire_pose(const EntityFrame& e);
+/// The kind an entity is sent with: 1 (player) for an id below `players`, else 0 (bot).
+[[nodiscard]] constexpr std::uint32_t wire_kind(std::uint32_t id, std::size_t players) {
+    return id < players ? 1 : 0;
+}
+
 class ClientReplication {
 public:
     /// Entities with an id below `players` are sent as kind 1 (player), others as 0 (bot).

@@ -1,0 +1,105 @@
+#pragma once
+// Acknowledged-delta snapshots (docs/protocol.md, "Acknowledged deltas"): the sender's and
+// the receiver's halves of one connection's entity replica over a transport that may
+// lose, duplicate or reorder snapshots (UDP). Each snapshot is coded against the newest
+// frame (delta_frame.hpp) the client has acknowledged, or against nothing, and says the
+// whole set the client knows at its tick: entities not in the baseline enter with full
+// state, the baseline's entities not wanted any more leave, and every other one is carried
+// at its predicted position plus the residual its update entry holds (none: the
+// prediction was exact). So a lost snapshot needs no repair, never leaves a stale entity
+// and never loses a leave: the next one is coded against a frame the client has.
+//
+// Threading: neither class is thread-safe; one per connection. Distinct instances may be
+// used concurrently.
+
+#include "dsoc/protocol/compact_snapshot.hpp"
+#include "dsoc/protocol/delta_frame.hpp"
+#include "dsoc/protocol/messages.hpp"
+#include "dsoc/protocol/quantization.hpp"
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace dsoc::protocol {
+
+/// What one acknowledged-delta snapshot holds.
+struct AckedSnapshotCounts {
+    std::uint32_t enters = 0;
+    std::uint32_t leaves = 0;
+    std::uint32_t entries = 0; ///< update entries written
+    /// Entities carried from the baseline whose position is not the baseline's, with an
+    /// entry or predicted exactly (the updates a sender without prediction would write).
+    std::uint32_t moved = 0;
+    bool coded_against_baseline = false;
+};
+
+class AckedSnapshotEncoder {
+public:
+    /// `settings` must have passed validate().
+    explicit AckedSnapshotEncoder(const QuantizationSettings& settings) : settings_(settings) {}
+
+    /// Clears `out` and starts the snapshot of `tick` (greater than every earlier one's),
+    /// coded against the frame of `acked` (the newest tick the client acknowledged) when
+    /// this encoder still holds it and it is less than kAckedHistory ticks older; against
+    /// nothing otherwise (every entity enters).
+    void begin(std::uint64_t tick, std::optional<std::uint64_t> acked, pb::Snapshot& out);
+    /// One entity the client is to know, in increasing id order: `pose` quantized on
+    /// `tier` (< kTiers; quantize(pose, settings(), tier)), `half_extents` in world units.
+    /// On a tier t > 0 an entity is updated only on ticks where (tick + id) is a multiple
+    /// of update_interval(t); on the others it is carried at its prediction.
+    void add(std::uint32_t id, const QuantizedPose& pose, std::uint8_t tier, std::uint32_t kind,
+             const std::array<float, 3>& half_extents, pb::Snapshot& out);
+    /// Ends the snapshot (the baseline's entities not added leave) and keeps its frame.
+    AckedSnapshotCounts finish(pb::Snapshot& out);
+
+    /// The frame of `tick` as the client holds it once it applies that snapshot, while
+    /// this encoder keeps it.
+    [[nodiscard]] const DeltaFrame* frame(std::uint64_t tick) const { return frames_.find(tick); }
+    [[nodiscard]] const QuantizationSettings& settings() const { return settings_; }
+
+private:
+    void leave_baseline_below(std::uint32_t id, pb::Snapshot& out);
+    void write_entry(std::uint32_t id, std::uint32_t fields, const std::int32_t* values,
+                     std::size_t count, pb::Snapshot& out);
+
+    QuantizationSettings settings_;
+    FrameRing frames_;
+    DeltaFrame next_;
+    const DeltaFrame* base_ = nullptr;
+    std::size_t base_at_ = 0; ///< the next baseline entity not yet met
+    std::uint64_t ticks_since_base_ = 0;
+    std::uint32_t last_entry_id_ = 0;
+    AckedSnapshotCounts counts_;
+};
+
+class AckedSnapshotDecoder {
+public:
+    /// `settings`: the server's, from its ServerHello.
+    explicit AckedSnapshotDecoder(const QuantizationSettings& settings = {})
+        : settings_(settings) {}
+
+    /// Decodes `snapshot` against the frame it names and, when nothing is wrong, makes
+    /// its frame the newest. Never trusts the input: a snapshot not newer than the
+    /// newest (stale_snapshot: a duplicate or a late one), coded against a frame this
+    /// decoder does not hold (baseline_missing) or inconsistent in any way (the kinds of
+    /// SnapshotDecoder::apply) is rejected whole and changes nothing; the problems say why.
+    std::vector<SnapshotProblem> apply(const pb::Snapshot& snapshot);
+
+    /// The newest frame applied (what the client acknowledges), or nullptr before any.
+    [[nodiscard]] const DeltaFrame* newest() const {
+        return newest_tick_ ? frames_.find(*newest_tick_) : nullptr;
+    }
+    [[nodiscard]] std::optional<std::uint64_t> newest_tick() const { return newest_tick_; }
+    /// The newest frame's pose of `id`, or nothing when the entity is not known.
+    [[nodiscard]] std::optional<Pose> pose(std::uint32_t id) const;
+
+private:
+    QuantizationSettings settings_;
+    FrameRing frames_;
+    DeltaFrame next_;
+    std::optional<std::uint64_t> newest_tick_;
+};
+
+} // namespace dsoc::protocol

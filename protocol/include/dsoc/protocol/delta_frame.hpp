@@ -1,0 +1,113 @@
+#pragma once
+// Acknowledged-delta frames (docs/protocol.md, "Acknowledged deltas"): what both ends of
+// a connection hold for one snapshot tick. A frame lists every entity the client knew
+// after that snapshot, with the pose the snapshot gave it and a velocity both ends derive
+// from it, so that a later snapshot can be coded against any frame the client has
+// acknowledged (a lost snapshot is never needed again), its positions as residuals
+// against one prediction rule: an entity moving steadily costs no bytes.
+//
+// Pure data and integer arithmetic: both ends compute bit-identical frames.
+//
+// Threading: none; one ring per connection end.
+
+#include "dsoc/protocol/quantization.hpp"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace dsoc::protocol {
+
+/// Frames each end keeps (as Quake 3's PACKET_BACKUP): a snapshot is coded against a
+/// frame at most kAckedHistory - 1 ticks older, or against nothing. [Units: ticks]
+inline constexpr std::size_t kAckedHistory = 32;
+
+/// Fixed-point scale of FrameEntity::velocity: 1/256 of a quantum per tick.
+inline constexpr std::int64_t kVelocityScale = 256;
+
+/// One entity of a frame.
+struct FrameEntity {
+    QuantizedPose pose; ///< on `tier`
+    /// The position's change per tick, measured over the last `motion_ticks` ticks up to
+    /// this frame, in quanta of `tier` / kVelocityScale: zero when the entity entered or
+    /// changed tier.
+    std::array<std::int32_t, 3> velocity{};
+    /// How the z velocity changed per tick since the one before (a fall, a jump's arc),
+    /// in quanta of `tier` / kVelocityScale per tick. Vertical only: gravity is the steady
+    /// acceleration of walking entities, and horizontally the same estimate mostly
+    /// amplifies the quantization's jitter (it cost bytes on arena-64).
+    std::int32_t fall_rate = 0;
+    /// How far the yaw turned per tick over the same ticks (the shorter way round), in
+    /// angle steps / kVelocityScale.
+    std::int32_t turn_rate = 0;
+    std::uint32_t id = 0;
+    std::uint32_t kind = 0;
+    std::array<std::uint32_t, 3> half_extents{}; ///< in quanta of `enter_tier`
+    std::uint8_t tier = 0;                       ///< < kTiers
+    std::uint8_t enter_tier = 0;
+    std::uint8_t motion_ticks = 0; ///< over how many ticks `velocity` was measured; 0: none
+    friend bool operator==(const FrameEntity&, const FrameEntity&) = default;
+};
+
+/// Every entity the client knew after the snapshot of `tick`, in increasing id order.
+struct DeltaFrame {
+    std::uint64_t tick = 0;
+    std::vector<FrameEntity> entities;
+};
+
+/// `a` / `b` (b > 0) rounded to the nearest integer, halves away from zero.
+[[nodiscard]] constexpr std::int64_t divide_rounded(std::int64_t a, std::int64_t b) {
+    return a >= 0 ? (a + b / 2) / b : -((-a + b / 2) / b);
+}
+
+/// Where `base` is expected `ticks` (1..kAckedHistory) after its frame: its position
+/// moved on by its velocity, z also by its fall rate (each coordinate within
+/// +-kMaxQuantizedCoordinate), its yaw turned on by its turn rate (wrapped into
+/// [0, angle_steps)), its pitch as it was.
+[[nodiscard]] QuantizedPose predict(const FrameEntity& base, std::uint64_t ticks,
+                                    std::uint32_t angle_steps);
+
+/// Forgets how `e` moved (it entered, or changed tier and so quanta): it is predicted
+/// where it is until set_motion() measures it again.
+inline void clear_motion(FrameEntity& e) {
+    e.velocity = {};
+    e.fall_rate = 0;
+    e.turn_rate = 0;
+    e.motion_ticks = 0;
+}
+
+/// Sets `e`'s velocity, fall rate (against its velocity before), turn rate and
+/// motion_ticks to how its pose went from `from` to e.pose in `ticks`
+/// (1..kAckedHistory) ticks.
+void set_motion(FrameEntity& e, const QuantizedPose& from, std::uint64_t ticks,
+                std::uint32_t angle_steps);
+
+/// The last kAckedHistory frames of one connection end, each in the slot of its tick
+/// modulo the capacity; a slot's memory is kept when a newer frame takes it.
+class FrameRing {
+public:
+    /// The frame of `tick`, or nullptr when it was never stored or has been replaced.
+    [[nodiscard]] const DeltaFrame* find(std::uint64_t tick) const {
+        const Slot& s = slots_[tick % kAckedHistory];
+        return s.used && s.frame.tick == tick ? &s.frame : nullptr;
+    }
+    /// Stores `frame` (its tick newer than any stored) in its slot, replacing the frame
+    /// kAckedHistory or more ticks older; `frame` gets the slot's old memory.
+    void store(DeltaFrame& frame) {
+        Slot& s = slots_[frame.tick % kAckedHistory];
+        std::swap(s.frame, frame);
+        s.used = true;
+        frame.entities.clear();
+    }
+
+private:
+    struct Slot {
+        DeltaFrame frame;
+        bool used = false;
+    };
+    std::array<Slot, kAckedHistory> slots_{};
+};
+
+} // namespace dsoc::protocol

@@ -1,0 +1,450 @@
+#include "dsoc/protocol/acked_snapshot.hpp"
+
+#include "snapshot_rules.hpp"
+
+#include <algorithm>
+#include <limits>
+
+namespace dsoc::protocol {
+
+// --- frames ---
+
+namespace {
+
+/// An update_head's field bits: x, y, z, yaw (UpdateField's four lowest).
+constexpr int kHeadFieldBitCount = 4;
+constexpr std::uint32_t kHeadFieldBits = (1u << kHeadFieldBitCount) - 1;
+static_assert((kFieldX | kFieldY | kFieldZ | kFieldYaw) == kHeadFieldBits);
+
+std::int32_t clamp_coordinate(std::int64_t v) {
+    return static_cast<std::int32_t>(
+        std::clamp<std::int64_t>(v, -kMaxQuantizedCoordinate, kMaxQuantizedCoordinate));
+}
+
+bool fits_int32(std::int64_t v) {
+    return v >= std::numeric_limits<std::int32_t>::min() &&
+           v <= std::numeric_limits<std::int32_t>::max();
+}
+
+bool same_position(const QuantizedPose& a, const QuantizedPose& b) {
+    return a.x == b.x && a.y == b.y && a.z == b.z;
+}
+
+} // namespace
+
+QuantizedPose predict(const FrameEntity& base, std::uint64_t ticks, std::uint32_t angle_steps) {
+    const auto t = static_cast<std::int64_t>(ticks);
+    const auto moved = [t](std::int32_t at, std::int32_t rate, std::int64_t more) {
+        return clamp_coordinate(
+            at + divide_rounded(static_cast<std::int64_t>(rate) * t + more, kVelocityScale));
+    };
+    // With the velocity the mean over the motion_ticks before the frame, a constant
+    // acceleration a adds a t (t + motion_ticks) / 2 in t ticks.
+    const std::int64_t fall =
+        static_cast<std::int64_t>(base.fall_rate) * t * (t + base.motion_ticks) / 2;
+    QuantizedPose p = base.pose;
+    p.x = moved(p.x, base.velocity[0], 0);
+    p.y = moved(p.y, base.velocity[1], 0);
+    p.z = moved(p.z, base.velocity[2], fall);
+    p.yaw = add_angle_steps(p.yaw, moved(0, base.turn_rate, 0), angle_steps);
+    return p;
+}
+
+void set_motion(FrameEntity& e, const QuantizedPose& from, std::uint64_t ticks,
+                std::uint32_t angle_steps) {
+    const auto t = static_cast<std::int64_t>(ticks);
+    const auto per_tick = [t](std::int64_t change) {
+        return clamp_coordinate(divide_rounded(change * kVelocityScale, t));
+    };
+    const std::int32_t vz = per_tick(static_cast<std::int64_t>(e.pose.z) - from.z);
+    // The old and the new mean z velocity stand (t + motion_ticks) / 2 ticks apart.
+    e.fall_rate =
+        e.motion_ticks == 0
+            ? 0
+            : clamp_coordinate(divide_rounded((static_cast<std::int64_t>(vz) - e.velocity[2]) * 2,
+                                              t + e.motion_ticks));
+    e.velocity = {per_tick(static_cast<std::int64_t>(e.pose.x) - from.x),
+                  per_tick(static_cast<std::int64_t>(e.pose.y) - from.y), vz};
+    e.turn_rate =
+        per_tick(wrap_angle_delta(static_cast<std::int64_t>(e.pose.yaw) - from.yaw, angle_steps));
+    e.motion_ticks = static_cast<std::uint8_t>(t);
+}
+
+// --- encoder ---
+
+void AckedSnapshotEncoder::begin(std::uint64_t tick, std::optional<std::uint64_t> acked,
+                                 pb::Snapshot& out) {
+    out.Clear();
+    out.set_server_tick(tick);
+    next_.tick = tick;
+    next_.entities.clear();
+    base_ = nullptr;
+    if (acked && *acked < tick && tick - *acked < kAckedHistory) {
+        base_ = frames_.find(*acked);
+    }
+    if (base_ != nullptr) {
+        out.set_baseline_tick(base_->tick);
+        ticks_since_base_ = tick - base_->tick;
+    }
+    base_at_ = 0;
+    last_entry_id_ = 0;
+    counts_ = {};
+    counts_.coded_against_baseline = base_ != nullptr;
+}
+
+void AckedSnapshotEncoder::leave_baseline_below(std::uint32_t id, pb::Snapshot& out) {
+    if (base_ == nullptr) {
+        return;
+    }
+    const std::vector<FrameEntity>& base = base_->entities;
+    for (; base_at_ < base.size() && base[base_at_].id < id; ++base_at_) {
+        out.add_leave(base[base_at_].id);
+        ++counts_.leaves;
+    }
+}
+
+void AckedSnapshotEncoder::write_entry(std::uint32_t id, std::uint32_t fields,
+                                       const std::int32_t* values, std::size_t count,
+                                       pb::Snapshot& out) {
+    const std::uint64_t id_delta = counts_.entries == 0 ? id : id - last_entry_id_;
+    const std::uint32_t low = fields & kHeadFieldBits;
+    const bool whole_mask_apart = low != fields; // pitch or rebase: the mask goes apart
+    out.add_update_head(id_delta << kHeadFieldBitCount | (whole_mask_apart ? 0 : low));
+    if (whole_mask_apart) {
+        out.add_update_fields(fields);
+    }
+    for (std::size_t k = 0; k < count; ++k) {
+        out.add_update_values(values[k]);
+    }
+    last_entry_id_ = id;
+    ++counts_.entries;
+}
+
+void AckedSnapshotEncoder::add(std::uint32_t id, const QuantizedPose& pose, std::uint8_t tier,
+                               std::uint32_t kind, const std::array<float, 3>& half_extents,
+                               pb::Snapshot& out) {
+    leave_baseline_below(id, out);
+    const bool carried =
+        base_ != nullptr && base_at_ < base_->entities.size() && base_->entities[base_at_].id == id;
+    if (!carried) {
+        FrameEntity n;
+        n.pose = pose;
+        n.id = id;
+        n.kind = kind;
+        n.half_extents = write_enter(id, pose, tier, half_extents, kind, settings_, out);
+        n.tier = tier;
+        n.enter_tier = tier;
+        next_.entities.push_back(n);
+        ++counts_.enters;
+        return;
+    }
+    const FrameEntity& b = base_->entities[base_at_++];
+    FrameEntity n = b;
+    const std::uint32_t steps = settings_.angle_steps;
+    const QuantizedPose predicted = predict(b, ticks_since_base_, steps);
+    const std::int64_t rx = static_cast<std::int64_t>(pose.x) - predicted.x;
+    const std::int64_t ry = static_cast<std::int64_t>(pose.y) - predicted.y;
+    const std::int64_t rz = static_cast<std::int64_t>(pose.z) - predicted.z;
+    const bool due = (next_.tick + id) % update_interval(tier) == 0;
+    if (tier != b.tier || (due && !(fits_int32(rx) && fits_int32(ry) && fits_int32(rz)))) {
+        const std::array<std::int32_t, 6> values{tier,   pose.x,   pose.y,
+                                                 pose.z, pose.yaw, pose.pitch};
+        write_entry(id, kFieldRebase, values.data(), values.size(), out);
+        n.pose = pose;
+        n.tier = tier;
+        clear_motion(n);
+    } else if (!due) {
+        n.pose = predicted; // both ends carry it at the prediction
+        set_motion(n, b.pose, ticks_since_base_, steps);
+    } else {
+        std::array<std::int32_t, 5> values{};
+        std::size_t count = 0;
+        std::uint32_t fields = 0;
+        const auto field = [&](std::uint32_t bit, std::int64_t value) {
+            if (value != 0) {
+                values[count++] = static_cast<std::int32_t>(value);
+                fields |= bit;
+            }
+        };
+        field(kFieldX, rx);
+        field(kFieldY, ry);
+        field(kFieldZ, rz);
+        field(kFieldYaw,
+              wrap_angle_delta(static_cast<std::int64_t>(pose.yaw) - predicted.yaw, steps));
+        field(kFieldPitch, static_cast<std::int64_t>(pose.pitch) - b.pose.pitch);
+        if (fields != 0) {
+            write_entry(id, fields, values.data(), count, out);
+        }
+        n.pose = pose;
+        set_motion(n, b.pose, ticks_since_base_, steps);
+    }
+    counts_.moved += same_position(n.pose, b.pose) ? 0 : 1;
+    next_.entities.push_back(n);
+}
+
+AckedSnapshotCounts AckedSnapshotEncoder::finish(pb::Snapshot& out) {
+    for (; base_ != nullptr && base_at_ < base_->entities.size(); ++base_at_) {
+        out.add_leave(base_->entities[base_at_].id);
+        ++counts_.leaves;
+    }
+    base_ = nullptr; // its slot may be the one the new frame takes
+    frames_.store(next_);
+    return counts_;
+}
+
+// --- decoder ---
+
+namespace {
+
+/// One update entry, located and checked for form.
+struct Entry {
+    std::uint32_t id = 0;
+    std::uint32_t fields = 0;
+    int at = 0; ///< index of its first value
+};
+
+/// The snapshot's update entries (update_head, update_fields for the masks apart), or
+/// the problem that stops reading them.
+std::optional<SnapshotProblem> read_entries(const pb::Snapshot& s, std::vector<Entry>& entries) {
+    entries.clear();
+    if (s.update_id_size() != 0) {
+        return SnapshotProblem{"malformed_update",
+                               "update_id in an acknowledged-delta snapshot (it uses update_head)"};
+    }
+    const int count = s.update_head_size();
+    int v = 0;
+    int masks_apart = 0;
+    std::uint64_t id = 0;
+    for (int i = 0; i < count; ++i) {
+        const std::uint64_t head = s.update_head(i);
+        const std::uint64_t step = head >> kHeadFieldBitCount;
+        id = i == 0 ? step : id + step;
+        const auto where = [&] {
+            return "update entry " + std::to_string(i) + " (" +
+                   entity_name(static_cast<std::uint32_t>(id)) + ")";
+        };
+        if ((i > 0 && step == 0) || id > 0xffffffffu) {
+            return SnapshotProblem{"malformed_update", where() + ": ids must increase"};
+        }
+        auto fields = static_cast<std::uint32_t>(head & kHeadFieldBits);
+        if (fields == 0) {
+            if (masks_apart == s.update_fields_size()) {
+                return SnapshotProblem{"malformed_update", where() + ": update_fields ends early"};
+            }
+            fields = s.update_fields(masks_apart++);
+        }
+        if (!valid_update_fields(fields)) {
+            return SnapshotProblem{"malformed_update",
+                                   where() + ": bad field mask " + std::to_string(fields)};
+        }
+        if (s.update_values_size() - v < update_value_count(fields)) {
+            return SnapshotProblem{"malformed_update", where() + ": update_values ends early"};
+        }
+        entries.push_back({static_cast<std::uint32_t>(id), fields, v});
+        v += update_value_count(fields);
+    }
+    if (masks_apart != s.update_fields_size() || v != s.update_values_size()) {
+        return SnapshotProblem{"malformed_update", "update_fields or update_values left over"};
+    }
+    return std::nullopt;
+}
+
+/// `b` carried to the new frame through its update entry `e` (nullptr: none), `ticks`
+/// after its frame; a problem when the entry does not fit the entity.
+std::optional<SnapshotProblem> carry(const FrameEntity& b, const Entry* e, const pb::Snapshot& s,
+                                     std::uint64_t tick, std::uint64_t ticks, std::uint32_t steps,
+                                     FrameEntity& n) {
+    n = b;
+    const QuantizedPose predicted = predict(b, ticks, steps);
+    if (e == nullptr) {
+        n.pose = predicted;
+        set_motion(n, b.pose, ticks, steps);
+        return std::nullopt;
+    }
+    const std::int32_t* values = s.update_values().data() + e->at;
+    const auto where = [&] { return "the update entry of " + entity_name(b.id); };
+    if (e->fields == kFieldRebase) {
+        if (auto problem = rebase_problem(values, steps, where())) {
+            return problem;
+        }
+        n.tier = static_cast<std::uint8_t>(values[0]);
+        n.pose = {values[1], values[2], values[3], values[4], values[5]};
+        clear_motion(n);
+        return std::nullopt;
+    }
+    if ((tick + b.id) % update_interval(b.tier) != 0) {
+        return SnapshotProblem{"malformed_update", where() + ": tier " + std::to_string(b.tier) +
+                                                       " is not due at tick " +
+                                                       std::to_string(tick)};
+    }
+    if (b.tier == kHeardTier && (e->fields & (kFieldYaw | kFieldPitch)) != 0) {
+        return SnapshotProblem{"angles_on_heard_tier",
+                               where() + ": view angles for a heard-only entity"};
+    }
+    int k = 0;
+    bool in_range = true;
+    const auto add = [&](std::uint32_t bit, std::int32_t from, std::int32_t& to) {
+        to = from;
+        if ((e->fields & bit) == 0) {
+            return;
+        }
+        const std::int64_t sum = static_cast<std::int64_t>(from) + values[k++];
+        in_range = in_range && sum >= -kMaxQuantizedCoordinate && sum <= kMaxQuantizedCoordinate;
+        to = static_cast<std::int32_t>(
+            std::clamp<std::int64_t>(sum, -kMaxQuantizedCoordinate, kMaxQuantizedCoordinate));
+    };
+    add(kFieldX, predicted.x, n.pose.x);
+    add(kFieldY, predicted.y, n.pose.y);
+    add(kFieldZ, predicted.z, n.pose.z);
+    n.pose.yaw = (e->fields & kFieldYaw) != 0 ? add_angle_steps(predicted.yaw, values[k++], steps)
+                                              : predicted.yaw;
+    add(kFieldPitch, b.pose.pitch, n.pose.pitch);
+    if (!in_range) {
+        return SnapshotProblem{"malformed_update", where() + ": a value leaves the range"};
+    }
+    set_motion(n, b.pose, ticks, steps);
+    return std::nullopt;
+}
+
+FrameEntity entered(const pb::EntityState& e) {
+    FrameEntity n;
+    n.pose = {e.x(), e.y(), e.z(), static_cast<std::int32_t>(e.yaw()), e.pitch()};
+    n.id = e.id();
+    n.kind = e.kind();
+    n.half_extents = {e.half_x(), e.half_y(), e.half_z()};
+    n.tier = static_cast<std::uint8_t>(e.tier());
+    n.enter_tier = n.tier;
+    return n;
+}
+
+} // namespace
+
+std::vector<SnapshotProblem> AckedSnapshotDecoder::apply(const pb::Snapshot& s) {
+    std::vector<SnapshotProblem> problems;
+    const std::uint64_t tick = s.server_tick();
+    if (newest_tick_ && tick <= *newest_tick_) {
+        problems.push_back({"stale_snapshot", "tick " + std::to_string(tick) +
+                                                  " is not newer than the newest applied, " +
+                                                  std::to_string(*newest_tick_)});
+        return problems;
+    }
+    static const DeltaFrame kNothing;
+    const DeltaFrame* base = &kNothing;
+    std::uint64_t ticks = 0;
+    if (s.has_baseline_tick()) {
+        const std::uint64_t from = s.baseline_tick();
+        base = from < tick && tick - from < kAckedHistory ? frames_.find(from) : nullptr;
+        if (base == nullptr) {
+            problems.push_back({"baseline_missing",
+                                "tick " + std::to_string(tick) + " is coded against tick " +
+                                    std::to_string(from) + ", which this client does not hold"});
+            return problems;
+        }
+        ticks = tick - from;
+    }
+    thread_local std::vector<Entry> entries_of_thread;
+    std::vector<Entry>& entries = entries_of_thread;
+    if (auto problem = read_entries(s, entries)) {
+        problems.push_back(std::move(*problem));
+        return problems;
+    }
+    for (const pb::EntityState& e : s.enter()) {
+        if (auto problem = enter_problem(e, settings_.angle_steps)) {
+            problems.push_back(std::move(*problem));
+        }
+    }
+    const auto& enters = s.enter();
+    const auto& leaves = s.leave();
+    for (int i = 1; i < enters.size(); ++i) {
+        if (enters[i].id() <= enters[i - 1].id()) {
+            problems.push_back({"malformed_update",
+                                "enter ids must increase (" + entity_name(enters[i].id()) + ")"});
+        }
+    }
+    for (int i = 1; i < leaves.size(); ++i) {
+        if (leaves[i] <= leaves[i - 1]) {
+            problems.push_back(
+                {"malformed_update", "leave ids must increase (" + entity_name(leaves[i]) + ")"});
+        }
+    }
+    if (!problems.empty()) {
+        return problems;
+    }
+
+    // The baseline's entities in id order, each dropped (a leave), carried (through its
+    // entry, if any), with the entering ones between them; every enter, leave and entry
+    // must meet exactly what the baseline says.
+    next_.tick = tick;
+    next_.entities.clear();
+    int enter_at = 0;
+    int leave_at = 0;
+    std::size_t entry_at = 0;
+    const auto take_enters_below = [&](std::uint64_t id) {
+        for (; enter_at < enters.size() && enters[enter_at].id() < id; ++enter_at) {
+            next_.entities.push_back(entered(enters[enter_at]));
+        }
+    };
+    for (const FrameEntity& b : base->entities) {
+        take_enters_below(b.id);
+        if (enter_at < enters.size() && enters[enter_at].id() == b.id) {
+            problems.push_back({"duplicate_enter", entity_name(b.id) + " entered while known"});
+            return problems;
+        }
+        if (leave_at < leaves.size() && leaves[leave_at] < b.id) {
+            break; // a leave of an entity the baseline lacks: reported below
+        }
+        if (entry_at < entries.size() && entries[entry_at].id < b.id) {
+            break; // an entry for an entity the baseline lacks: reported below
+        }
+        const bool leaves_now = leave_at < leaves.size() && leaves[leave_at] == b.id;
+        const Entry* entry = entry_at < entries.size() && entries[entry_at].id == b.id
+                                 ? &entries[entry_at]
+                                 : nullptr;
+        if (leaves_now) {
+            ++leave_at;
+            if (entry != nullptr) {
+                break; // an entry for an entity that leaves: reported below
+            }
+            continue;
+        }
+        entry_at += entry != nullptr ? 1 : 0;
+        FrameEntity n;
+        if (auto problem = carry(b, entry, s, tick, ticks, settings_.angle_steps, n)) {
+            problems.push_back(std::move(*problem));
+            return problems;
+        }
+        next_.entities.push_back(n);
+    }
+    take_enters_below(std::uint64_t{1} << 32);
+    if (leave_at < leaves.size()) {
+        problems.push_back(
+            {"leave_for_unknown_entity", entity_name(leaves[leave_at]) + " left while unknown"});
+    }
+    if (entry_at < entries.size()) {
+        problems.push_back({"update_for_unknown_entity", "the update entry of " +
+                                                             entity_name(entries[entry_at].id) +
+                                                             ": the entity is not known"});
+    }
+    if (!problems.empty()) {
+        return problems;
+    }
+    frames_.store(next_);
+    newest_tick_ = tick;
+    return problems;
+}
+
+std::optional<Pose> AckedSnapshotDecoder::pose(std::uint32_t id) const {
+    const DeltaFrame* frame = newest();
+    if (frame == nullptr) {
+        return std::nullopt;
+    }
+    const auto it =
+        std::lower_bound(frame->entities.begin(), frame->entities.end(), id,
+                         [](const FrameEntity& e, std::uint32_t wanted) { return e.id < wanted; });
+    if (it == frame->entities.end() || it->id != id) {
+        return std::nullopt;
+    }
+    return dequantize(it->pose, settings_.quantum(it->tier), settings_.angle_steps);
+}
+
+} // namespace dsoc::protocol

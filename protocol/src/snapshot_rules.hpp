@@ -1,0 +1,145 @@
+#pragma once
+// Rules both snapshot codecs (compact_snapshot.hpp, acked_snapshot.hpp) share: angle
+// steps as they travel (a yaw is a step in [0, steps) and wraps; its deltas go the
+// shorter way round) and which update entries are well formed. Pure functions.
+
+#include "dsoc/protocol/compact_snapshot.hpp"
+
+#include <array>
+#include <bit>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace dsoc::protocol {
+
+/// `delta` wrapped into [steps/2 - steps, steps/2) (integer halves).
+inline std::int32_t wrap_angle_delta(std::int64_t delta, std::uint32_t steps) {
+    const auto n = static_cast<std::int64_t>(steps);
+    const std::int64_t half = n / 2;
+    std::int64_t d = delta;
+    if (d <= -n || d >= n) {
+        d = ((d % n) + n) % n; // not between two quantized yaws: the general rule
+    }
+    if (d >= half) {
+        d -= n;
+    } else if (d < half - n) {
+        d += n;
+    }
+    return static_cast<std::int32_t>(d);
+}
+
+/// `yaw` + `delta` wrapped into [0, steps). An encoder's deltas keep the sum within
+/// one turn of the range (wrap_angle_delta), so that case costs no division; any other
+/// delta (a hostile sender's) takes the general rule.
+inline std::int32_t add_angle_steps(std::int32_t yaw, std::int32_t delta, std::int64_t steps) {
+    std::int64_t sum = static_cast<std::int64_t>(yaw) + delta;
+    sum += sum < 0 ? steps : 0;
+    sum -= sum >= steps ? steps : 0;
+    if (sum < 0 || sum >= steps) {
+        sum = ((sum % steps) + steps) % steps;
+    }
+    return static_cast<std::int32_t>(sum);
+}
+
+/// Whether `fields` is a well-formed Snapshot.update_fields entry: not empty, only known
+/// bits, and a rebase alone.
+[[nodiscard]] inline bool valid_update_fields(std::uint32_t fields) {
+    constexpr std::uint32_t kKnownFields =
+        kFieldX | kFieldY | kFieldZ | kFieldYaw | kFieldPitch | kFieldRebase;
+    return fields != 0 && (fields & ~kKnownFields) == 0 &&
+           ((fields & kFieldRebase) == 0 || fields == kFieldRebase);
+}
+
+/// How many update_values an entry with valid_update_fields() `fields` carries: a rebase
+/// the tier and five absolute values, otherwise one value per field.
+[[nodiscard]] inline int update_value_count(std::uint32_t fields) {
+    return (fields & kFieldRebase) != 0 ? 6 : std::popcount(fields);
+}
+
+/// "entity <id>", as problems name an entity.
+[[nodiscard]] inline std::string entity_name(std::uint32_t id) {
+    return "entity " + std::to_string(id);
+}
+
+/// Appends to `out` the enter of `id` with quantized pose `q` on `tier`, its half extents
+/// (world units) quantized on the same tier: what either encoder sends for an entity
+/// new to the client. Returns the quantized half extents.
+inline std::array<std::uint32_t, 3>
+write_enter(std::uint32_t id, const QuantizedPose& q, std::uint8_t tier,
+            const std::array<float, 3>& half_extents, std::uint32_t kind,
+            const QuantizationSettings& settings, pb::Snapshot& out) {
+    const float quantum = settings.quantum(tier);
+    const std::array<std::uint32_t, 3> half{quantize_extent(half_extents[0], quantum),
+                                            quantize_extent(half_extents[1], quantum),
+                                            quantize_extent(half_extents[2], quantum)};
+    pb::EntityState& s = *out.add_enter();
+    s.set_id(id);
+    s.set_tier(tier);
+    s.set_x(q.x);
+    s.set_y(q.y);
+    s.set_z(q.z);
+    s.set_yaw(static_cast<std::uint32_t>(q.yaw));
+    s.set_pitch(q.pitch);
+    s.set_half_x(half[0]);
+    s.set_half_y(half[1]);
+    s.set_half_z(half[2]);
+    s.set_kind(kind);
+    return half;
+}
+
+/// What is wrong with an entering entity's state, if anything: its tier, angles on the
+/// heard tier, a position beyond +-kMaxQuantizedCoordinate, or a yaw step outside
+/// [0, steps).
+[[nodiscard]] inline std::optional<SnapshotProblem> enter_problem(const pb::EntityState& e,
+                                                                  std::uint32_t steps) {
+    if (e.tier() >= kTiers) {
+        return SnapshotProblem{"bad_tier", entity_name(e.id()) + " enters on tier " +
+                                               std::to_string(e.tier()) + "; tiers are 0..3"};
+    }
+    if (e.tier() == kHeardTier && (e.yaw() != 0 || e.pitch() != 0)) {
+        return SnapshotProblem{"angles_on_heard_tier",
+                               entity_name(e.id()) + " enters heard-only with view angles"};
+    }
+    const auto outside = [](std::int32_t v) {
+        return v < -kMaxQuantizedCoordinate || v > kMaxQuantizedCoordinate;
+    };
+    if (outside(e.x()) || outside(e.y()) || outside(e.z())) {
+        return SnapshotProblem{"malformed_update",
+                               entity_name(e.id()) + " enters beyond +-2^30 quanta"};
+    }
+    if (e.yaw() >= steps) {
+        return SnapshotProblem{"malformed_update", entity_name(e.id()) + " enters with yaw step " +
+                                                       std::to_string(e.yaw()) +
+                                                       " >= " + std::to_string(steps)};
+    }
+    return std::nullopt;
+}
+
+/// What is wrong with a rebase entry's values (the new tier, x, y, z, yaw, pitch), if
+/// anything (the tier, angles on the heard tier, the yaw step, a position beyond
+/// +-kMaxQuantizedCoordinate); `where` names the entry.
+[[nodiscard]] inline std::optional<SnapshotProblem>
+rebase_problem(const std::int32_t* values, std::uint32_t steps, const std::string& where) {
+    const std::int32_t tier = values[0];
+    const std::int32_t yaw = values[4];
+    if (tier < 0 || static_cast<std::size_t>(tier) >= kTiers) {
+        return SnapshotProblem{"bad_tier", where + ": rebase to tier " + std::to_string(tier)};
+    }
+    if (tier == kHeardTier && (yaw != 0 || values[5] != 0)) {
+        return SnapshotProblem{"angles_on_heard_tier",
+                               where + ": rebase to heard with view angles"};
+    }
+    if (yaw < 0 || static_cast<std::uint32_t>(yaw) >= steps) {
+        return SnapshotProblem{"malformed_update",
+                               where + ": rebase yaw step " + std::to_string(yaw)};
+    }
+    for (int k = 1; k <= 3; ++k) {
+        if (values[k] < -kMaxQuantizedCoordinate || values[k] > kMaxQuantizedCoordinate) {
+            return SnapshotProblem{"malformed_update", where + ": rebase beyond +-2^30 quanta"};
+        }
+    }
+    return std::nullopt;
+}
+
+} // namespace dsoc::protocol

@@ -1,0 +1,373 @@
+#include "dsoc/protocol/acked_snapshot.hpp"
+
+#include "snapshot_wire.hpp"
+
+#include <glm/vec3.hpp>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <deque>
+#include <limits>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace dsoc::protocol {
+namespace {
+
+const std::array<float, 3> kHalf{15.0f, 15.0f, 28.0f};
+
+std::string entity_name(std::uint32_t id) {
+    return "entity " + std::to_string(id);
+}
+
+/// One entity of the server's world as a test drives it: quantized on every tier.
+struct TruthEntity {
+    std::uint32_t id = 0;
+    Pose pose;
+    glm::vec3 velocity{0.0f};
+    std::uint8_t tier = 0;
+};
+
+QuantizedPose on_tier(const TruthEntity& e, const QuantizationSettings& settings) {
+    return quantize(e.pose, settings, e.tier);
+}
+
+void encode(AckedSnapshotEncoder& encoder, std::uint64_t tick, std::optional<std::uint64_t> acked,
+            const std::vector<TruthEntity>& interest, pb::Snapshot& out) {
+    encoder.begin(tick, acked, out);
+    for (const TruthEntity& e : interest) {
+        encoder.add(e.id, on_tier(e, encoder.settings()), e.tier, 1, kHalf, out);
+    }
+    encoder.finish(out);
+}
+
+TEST(AckedPrediction, RoundsHalvesAwayFromZero) {
+    EXPECT_EQ(divide_rounded(5, 2), 3);
+    EXPECT_EQ(divide_rounded(-5, 2), -3);
+    EXPECT_EQ(divide_rounded(4, 3), 1);
+    EXPECT_EQ(divide_rounded(-4, 3), -1);
+    EXPECT_EQ(divide_rounded(0, 7), 0);
+}
+
+TEST(AckedPrediction, AnEntityMovingSteadilyIsPredictedExactly) {
+    constexpr std::uint32_t kSteps = 4096;
+    FrameEntity e;
+    e.pose = {100, -50, 8, 10, 0};
+    set_motion(e, {40, -20, 8, 4076, 0}, 3, kSteps); // 20, -10, 0 a tick; turning 10 a tick
+    EXPECT_EQ(e.velocity[0], 20 * kVelocityScale);
+    EXPECT_EQ(e.velocity[1], -10 * kVelocityScale);
+    EXPECT_EQ(e.turn_rate, 10 * kVelocityScale); // the shorter way round, across 0
+    EXPECT_EQ(predict(e, 4, kSteps), (QuantizedPose{180, -90, 8, 50, 0}));
+    e.turn_rate = -10 * kVelocityScale;
+    EXPECT_EQ(predict(e, 2, kSteps).yaw, 4086); // wraps below 0
+    // A fall: z(k) = -7 k (k + 1) / 2 quanta after k ticks (gravity, 7 quanta a tick a tick),
+    // measured over 2 ticks and then over 3, is predicted exactly 4 ticks on.
+    const auto fallen = [](std::int32_t k) { return -7 * k * (k + 1) / 2; };
+    FrameEntity f;
+    f.pose.z = fallen(2);
+    set_motion(f, {0, 0, fallen(0), 0, 0}, 2, kSteps);
+    EXPECT_EQ(f.fall_rate, 0); // one velocity is no acceleration yet
+    f.pose.z = fallen(5);
+    set_motion(f, {0, 0, fallen(2), 0, 0}, 3, kSteps);
+    EXPECT_EQ(f.fall_rate, -7 * kVelocityScale);
+    EXPECT_EQ(predict(f, 4, kSteps).z, fallen(9));
+    clear_motion(f);
+    EXPECT_EQ(predict(f, 4, kSteps), f.pose);
+
+    e.pose.x = kMaxQuantizedCoordinate; // far out: clamped, never overflowing
+    e.velocity[0] = kMaxQuantizedCoordinate;
+    EXPECT_EQ(predict(e, kAckedHistory - 1, kSteps).x, kMaxQuantizedCoordinate);
+}
+
+// The contract under loss, delay, duplication and reordering: every snapshot the client
+// applies leaves it holding exactly the server's frame of that tick (the interest set of
+// that tick, no stale entity, no lost leave), and every entity due on that tick exactly at
+// its quantized pose.
+TEST(AckedSnapshot, TheClientHoldsTheServersFrameWhateverIsLost) {
+    for (const std::uint32_t seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
+        SCOPED_TRACE("seed " + std::to_string(seed));
+        std::mt19937 rng(seed);
+        std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+        const QuantizationSettings settings;
+        AckedSnapshotEncoder encoder(settings);
+        AckedSnapshotDecoder decoder(settings);
+        const float loss = std::array{0.0f, 0.05f, 0.2f, 0.5f, 0.05f, 0.3f}[seed - 1];
+
+        std::vector<TruthEntity> world;
+        std::uint32_t next_id = 1;
+        for (int i = 0; i < 40; ++i) {
+            next_id += 1 + static_cast<std::uint32_t>(rng() % 5);
+            world.push_back(
+                {next_id, {unit(rng) * 2000.0f, unit(rng) * 2000.0f, 0.0f, 0.0f, 0.0f}});
+        }
+        std::map<std::uint32_t, bool> wanted;
+        struct InFlight {
+            int arrives = 0;
+            pb::Snapshot snapshot;
+        };
+        std::deque<InFlight> to_client;
+        std::vector<std::pair<int, std::uint64_t>> to_server; // arrival tick, acked tick
+        std::optional<std::uint64_t> acked;
+        std::map<std::uint64_t, std::vector<TruthEntity>> sent_interest;
+        int applied = 0;
+        int against_baseline = 0;
+        int full = 0;
+        int stale = 0;
+        for (int tick = 1; tick <= 600; ++tick) {
+            // The world moves: steady runs, turns, stops, tier changes, a long outage.
+            for (TruthEntity& e : world) {
+                if (unit(rng) < 0.05f) {
+                    e.velocity = unit(rng) < 0.3f ? glm::vec3(0.0f)
+                                                  : glm::vec3(unit(rng) * 10.0f - 5.0f,
+                                                              unit(rng) * 10.0f - 5.0f, 0.0f);
+                }
+                e.pose.x += e.velocity.x;
+                e.pose.y += e.velocity.y;
+                e.pose.z = unit(rng) < 0.02f ? unit(rng) * 40.0f : e.pose.z;
+                e.pose.yaw_deg = unit(rng) < 0.3f ? unit(rng) * 359.0f - 180.0f : e.pose.yaw_deg;
+                e.pose.pitch_deg = unit(rng) < 0.1f ? unit(rng) * 178.0f - 89.0f : e.pose.pitch_deg;
+                if (unit(rng) < 0.02f) {
+                    e.tier = static_cast<std::uint8_t>(rng() % kTiers);
+                }
+                if (unit(rng) < 0.04f || !wanted.contains(e.id)) {
+                    wanted[e.id] = unit(rng) < 0.7f;
+                }
+            }
+            std::vector<TruthEntity> interest;
+            for (const TruthEntity& e : world) {
+                if (wanted[e.id]) {
+                    interest.push_back(e);
+                }
+            }
+            for (const auto& [arrives, tick_acked] : to_server) {
+                if (arrives == tick) { // acks overtake each other: the newest counts
+                    acked = std::max(acked.value_or(0), tick_acked);
+                }
+            }
+            pb::Snapshot snapshot;
+            encode(encoder, static_cast<std::uint64_t>(tick), acked, interest, snapshot);
+            (snapshot.has_baseline_tick() ? against_baseline : full) += 1;
+            sent_interest[static_cast<std::uint64_t>(tick)] = interest;
+            const bool outage = tick >= 300 && tick < 340; // longer than the history
+            if (!outage && unit(rng) >= loss) {
+                const int delay = static_cast<int>(rng() % 4);
+                to_client.push_back({tick + delay, through_wire(snapshot)});
+                if (unit(rng) < 0.05f) {
+                    to_client.push_back({tick + delay + 1, through_wire(snapshot)}); // duplicated
+                }
+            }
+            std::stable_sort(
+                to_client.begin(), to_client.end(),
+                [](const InFlight& a, const InFlight& b) { return a.arrives < b.arrives; });
+            while (!to_client.empty() && to_client.front().arrives <= tick) {
+                const pb::Snapshot s = std::move(to_client.front().snapshot);
+                to_client.pop_front();
+                const auto problems = decoder.apply(s);
+                if (!problems.empty()) {
+                    ASSERT_EQ(problems.size(), 1u) << kinds(problems);
+                    ASSERT_EQ(problems[0].kind, "stale_snapshot") << kinds(problems);
+                    ++stale;
+                    continue;
+                }
+                ++applied;
+                const DeltaFrame* held = decoder.newest();
+                const DeltaFrame* sent = encoder.frame(s.server_tick());
+                ASSERT_NE(held, nullptr);
+                ASSERT_NE(sent, nullptr);
+                ASSERT_EQ(held->entities, sent->entities) << "tick " << s.server_tick();
+                const std::vector<TruthEntity>& truth = sent_interest[s.server_tick()];
+                ASSERT_EQ(held->entities.size(), truth.size());
+                for (std::size_t k = 0; k < truth.size(); ++k) {
+                    const FrameEntity& got = held->entities[k];
+                    ASSERT_EQ(got.id, truth[k].id);
+                    ASSERT_EQ(got.tier, truth[k].tier);
+                    if ((s.server_tick() + got.id) % update_interval(got.tier) == 0) {
+                        ASSERT_EQ(got.pose, on_tier(truth[k], settings)) << entity_name(got.id);
+                    }
+                }
+            }
+            if (decoder.newest_tick() && unit(rng) >= loss) {
+                to_server.emplace_back(tick + 1 + static_cast<int>(rng() % 3),
+                                       *decoder.newest_tick());
+            }
+        }
+        EXPECT_GT(applied, 200);
+        EXPECT_GT(against_baseline, 300); // deltas, not full snapshots, carried the run
+        EXPECT_GE(full, 2);               // the first one and after the outage at least
+        EXPECT_GT(stale, 0);              // duplicates and late ones came and changed nothing
+    }
+}
+
+TEST(AckedSnapshot, SteadyMotionCostsNoUpdateEntries) {
+    const QuantizationSettings settings;
+    AckedSnapshotEncoder encoder(settings);
+    AckedSnapshotDecoder decoder(settings);
+    // A mover turning steadily, one standing still, one far up the id range.
+    std::vector<TruthEntity> interest{{7, {0.0f, 0.0f, 0.0f, 90.0f, 0.0f}},
+                                      {9, {500.0f, 0.0f, 0.0f, 0.0f, 0.0f}},
+                                      {0xfffffff0u, {-500.0f, 0.0f, 0.0f, 0.0f, 0.0f}}};
+    std::optional<std::uint64_t> acked;
+    std::uint32_t late_entries = 0;
+    std::uint32_t late_moved = 0;
+    for (std::uint64_t tick = 1; tick <= 40; ++tick) {
+        interest[0].pose.x += 2.5f; // 20 quanta a tick
+        interest[0].pose.y -= 1.25f;
+        interest[0].pose.yaw_deg -= 360.0f / 4096.0f * 3.0f; // 3 steps a tick
+        interest[2].pose.x += tick % 3 == 0 ? 1.0f : 0.0f;   // unsteady: entries
+        pb::Snapshot s;
+        encoder.begin(tick, acked, s);
+        for (const TruthEntity& e : interest) {
+            encoder.add(e.id, on_tier(e, settings), e.tier, 1, kHalf, s);
+        }
+        const AckedSnapshotCounts counts = encoder.finish(s);
+        ASSERT_TRUE(decoder.apply(through_wire(s)).empty());
+        if (tick > 10) {
+            late_entries += counts.entries;
+            late_moved += counts.moved;
+        }
+        if (tick >= 4) {
+            acked = tick - 3; // three ticks of round trip
+        }
+    }
+    // Entity 7 is predicted exactly once it has a velocity; only the far one's uneven
+    // steps cost entries. Both moved since the baseline on every one of those ticks.
+    EXPECT_GT(late_entries, 0u);
+    EXPECT_LE(late_entries, 30u);
+    EXPECT_EQ(late_moved, 60u);
+    EXPECT_NEAR(decoder.pose(7)->x, 100.0f, 1e-3f);
+    EXPECT_NEAR(decoder.pose(7)->yaw_deg, 90.0f - 40 * 3 * 360.0f / 4096.0f, 1e-3f);
+    EXPECT_NEAR(decoder.pose(0xfffffff0u)->x, -487.0f, 1e-3f);
+}
+
+/// A client holding the frame of tick 2 (entities 4 and 6), for the hostile cases.
+struct HostileFixture : ::testing::Test {
+    QuantizationSettings settings;
+    AckedSnapshotEncoder encoder{settings};
+    AckedSnapshotDecoder decoder{settings};
+    std::vector<TruthEntity> interest{{4, {1.0f, 2.0f, 3.0f, 0.0f, 0.0f}},
+                                      {6, {8.0f, 2.0f, 3.0f, 0.0f, 0.0f}}};
+
+    void SetUp() override {
+        pb::Snapshot s;
+        encode(encoder, 1, std::nullopt, interest, s);
+        ASSERT_TRUE(decoder.apply(through_wire(s)).empty());
+        interest[0].pose.x += 4.0f;
+        encode(encoder, 2, 1, interest, s);
+        ASSERT_TRUE(decoder.apply(through_wire(s)).empty());
+    }
+    /// A valid snapshot of tick 3 against tick 2, for a test to break.
+    pb::Snapshot next() {
+        pb::Snapshot s;
+        interest[1].pose.y += 1.0f;
+        encode(encoder, 3, 2, interest, s);
+        return s;
+    }
+    /// Applies `s`; expects it rejected for `kind` with the client still at tick 2.
+    void expect_rejected(const pb::Snapshot& s, const std::string& kind) {
+        const DeltaFrame before = *decoder.newest();
+        const auto problems = decoder.apply(through_wire(s));
+        ASSERT_FALSE(problems.empty());
+        EXPECT_EQ(problems[0].kind, kind) << kinds(problems);
+        EXPECT_FALSE(problems[0].detail.empty());
+        EXPECT_EQ(decoder.newest_tick(), 2u);
+        EXPECT_EQ(decoder.newest()->entities, before.entities);
+    }
+};
+
+TEST_F(HostileFixture, TheValidSnapshotApplies) {
+    const pb::Snapshot s = next();
+    EXPECT_TRUE(s.has_baseline_tick());
+    EXPECT_TRUE(decoder.apply(through_wire(s)).empty());
+    EXPECT_EQ(decoder.newest()->entities, encoder.frame(3)->entities);
+}
+
+TEST_F(HostileFixture, StaleAndDuplicateSnapshotsAreRejected) {
+    pb::Snapshot s = next();
+    s.set_server_tick(2);
+    expect_rejected(s, "stale_snapshot");
+}
+
+TEST_F(HostileFixture, AFrameTheClientDoesNotHoldIsRejected) {
+    pb::Snapshot s = next();
+    s.set_baseline_tick(1000);
+    expect_rejected(s, "baseline_missing");
+    s.set_baseline_tick(3); // itself
+    expect_rejected(s, "baseline_missing");
+    s.set_server_tick(2 + kAckedHistory); // older than the history
+    s.set_baseline_tick(2);
+    expect_rejected(s, "baseline_missing");
+}
+
+TEST_F(HostileFixture, EntersLeavesAndEntriesMustMeetTheBaseline) {
+    pb::Snapshot s = next();
+    pb::EntityState& again = *s.add_enter();
+    again.set_id(6);
+    expect_rejected(s, "duplicate_enter");
+    s = next();
+    s.add_leave(5);
+    expect_rejected(s, "leave_for_unknown_entity");
+    s = next();
+    s.add_leave(6); // and its update entry stays
+    expect_rejected(s, "update_for_unknown_entity");
+    s = next();
+    s.set_update_head(0, 5u << 4 | (s.update_head(0) & 15u)); // entity 5, then 7
+    expect_rejected(s, "update_for_unknown_entity");
+}
+
+TEST_F(HostileFixture, MalformedEntriesAreRejected) {
+    // The first entry's mask apart (low bits 0), then made bad.
+    const auto mask_apart = [](pb::Snapshot& s, std::uint32_t fields) {
+        s.set_update_head(0, s.update_head(0) & ~std::uint64_t{15});
+        s.add_update_fields(fields);
+    };
+    pb::Snapshot s = next();
+    ASSERT_EQ(s.update_head_size(), 2); // 4 is not where its velocity says, 6 moved
+    ASSERT_EQ(s.update_fields_size(), 0);
+    mask_apart(s, 64);
+    expect_rejected(s, "malformed_update");
+    s = next();
+    mask_apart(s, kFieldX | kFieldRebase);
+    expect_rejected(s, "malformed_update");
+    s = next();
+    s.set_update_head(0, s.update_head(0) & ~std::uint64_t{15}); // no mask apart to take
+    expect_rejected(s, "malformed_update");
+    s = next();
+    s.add_update_fields(kFieldX); // a mask apart no entry takes
+    expect_rejected(s, "malformed_update");
+    s = next();
+    s.add_update_values(1);
+    expect_rejected(s, "malformed_update");
+    s = next();
+    s.add_update_id(4); // the reliable wire's column
+    expect_rejected(s, "malformed_update");
+    s = next();
+    s.set_update_head(1, 0); // entity 6 becomes 4 again
+    expect_rejected(s, "malformed_update");
+    s = next();
+    s.set_update_values(0, std::numeric_limits<std::int32_t>::max());
+    expect_rejected(s, "malformed_update");
+    s = next();
+    mask_apart(s, kFieldRebase);
+    for (const int v : {0, 0, 0, 0, 0}) { // six values: the tier is the first one's
+        s.add_update_values(v);
+    }
+    expect_rejected(s, "bad_tier");
+    s = next();
+    mask_apart(s, kFieldRebase);
+    s.set_update_values(0, 0); // tier 0, then x beyond the range
+    s.set_update_values(1, kMaxQuantizedCoordinate + 1);
+    for (const int v : {0, 0, 0, 0, 0}) {
+        s.add_update_values(v);
+    }
+    expect_rejected(s, "malformed_update");
+    s = next();
+    pb::EntityState& far = *s.add_enter();
+    far.set_id(9);
+    far.set_y(-kMaxQuantizedCoordinate - 1);
+    expect_rejected(s, "malformed_update");
+}
+
+} // namespace
+} // namespace dsoc::protocol
