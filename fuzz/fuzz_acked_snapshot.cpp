@@ -3,8 +3,9 @@
 // holds three frames (ticks 1 to 3) of a few entities, so that snapshots coded against
 // them reach the prediction and the merge. Whatever the bytes, the decoder must report
 // problems and never crash, overflow or read past a column; every frame it accepts
-// must be well formed: ids increasing, tiers below kTiers, no angles on the heard tier,
-// yaw steps in range, positions within the quantized range.
+// must be well formed (ids increasing, tiers below kTiers, no angles on the heard tier,
+// yaw steps in range, positions within the quantized range), and a snapshot it rejects
+// must leave the newest frame as it was.
 
 #include "dsoc/protocol/acked_snapshot.hpp"
 #include "snapshot_input.hpp"

@@ -11,11 +11,6 @@ namespace dsoc::protocol {
 
 namespace {
 
-/// An update_head's field bits: x, y, z, yaw (UpdateField's four lowest).
-constexpr int kHeadFieldBitCount = 4;
-constexpr std::uint32_t kHeadFieldBits = (1u << kHeadFieldBitCount) - 1;
-static_assert((kFieldX | kFieldY | kFieldZ | kFieldYaw) == kHeadFieldBits);
-
 std::int32_t clamp_coordinate(std::int64_t v) {
     return static_cast<std::int32_t>(
         std::clamp<std::int64_t>(v, -kMaxQuantizedCoordinate, kMaxQuantizedCoordinate));
@@ -34,18 +29,20 @@ bool same_position(const QuantizedPose& a, const QuantizedPose& b) {
 
 QuantizedPose predict(const FrameEntity& base, std::uint64_t ticks, std::uint32_t angle_steps) {
     const auto t = static_cast<std::int64_t>(ticks);
-    const auto moved = [t](std::int32_t at, std::int32_t rate, std::int64_t more) {
-        return clamp_coordinate(
-            at + divide_rounded(static_cast<std::int64_t>(rate) * t + more, kVelocityScale));
+    // In halves, so that the fall's t (t + motion_ticks) / 2 is exact before the one
+    // rounding: with the velocity the mean over the motion_ticks before the frame, a
+    // constant acceleration a adds a t (t + motion_ticks) / 2 in t ticks.
+    const auto moved = [t](std::int32_t at, std::int32_t rate, std::int64_t twice_more) {
+        return clamp_coordinate(at +
+                                divide_rounded(2 * static_cast<std::int64_t>(rate) * t + twice_more,
+                                               2 * kVelocityScale));
     };
-    // With the velocity the mean over the motion_ticks before the frame, a constant
-    // acceleration a adds a t (t + motion_ticks) / 2 in t ticks.
-    const std::int64_t fall =
-        static_cast<std::int64_t>(base.fall_rate) * t * (t + base.motion_ticks) / 2;
+    const std::int64_t twice_fall =
+        static_cast<std::int64_t>(base.fall_rate) * t * (t + base.motion_ticks);
     QuantizedPose p = base.pose;
     p.x = moved(p.x, base.velocity[0], 0);
     p.y = moved(p.y, base.velocity[1], 0);
-    p.z = moved(p.z, base.velocity[2], fall);
+    p.z = moved(p.z, base.velocity[2], twice_fall);
     p.yaw = add_angle_steps(p.yaw, moved(0, base.turn_rate, 0), angle_steps);
     return p;
 }
@@ -106,11 +103,8 @@ void AckedSnapshotEncoder::leave_baseline_below(std::uint32_t id, pb::Snapshot& 
 void AckedSnapshotEncoder::write_entry(std::uint32_t id, std::uint32_t fields,
                                        const std::int32_t* values, std::size_t count,
                                        pb::Snapshot& out) {
-    const std::uint64_t id_delta = counts_.entries == 0 ? id : id - last_entry_id_;
-    const std::uint32_t low = fields & kHeadFieldBits;
-    const bool whole_mask_apart = low != fields; // pitch or rebase: the mask goes apart
-    out.add_update_head(id_delta << kHeadFieldBitCount | (whole_mask_apart ? 0 : low));
-    if (whole_mask_apart) {
+    out.add_update_head(update_head(counts_.entries == 0 ? id : id - last_entry_id_, fields));
+    if (mask_apart(fields)) {
         out.add_update_fields(fields);
     }
     for (std::size_t k = 0; k < count; ++k) {
@@ -145,8 +139,10 @@ void AckedSnapshotEncoder::add(std::uint32_t id, const QuantizedPose& pose, std:
     const std::int64_t rx = static_cast<std::int64_t>(pose.x) - predicted.x;
     const std::int64_t ry = static_cast<std::int64_t>(pose.y) - predicted.y;
     const std::int64_t rz = static_cast<std::int64_t>(pose.z) - predicted.z;
+    const std::int64_t rpitch = static_cast<std::int64_t>(pose.pitch) - b.pose.pitch;
     const bool due = (next_.tick + id) % update_interval(tier) == 0;
-    if (tier != b.tier || (due && !(fits_int32(rx) && fits_int32(ry) && fits_int32(rz)))) {
+    const bool fits = fits_int32(rx) && fits_int32(ry) && fits_int32(rz) && fits_int32(rpitch);
+    if (tier != b.tier || (due && !fits)) {
         const std::array<std::int32_t, 6> values{tier,   pose.x,   pose.y,
                                                  pose.z, pose.yaw, pose.pitch};
         write_entry(id, kFieldRebase, values.data(), values.size(), out);
@@ -171,7 +167,7 @@ void AckedSnapshotEncoder::add(std::uint32_t id, const QuantizedPose& pose, std:
         field(kFieldZ, rz);
         field(kFieldYaw,
               wrap_angle_delta(static_cast<std::int64_t>(pose.yaw) - predicted.yaw, steps));
-        field(kFieldPitch, static_cast<std::int64_t>(pose.pitch) - b.pose.pitch);
+        field(kFieldPitch, rpitch);
         if (fields != 0) {
             write_entry(id, fields, values.data(), count, out);
         }
@@ -196,64 +192,11 @@ AckedSnapshotCounts AckedSnapshotEncoder::finish(pb::Snapshot& out) {
 
 namespace {
 
-/// One update entry, located and checked for form.
-struct Entry {
-    std::uint32_t id = 0;
-    std::uint32_t fields = 0;
-    int at = 0; ///< index of its first value
-};
-
-/// The snapshot's update entries (update_head, update_fields for the masks apart), or
-/// the problem that stops reading them.
-std::optional<SnapshotProblem> read_entries(const pb::Snapshot& s, std::vector<Entry>& entries) {
-    entries.clear();
-    if (s.update_id_size() != 0) {
-        return SnapshotProblem{"malformed_update",
-                               "update_id in an acknowledged-delta snapshot (it uses update_head)"};
-    }
-    const int count = s.update_head_size();
-    int v = 0;
-    int masks_apart = 0;
-    std::uint64_t id = 0;
-    for (int i = 0; i < count; ++i) {
-        const std::uint64_t head = s.update_head(i);
-        const std::uint64_t step = head >> kHeadFieldBitCount;
-        id = i == 0 ? step : id + step;
-        const auto where = [&] {
-            return "update entry " + std::to_string(i) + " (" +
-                   entity_name(static_cast<std::uint32_t>(id)) + ")";
-        };
-        if ((i > 0 && step == 0) || id > 0xffffffffu) {
-            return SnapshotProblem{"malformed_update", where() + ": ids must increase"};
-        }
-        auto fields = static_cast<std::uint32_t>(head & kHeadFieldBits);
-        if (fields == 0) {
-            if (masks_apart == s.update_fields_size()) {
-                return SnapshotProblem{"malformed_update", where() + ": update_fields ends early"};
-            }
-            fields = s.update_fields(masks_apart++);
-        }
-        if (!valid_update_fields(fields)) {
-            return SnapshotProblem{"malformed_update",
-                                   where() + ": bad field mask " + std::to_string(fields)};
-        }
-        if (s.update_values_size() - v < update_value_count(fields)) {
-            return SnapshotProblem{"malformed_update", where() + ": update_values ends early"};
-        }
-        entries.push_back({static_cast<std::uint32_t>(id), fields, v});
-        v += update_value_count(fields);
-    }
-    if (masks_apart != s.update_fields_size() || v != s.update_values_size()) {
-        return SnapshotProblem{"malformed_update", "update_fields or update_values left over"};
-    }
-    return std::nullopt;
-}
-
 /// `b` carried to the new frame through its update entry `e` (nullptr: none), `ticks`
 /// after its frame; a problem when the entry does not fit the entity.
-std::optional<SnapshotProblem> carry(const FrameEntity& b, const Entry* e, const pb::Snapshot& s,
-                                     std::uint64_t tick, std::uint64_t ticks, std::uint32_t steps,
-                                     FrameEntity& n) {
+std::optional<SnapshotProblem> carry(const FrameEntity& b, const UpdateEntry* e,
+                                     const pb::Snapshot& s, std::uint64_t tick, std::uint64_t ticks,
+                                     std::uint32_t steps, FrameEntity& n) {
     n = b;
     const QuantizedPose predicted = predict(b, ticks, steps);
     if (e == nullptr) {
@@ -342,9 +285,8 @@ std::vector<SnapshotProblem> AckedSnapshotDecoder::apply(const pb::Snapshot& s) 
         }
         ticks = tick - from;
     }
-    thread_local std::vector<Entry> entries_of_thread;
-    std::vector<Entry>& entries = entries_of_thread;
-    if (auto problem = read_entries(s, entries)) {
+    std::vector<UpdateEntry>& entries = entries_;
+    if (auto problem = read_update_entries(s, entries)) {
         problems.push_back(std::move(*problem));
         return problems;
     }
@@ -397,9 +339,9 @@ std::vector<SnapshotProblem> AckedSnapshotDecoder::apply(const pb::Snapshot& s) 
             break; // an entry for an entity the baseline lacks: reported below
         }
         const bool leaves_now = leave_at < leaves.size() && leaves[leave_at] == b.id;
-        const Entry* entry = entry_at < entries.size() && entries[entry_at].id == b.id
-                                 ? &entries[entry_at]
-                                 : nullptr;
+        const UpdateEntry* entry = entry_at < entries.size() && entries[entry_at].id == b.id
+                                       ? &entries[entry_at]
+                                       : nullptr;
         if (leaves_now) {
             ++leave_at;
             if (entry != nullptr) {

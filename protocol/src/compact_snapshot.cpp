@@ -36,13 +36,13 @@ void SnapshotEncoder::enter(std::uint32_t id, const Pose& pose,
     baseline_[id] = {q, tier};
 }
 
-bool SnapshotEncoder::update(std::uint32_t id, const Pose& pose, std::uint8_t tier,
-                             pb::Snapshot& out) {
+std::uint32_t SnapshotEncoder::update(std::uint32_t id, const Pose& pose, std::uint8_t tier,
+                                      pb::Snapshot& out) {
     return update_quantized(id, quantize(pose, settings_, tier), tier, out);
 }
 
-bool SnapshotEncoder::update_quantized(std::uint32_t id, const QuantizedPose& q, std::uint8_t tier,
-                                       pb::Snapshot& out) {
+std::uint32_t SnapshotEncoder::update_quantized(std::uint32_t id, const QuantizedPose& q,
+                                                std::uint8_t tier, pb::Snapshot& out) {
     Baseline& base = baseline_[id];
     std::array<std::int32_t, UpdateColumns::kMaxValuesPerEntry> values{};
     std::size_t count = 0;
@@ -73,7 +73,7 @@ bool SnapshotEncoder::update_quantized(std::uint32_t id, const QuantizedPose& q,
         delta(kFieldPitch, q.pitch, base.pose.pitch, difference(q.pitch, base.pose.pitch));
     }
     if (fields == 0) {
-        return false;
+        return 0;
     }
     const std::uint32_t id_delta = any_update_ ? id - last_update_id_ : id;
     if (columns_ != nullptr) {
@@ -83,8 +83,10 @@ bool SnapshotEncoder::update_quantized(std::uint32_t id, const QuantizedPose& q,
         for (std::size_t k = 0; k < count; ++k) {
             column->Add(values[k]);
         }
-        out.add_update_id(id_delta);
-        out.add_update_fields(fields);
+        out.add_update_head(update_head(id_delta, fields));
+        if (mask_apart(fields)) {
+            out.add_update_fields(fields);
+        }
     }
     any_update_ = true;
     last_update_id_ = id;
@@ -92,7 +94,7 @@ bool SnapshotEncoder::update_quantized(std::uint32_t id, const QuantizedPose& q,
     // with overlapping loads that wait for its stores to retire.
     base.pose = q;
     base.tier = tier;
-    return true;
+    return fields;
 }
 
 void SnapshotEncoder::leave(std::uint32_t id, pb::Snapshot& out) {
@@ -104,6 +106,12 @@ void SnapshotEncoder::leave(std::uint32_t id, pb::Snapshot& out) {
 
 std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
     std::vector<SnapshotProblem> problems;
+    if (s.has_baseline_tick()) {
+        problems.push_back({"malformed_update", "an acknowledged-delta snapshot (baseline_tick " +
+                                                    std::to_string(s.baseline_tick()) +
+                                                    ") on the reliable wire"});
+        return problems;
+    }
     const auto steps = static_cast<std::int64_t>(settings_.angle_steps);
     for (const pb::EntityState& e : s.enter()) {
         if (auto problem = enter_problem(e, settings_.angle_steps)) {
@@ -123,104 +131,72 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
         }
     }
 
-    const int entries = s.update_id_size();
-    if (s.update_fields_size() != entries) {
-        problems.push_back({"malformed_update", "update_id has " + std::to_string(entries) +
-                                                    " entries, update_fields " +
-                                                    std::to_string(s.update_fields_size())});
-    } else {
-        const auto& values = s.update_values();
-        int v = 0;
-        std::uint64_t id = 0;
-        // The ids a few entries ahead, only to prefetch their slots (500 clients'
-        // replicas do not fit in cache): a hint, whatever the ids are.
-        int ahead = 0;
-        std::uint64_t ahead_id = 0;
-        for (int i = 0; i < entries; ++i) {
-            for (; ahead < entries && ahead <= i + kPrefetchAhead; ++ahead) {
-                ahead_id = ahead == 0 ? s.update_id(0) : ahead_id + s.update_id(ahead);
-                replica_.prefetch(static_cast<std::uint32_t>(ahead_id));
-            }
-            const std::uint32_t step = s.update_id(i);
-            const std::uint32_t fields = s.update_fields(i);
-            id = i == 0 ? step : id + step;
-            // Built only for a problem: this loop runs for every update a client receives.
-            const auto where = [&] {
-                return "update entry " + std::to_string(i) + " (" +
-                       entity_name(static_cast<std::uint32_t>(id)) + ")";
-            };
-            if ((i > 0 && step == 0) || id > 0xffffffffu) {
-                problems.push_back({"malformed_update", where() + ": ids must increase"});
-                break;
-            }
-            if (!valid_update_fields(fields)) {
-                problems.push_back(
-                    {"malformed_update", where() + ": bad field mask " + std::to_string(fields)});
-                break;
-            }
-            const int needed = update_value_count(fields);
-            if (values.size() - v < needed) {
-                problems.push_back({"malformed_update", where() + ": update_values ends early"});
-                break;
-            }
-            ReplicaEntity* const known = replica_.find(static_cast<std::uint32_t>(id));
-            const int at = v;
-            v += needed;
-            if (known == nullptr) {
-                problems.push_back({"update_for_unknown_entity", where() + " is not known"});
-                continue;
-            }
-            ReplicaEntity& r = *known;
-            if ((fields & kFieldRebase) != 0) {
-                if (auto problem =
-                        rebase_problem(values.data() + at, settings_.angle_steps, where())) {
-                    problems.push_back(std::move(*problem));
-                    continue;
-                }
-                const std::int32_t tier = values[at];
-                const std::int32_t yaw = values[at + 4];
-                heard_ -= r.tier == kHeardTier ? 1 : 0;
-                heard_ += tier == kHeardTier ? 1 : 0;
-                r.tier = static_cast<std::uint8_t>(tier);
-                r.quantized = {values[at + 1], values[at + 2], values[at + 3], yaw, values[at + 5]};
-                continue;
-            }
-            if (r.tier == kHeardTier && (fields & (kFieldYaw | kFieldPitch)) != 0) {
-                problems.push_back(
-                    {"angles_on_heard_tier", where() + ": view angles for a heard-only entity"});
-                continue;
-            }
-            int k = at;
-            bool in_range = true;
-            auto add = [&](std::uint32_t bit, std::int32_t& field) {
-                if ((fields & bit) == 0) {
-                    return;
-                }
-                const std::int64_t sum = static_cast<std::int64_t>(field) + values[k++];
-                if (sum < -kMaxQuantizedCoordinate || sum > kMaxQuantizedCoordinate) {
-                    in_range = false;
-                    return;
-                }
-                field = static_cast<std::int32_t>(sum);
-            };
-            QuantizedPose q = r.quantized;
-            add(kFieldX, q.x);
-            add(kFieldY, q.y);
-            add(kFieldZ, q.z);
-            if ((fields & kFieldYaw) != 0) {
-                q.yaw = add_angle_steps(q.yaw, values[k++], steps);
-            }
-            add(kFieldPitch, q.pitch);
-            if (!in_range) {
-                problems.push_back({"malformed_update", where() + ": a delta leaves the range"});
-                continue;
-            }
-            r.quantized = q;
+    std::optional<SnapshotProblem> stopped = read_update_entries(s, entries_);
+    const auto& values = s.update_values();
+    for (std::size_t i = 0; i < entries_.size(); ++i) {
+        if (i + kPrefetchAhead < entries_.size()) { // 500 clients' replicas do not fit in cache
+            replica_.prefetch(entries_[i + kPrefetchAhead].id);
         }
-        if (problems.empty() && v != values.size()) {
-            problems.push_back({"malformed_update",
-                                std::to_string(values.size() - v) + " update_values left over"});
+        const UpdateEntry& e = entries_[i];
+        const std::uint32_t fields = e.fields;
+        const int at = e.at;
+        // Built only for a problem: this loop runs for every update a client receives.
+        const auto where = [&] {
+            return "update entry " + std::to_string(i) + " (" + entity_name(e.id) + ")";
+        };
+        ReplicaEntity* const known = replica_.find(e.id);
+        if (known == nullptr) {
+            problems.push_back({"update_for_unknown_entity", where() + " is not known"});
+            continue;
         }
+        ReplicaEntity& r = *known;
+        if ((fields & kFieldRebase) != 0) {
+            if (auto problem = rebase_problem(values.data() + at, settings_.angle_steps, where())) {
+                problems.push_back(std::move(*problem));
+                continue;
+            }
+            const std::int32_t tier = values[at];
+            heard_ -= r.tier == kHeardTier ? 1 : 0;
+            heard_ += tier == kHeardTier ? 1 : 0;
+            r.tier = static_cast<std::uint8_t>(tier);
+            r.quantized = {values[at + 1], values[at + 2], values[at + 3], values[at + 4],
+                           values[at + 5]};
+            continue;
+        }
+        if (r.tier == kHeardTier && (fields & (kFieldYaw | kFieldPitch)) != 0) {
+            problems.push_back(
+                {"angles_on_heard_tier", where() + ": view angles for a heard-only entity"});
+            continue;
+        }
+        int k = at;
+        bool in_range = true;
+        auto add = [&](std::uint32_t bit, std::int32_t& field) {
+            if ((fields & bit) == 0) {
+                return;
+            }
+            const std::int64_t sum = static_cast<std::int64_t>(field) + values[k++];
+            if (sum < -kMaxQuantizedCoordinate || sum > kMaxQuantizedCoordinate) {
+                in_range = false;
+                return;
+            }
+            field = static_cast<std::int32_t>(sum);
+        };
+        QuantizedPose q = r.quantized;
+        add(kFieldX, q.x);
+        add(kFieldY, q.y);
+        add(kFieldZ, q.z);
+        if ((fields & kFieldYaw) != 0) {
+            q.yaw = add_angle_steps(q.yaw, values[k++], steps);
+        }
+        add(kFieldPitch, q.pitch);
+        if (!in_range) {
+            problems.push_back({"malformed_update", where() + ": a delta leaves the range"});
+            continue;
+        }
+        r.quantized = q;
+    }
+    if (stopped) {
+        problems.push_back(std::move(*stopped));
     }
 
     for (const std::uint32_t id : s.leave()) {

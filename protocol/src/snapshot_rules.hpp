@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace dsoc::protocol {
 
@@ -87,6 +88,13 @@ write_enter(std::uint32_t id, const QuantizedPose& q, std::uint8_t tier,
     s.set_kind(kind);
     return half;
 }
+
+/// Locates `s`'s update entries in `entries` (cleared first), checking their form: ids
+/// increasing, masks well formed, values and masks apart neither running out nor left
+/// over. Stops at the first malformed entry (the later ones cannot be located) and
+/// returns its problem; the entries before it are in `entries`.
+std::optional<SnapshotProblem> read_update_entries(const pb::Snapshot& s,
+                                                   std::vector<UpdateEntry>& entries);
 
 /// What is wrong with an entering entity's state, if anything: its tier, angles on the
 /// heard tier, a position beyond +-kMaxQuantizedCoordinate, or a yaw step outside

@@ -44,7 +44,7 @@ std::uint8_t* write_packed_field(int field_number, std::span<const std::uint8_t>
 } // namespace
 
 void UpdateColumns::clear() {
-    ids_.used = 0;
+    heads_.used = 0;
     fields_.used = 0;
     values_.used = 0;
     count_ = 0;
@@ -54,20 +54,20 @@ void UpdateColumns::grow() {
     // Room for `capacity_` entries of the largest size from the start: whatever was
     // written takes no more than that, so the rest has room for the entries left.
     capacity_ = std::max<std::size_t>(64, 2 * capacity_);
-    ids_.bytes.resize(capacity_ * kMaxVarintBytes);
+    heads_.bytes.resize(capacity_ * kMaxVarint64Bytes);
     fields_.bytes.resize(capacity_ * kMaxVarintBytes);
     values_.bytes.resize(capacity_ * kMaxValuesPerEntry * kMaxVarintBytes);
 }
 
 std::size_t UpdateColumns::wire_bytes() const {
-    return packed_field_bytes(pb::Snapshot::kUpdateIdFieldNumber, ids_.used) +
+    return packed_field_bytes(pb::Snapshot::kUpdateHeadFieldNumber, heads_.used) +
            packed_field_bytes(pb::Snapshot::kUpdateFieldsFieldNumber, fields_.used) +
            packed_field_bytes(pb::Snapshot::kUpdateValuesFieldNumber, values_.used);
 }
 
 std::uint8_t* UpdateColumns::write(std::uint8_t* out) const {
-    out =
-        write_packed_field(pb::Snapshot::kUpdateIdFieldNumber, {ids_.bytes.data(), ids_.used}, out);
+    out = write_packed_field(pb::Snapshot::kUpdateHeadFieldNumber,
+                             {heads_.bytes.data(), heads_.used}, out);
     out = write_packed_field(pb::Snapshot::kUpdateFieldsFieldNumber,
                              {fields_.bytes.data(), fields_.used}, out);
     return write_packed_field(pb::Snapshot::kUpdateValuesFieldNumber,
@@ -75,33 +75,28 @@ std::uint8_t* UpdateColumns::write(std::uint8_t* out) const {
 }
 
 std::size_t update_column_bytes(const pb::Snapshot& s) {
-    std::size_t ids = 0;
-    for (const std::uint32_t v : s.update_id()) {
-        ids += CodedOutputStream::VarintSize32(v);
+    std::size_t heads = 0;
+    for (const std::uint64_t v : s.update_head()) {
+        heads += CodedOutputStream::VarintSize64(v);
     }
     std::size_t fields = 0;
     for (const std::uint32_t v : s.update_fields()) {
         fields += CodedOutputStream::VarintSize32(v);
     }
-    std::size_t heads = 0;
-    for (const std::uint64_t v : s.update_head()) {
-        heads += CodedOutputStream::VarintSize64(v);
-    }
     std::size_t values = 0;
     for (const std::int32_t v : s.update_values()) {
         values += CodedOutputStream::VarintSize32(WireFormatLite::ZigZagEncode32(v));
     }
-    return packed_field_bytes(pb::Snapshot::kUpdateIdFieldNumber, ids) +
+    return packed_field_bytes(pb::Snapshot::kUpdateHeadFieldNumber, heads) +
            packed_field_bytes(pb::Snapshot::kUpdateFieldsFieldNumber, fields) +
-           packed_field_bytes(pb::Snapshot::kUpdateValuesFieldNumber, values) +
-           packed_field_bytes(pb::Snapshot::kUpdateHeadFieldNumber, heads);
+           packed_field_bytes(pb::Snapshot::kUpdateValuesFieldNumber, values);
 }
 
 std::size_t encode_snapshot_frame(pb::Envelope& envelope, const UpdateColumns& columns,
                                   std::vector<std::uint8_t>& out) {
     assert(envelope.has_snapshot());
     pb::Snapshot& snapshot = *envelope.mutable_snapshot();
-    assert(snapshot.update_id_size() == 0 && snapshot.update_fields_size() == 0 &&
+    assert(snapshot.update_head_size() == 0 && snapshot.update_fields_size() == 0 &&
            snapshot.update_values_size() == 0);
     static_assert(pb::Snapshot::kAuditFieldNumber > pb::Snapshot::kUpdateValuesFieldNumber,
                   "the audit poses follow the update columns on the wire");

@@ -310,7 +310,7 @@ void SimClient::apply_snapshot(const pb::Snapshot& s) {
         stats_.audited_poses += static_cast<std::uint64_t>(s.audit_size());
         stats_.max_audit_error = std::max(stats_.max_audit_error, worst);
     }
-    stats_.entity_updates += static_cast<std::uint64_t>(s.enter_size() + s.update_id_size());
+    stats_.entity_updates += static_cast<std::uint64_t>(s.enter_size() + s.update_head_size());
     if (replica_.knows(stats_.entity_id)) {
         stats_.saw_own_entity = true;
     }

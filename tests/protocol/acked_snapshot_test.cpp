@@ -210,6 +210,7 @@ TEST(AckedSnapshot, SteadyMotionCostsNoUpdateEntries) {
                                       {0xfffffff0u, {-500.0f, 0.0f, 0.0f, 0.0f, 0.0f}}};
     std::optional<std::uint64_t> acked;
     std::uint32_t late_entries = 0;
+    std::uint32_t late_entries_of_7 = 0;
     std::uint32_t late_moved = 0;
     for (std::uint64_t tick = 1; tick <= 40; ++tick) {
         interest[0].pose.x += 2.5f; // 20 quanta a tick
@@ -226,6 +227,11 @@ TEST(AckedSnapshot, SteadyMotionCostsNoUpdateEntries) {
         if (tick > 10) {
             late_entries += counts.entries;
             late_moved += counts.moved;
+            std::uint64_t id = 0;
+            for (int i = 0; i < s.update_head_size(); ++i) {
+                id = i == 0 ? s.update_head(i) >> 4 : id + (s.update_head(i) >> 4);
+                late_entries_of_7 += id == 7 ? 1 : 0;
+            }
         }
         if (tick >= 4) {
             acked = tick - 3; // three ticks of round trip
@@ -233,6 +239,7 @@ TEST(AckedSnapshot, SteadyMotionCostsNoUpdateEntries) {
     }
     // Entity 7 is predicted exactly once it has a velocity; only the far one's uneven
     // steps cost entries. Both moved since the baseline on every one of those ticks.
+    EXPECT_EQ(late_entries_of_7, 0u);
     EXPECT_GT(late_entries, 0u);
     EXPECT_LE(late_entries, 30u);
     EXPECT_EQ(late_moved, 60u);
@@ -241,13 +248,34 @@ TEST(AckedSnapshot, SteadyMotionCostsNoUpdateEntries) {
     EXPECT_NEAR(decoder.pose(0xfffffff0u)->x, -487.0f, 1e-3f);
 }
 
-/// A client holding the frame of tick 2 (entities 4 and 6), for the hostile cases.
+TEST(AckedSnapshot, AnAcknowledgementOlderThanTheHistoryGetsAFullSnapshot) {
+    const QuantizationSettings settings;
+    AckedSnapshotEncoder encoder(settings);
+    const std::vector<TruthEntity> interest{{3, {1.0f, 2.0f, 3.0f, 0.0f, 0.0f}}};
+    pb::Snapshot s;
+    for (std::uint64_t tick = 1; tick <= 40; ++tick) {
+        encode(encoder, tick, std::nullopt, interest, s);
+    }
+    encode(encoder, 41, 41 - (kAckedHistory - 1), interest, s); // the oldest frame held
+    EXPECT_TRUE(s.has_baseline_tick());
+    EXPECT_EQ(s.enter_size(), 0);
+    encode(encoder, 42, 42 - kAckedHistory, interest, s); // just replaced
+    EXPECT_FALSE(s.has_baseline_tick());
+    EXPECT_EQ(s.enter_size(), 1);
+    encode(encoder, 43, 43, interest, s); // not older than the snapshot: never
+    EXPECT_FALSE(s.has_baseline_tick());
+}
+
+/// A client holding the frame of tick 2, for the hostile cases: entities 4 and 6 on
+/// the near tier, 8 on tier 1 (not due at tick 3), 13 heard (due at tick 3).
 struct HostileFixture : ::testing::Test {
     QuantizationSettings settings;
     AckedSnapshotEncoder encoder{settings};
     AckedSnapshotDecoder decoder{settings};
     std::vector<TruthEntity> interest{{4, {1.0f, 2.0f, 3.0f, 0.0f, 0.0f}},
-                                      {6, {8.0f, 2.0f, 3.0f, 0.0f, 0.0f}}};
+                                      {6, {8.0f, 2.0f, 3.0f, 0.0f, 0.0f}},
+                                      {8, {16.0f, 2.0f, 3.0f, 0.0f, 0.0f}, {}, 1},
+                                      {13, {256.0f, 2.0f, 3.0f, 0.0f, 0.0f}, {}, kHeardTier}};
 
     void SetUp() override {
         pb::Snapshot s;
@@ -287,6 +315,30 @@ TEST_F(HostileFixture, StaleAndDuplicateSnapshotsAreRejected) {
     pb::Snapshot s = next();
     s.set_server_tick(2);
     expect_rejected(s, "stale_snapshot");
+    s.set_server_tick(1);
+    expect_rejected(s, "stale_snapshot");
+}
+
+TEST_F(HostileFixture, EntriesMustFitTheEntitysTier) {
+    pb::Snapshot s = next();
+    s.add_update_head(2u << 4 | kFieldX); // entity 8, after 6: tier 1 is not due at tick 3
+    s.add_update_values(5);
+    expect_rejected(s, "malformed_update");
+    s = next();
+    s.add_update_head(7u << 4 | kFieldYaw); // entity 13, heard: no angles
+    s.add_update_values(5);
+    expect_rejected(s, "angles_on_heard_tier");
+}
+
+TEST_F(HostileFixture, EntersAndLeavesMustIncrease) {
+    pb::Snapshot s = next();
+    s.add_enter()->set_id(20);
+    s.add_enter()->set_id(19);
+    expect_rejected(s, "malformed_update");
+    s = next();
+    s.add_leave(13);
+    s.add_leave(8);
+    expect_rejected(s, "malformed_update");
 }
 
 TEST_F(HostileFixture, AFrameTheClientDoesNotHoldIsRejected) {
@@ -338,9 +390,6 @@ TEST_F(HostileFixture, MalformedEntriesAreRejected) {
     expect_rejected(s, "malformed_update");
     s = next();
     s.add_update_values(1);
-    expect_rejected(s, "malformed_update");
-    s = next();
-    s.add_update_id(4); // the reliable wire's column
     expect_rejected(s, "malformed_update");
     s = next();
     s.set_update_head(1, 0); // entity 6 becomes 4 again

@@ -98,7 +98,7 @@ TEST(CompactSnapshot, AHeardEntityTravelsCoarseWithoutAnglesAndIsPreciseOnceSeen
     // Seen: a rebase to the near tier carries the exact pose.
     enc.begin(3, s);
     EXPECT_TRUE(enc.update(7, exact, 0, s));
-    EXPECT_EQ(s.update_fields(0), kFieldRebase);
+    EXPECT_EQ(first_entry_fields(s), kFieldRebase);
     ASSERT_TRUE(dec.apply(through_wire(s)).empty());
     EXPECT_LE(quantization_error(*dec.pose(7), exact, q.position_quantum[0], q.angle_steps),
               0.5 + 1e-3);
@@ -128,8 +128,7 @@ TEST(CompactSnapshot, AHeardEntityWithAnglesOrAnAuditPoseIsAProblem) {
     ASSERT_TRUE(dec.apply(s).empty());
     pb::Snapshot next;
     next.set_server_tick(2);
-    next.add_update_id(4);
-    next.add_update_fields(kFieldPitch); // angles for a heard-only entity
+    add_entry(next, 4, kFieldPitch); // angles for a heard-only entity
     next.add_update_values(5);
     EXPECT_EQ(kinds(dec.apply(next)).rfind("angles_on_heard_tier", 0), 0u);
 
@@ -157,13 +156,14 @@ TEST(CompactSnapshot, OnlyChangedFieldsTravel) {
     enc.begin(2, s);
     EXPECT_TRUE(enc.update(7, {110.0f, 200.0f, 24.0f, 90.0f, 0.0f}, 0, s)); // x only
     EXPECT_FALSE(enc.update(9, {0.01f, 0.0f, 24.0f, 0.0f, 0.0f}, 0, s));    // below a quantum
-    ASSERT_EQ(s.update_id_size(), 1);
-    EXPECT_EQ(s.update_id(0), 7u);
-    EXPECT_EQ(s.update_fields(0), kFieldX);
+    ASSERT_EQ(s.update_head_size(), 1);
+    EXPECT_EQ(s.update_head(0), 7u << 4 | kFieldX); // id 7, mask x, one varint
+    EXPECT_EQ(s.update_fields_size(), 0);
     ASSERT_EQ(s.update_values_size(), 1);
     EXPECT_EQ(s.update_values(0), 80);
-    // One entry: id, mask, one 2-byte value, plus three tag+length pairs.
-    EXPECT_EQ(update_column_bytes(s), 1u + 2 + 1 + 2 + 2 + 2);
+    // One entry: a 2-byte head (7 << 4 | 1 = 113 < 128, so one byte, and a 2-byte value,
+    // plus two tag+length pairs.
+    EXPECT_EQ(update_column_bytes(s), 1u + 2 + 2 + 2);
 }
 
 TEST(CompactSnapshot, YawDeltasTakeTheShortWayAround) {
@@ -176,7 +176,7 @@ TEST(CompactSnapshot, YawDeltasTakeTheShortWayAround) {
     ASSERT_TRUE(dec.apply(through_wire(s)).empty());
     enc.begin(2, s);
     ASSERT_TRUE(enc.update(3, {0, 0, 0, -179.9f, 0}, 0, s));
-    EXPECT_EQ(s.update_fields(0), kFieldYaw);
+    EXPECT_EQ(first_entry_fields(s), kFieldYaw);
     EXPECT_LE(std::abs(s.update_values(0)), 3); // 0.2 degrees = 2.3 steps, not 4094
     ASSERT_TRUE(dec.apply(through_wire(s)).empty());
     EXPECT_NEAR(dec.pose(3)->yaw_deg, -179.9f, 0.05f);
@@ -223,8 +223,7 @@ TEST(CompactSnapshot, AnyYawDeltaLandsOnTheCircleAsTheModuloRuleSays) {
         }
         pb::Snapshot u;
         u.set_server_tick(static_cast<std::uint64_t>(round) + 2);
-        u.add_update_id(3);
-        u.add_update_fields(kFieldYaw);
+        add_entry(u, 3, kFieldYaw);
         u.add_update_values(delta);
         ASSERT_TRUE(dec.apply(u).empty()) << "delta " << delta;
         yaw = (((yaw + delta) % steps) + steps) % steps;
@@ -242,7 +241,7 @@ TEST(CompactSnapshot, UpdateColumnBytesMatchTheRealEncoder) {
         pb::Snapshot s;
         const int n = static_cast<int>(rng() % 40);
         for (int i = 0; i < n; ++i) {
-            s.add_update_id(rng() % 3000);
+            s.add_update_head(rng() % (3000u << 4));
             s.add_update_fields(rng() % 64);
             s.add_update_values(big(rng));
             s.add_update_values(static_cast<std::int32_t>(rng() % 200) - 100);
@@ -355,8 +354,7 @@ TEST(CompactSnapshot, HostileSnapshotsAreReportedNotTrusted) {
 
     const auto one = [](std::uint32_t id, std::uint32_t fields, std::vector<std::int32_t> values) {
         pb::Snapshot u;
-        u.add_update_id(id);
-        u.add_update_fields(fields);
+        add_entry(u, id, fields);
         for (const auto v : values) {
             u.add_update_values(v);
         }
@@ -370,13 +368,21 @@ TEST(CompactSnapshot, HostileSnapshotsAreReportedNotTrusted) {
     EXPECT_EQ(dec.apply(one(4, kFieldRebase, {9, 0, 0, 0, 0, 0})).at(0).kind, "bad_tier");
     EXPECT_EQ(dec.apply(one(4, kFieldX, {2'000'000'000})).at(0).kind, "malformed_update");
     pb::Snapshot twice = one(4, kFieldX, {1});
-    twice.add_update_id(0); // the same id again
-    twice.add_update_fields(kFieldX);
+    twice.add_update_head(0 << 4 | kFieldX); // the same id again
     twice.add_update_values(1);
     EXPECT_EQ(dec.apply(twice).at(0).kind, "malformed_update");
     pb::Snapshot columns = one(4, kFieldX, {1});
-    columns.add_update_id(1);
+    columns.add_update_fields(kFieldPitch); // a mask apart no entry takes
     EXPECT_EQ(dec.apply(columns).at(0).kind, "malformed_update");
+    EXPECT_EQ(dec.apply(one(4, kFieldX | kFieldPitch, {1, 0})).size(), 0u); // apart: fine
+    pb::Snapshot acked = one(4, kFieldX, {1});
+    acked.set_baseline_tick(1); // the other wire's snapshot
+    EXPECT_EQ(dec.apply(acked).at(0).kind, "malformed_update");
+    pb::Snapshot apart_for_nothing;
+    apart_for_nothing.add_update_head(std::uint64_t{4} << 4);
+    apart_for_nothing.add_update_fields(kFieldX); // a mask the head could hold
+    apart_for_nothing.add_update_values(1);
+    EXPECT_EQ(dec.apply(apart_for_nothing).at(0).kind, "malformed_update");
 
     // An audit that disagrees with the replica by more than half a quantum.
     pb::Snapshot audit;

@@ -124,7 +124,7 @@ std::vector<std::string> run_server_ticks(const std::string& policy, int threads
                 out.push_back(clients[i]->envelope.SerializeAsString());
             }
             enters += static_cast<std::uint64_t>(snapshot.enter_size());
-            updates += static_cast<std::uint64_t>(snapshot.update_id_size());
+            updates += static_cast<std::uint64_t>(snapshot.update_head_size());
             // What the client decodes is within half a quantum of the server's world.
             const auto problems = clients[i]->decoder.apply(snapshot);
             EXPECT_TRUE(problems.empty())

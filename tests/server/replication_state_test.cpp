@@ -38,13 +38,14 @@ std::vector<std::uint32_t> id_list(const std::vector<interest::Interest>& set) {
     return out;
 }
 
-/// The ids of a snapshot's update entries (update_id is delta-coded).
+/// The ids of a snapshot's update entries (update_head holds the id steps).
 std::vector<std::uint32_t> updated_ids(const protocol::pb::Snapshot& s) {
     std::vector<std::uint32_t> out;
-    std::uint32_t id = 0;
-    for (int i = 0; i < s.update_id_size(); ++i) {
-        id = i == 0 ? s.update_id(i) : id + s.update_id(i);
-        out.push_back(id);
+    std::uint64_t id = 0;
+    for (int i = 0; i < s.update_head_size(); ++i) {
+        const std::uint64_t step = s.update_head(i) >> protocol::kHeadFieldBitCount;
+        id = i == 0 ? step : id + step;
+        out.push_back(static_cast<std::uint32_t>(id));
     }
     return out;
 }
@@ -60,13 +61,13 @@ TEST(ReplicationState, EnterThenUpdateThenLeave) {
     ASSERT_EQ(snap.enter_size(), 2);
     EXPECT_EQ(snap.enter(0).id(), 1u);
     EXPECT_EQ(snap.enter(1).id(), 3u);
-    EXPECT_EQ(snap.update_id_size(), 0);
+    EXPECT_EQ(snap.update_head_size(), 0);
     EXPECT_EQ(snap.leave_size(), 0);
     EXPECT_EQ(snap.server_tick(), 1u);
 
     // Nothing moved: no updates.
     state.build_snapshot(world, first, 2, false, snap);
-    EXPECT_EQ(snap.enter_size() + snap.update_id_size() + snap.leave_size(), 0);
+    EXPECT_EQ(snap.enter_size() + snap.update_head_size() + snap.leave_size(), 0);
 
     world.step(0.1f); // bots move
     const auto second = near({2, 3});

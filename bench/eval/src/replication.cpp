@@ -47,13 +47,11 @@ SnapshotCost ClientReplication::send(const WorldFrame& frame,
         if (is_heard && (tick + id) % protocol::update_interval(tier) != 0) {
             return; // deferred, as the server does on a coarse tier
         }
-        if (encoder_.update(id, wire_pose(e), tier, snapshot)) {
+        if (const std::uint32_t fields = encoder_.update(id, wire_pose(e), tier, snapshot);
+            fields != 0) {
             ++cost.updates;
             cost.heard_entries += is_heard ? 1 : 0;
-            const int entries = snapshot.update_fields_size();
-            if ((snapshot.update_fields(entries - 1) & kPositionFields) != 0) {
-                ++cost.moving_updates;
-            }
+            cost.moving_updates += (fields & kPositionFields) != 0 ? 1 : 0;
         }
     };
     protocol::merge_interest(

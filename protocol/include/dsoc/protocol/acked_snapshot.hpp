@@ -100,6 +100,7 @@ private:
     FrameRing frames_;
     DeltaFrame next_;
     std::optional<std::uint64_t> newest_tick_;
+    std::vector<UpdateEntry> entries_; ///< scratch of apply()
 };
 
 } // namespace dsoc::protocol

@@ -23,16 +23,6 @@
 
 namespace dsoc::protocol {
 
-/// Bits of Snapshot.update_fields.
-enum UpdateField : std::uint32_t {
-    kFieldX = 1u << 0,
-    kFieldY = 1u << 1,
-    kFieldZ = 1u << 2,
-    kFieldYaw = 1u << 3,
-    kFieldPitch = 1u << 4,
-    kFieldRebase = 1u << 5, ///< tier changed: the new tier, then all five fields absolute
-};
-
 class SnapshotEncoder {
 public:
     /// `settings` must have passed validate().
@@ -49,13 +39,14 @@ public:
                std::uint32_t kind, std::uint8_t tier, pb::Snapshot& out);
     /// `id` (known) is now at `pose` on `tier`: appends an update entry holding the
     /// fields whose quantized value changed, or nothing when none did. Within one
-    /// snapshot, update() ids must increase. Returns whether an entry was written.
-    bool update(std::uint32_t id, const Pose& pose, std::uint8_t tier, pb::Snapshot& out);
+    /// snapshot, update() ids must increase. Returns the entry's UpdateField mask (0:
+    /// no entry).
+    std::uint32_t update(std::uint32_t id, const Pose& pose, std::uint8_t tier, pb::Snapshot& out);
     /// The same with the pose already quantized on `tier` (quantize(pose, settings(),
     /// tier)): a server quantizes
     /// each entity once per tick for all its clients. Same bytes as update(pose).
-    bool update_quantized(std::uint32_t id, const QuantizedPose& quantized, std::uint8_t tier,
-                          pb::Snapshot& out);
+    std::uint32_t update_quantized(std::uint32_t id, const QuantizedPose& quantized,
+                                   std::uint8_t tier, pb::Snapshot& out);
     /// `id` (known) leaves; the connection forgets it.
     void leave(std::uint32_t id, pb::Snapshot& out);
 
@@ -108,7 +99,8 @@ public:
 
     /// Applies enters, then updates, then leaves. Never trusts the input: every
     /// inconsistency is returned (empty when none) and skipped; a malformed update
-    /// column stops the updates there (later entries cannot be located).
+    /// column stops the updates there (later entries cannot be located); a snapshot of
+    /// the acknowledged-delta wire (baseline_tick set) is refused whole.
     std::vector<SnapshotProblem> apply(const pb::Snapshot& snapshot);
     /// Compares the replica with the snapshot's audit poses (call after apply()):
     /// each must be within half a quantum/step (+1e-3). `max_error` receives the
@@ -127,7 +119,8 @@ public:
 private:
     QuantizationSettings settings_;
     FlatIdMap<ReplicaEntity> replica_;
-    std::size_t heard_ = 0; ///< entries of replica_ with tier == kHeardTier
+    std::vector<UpdateEntry> entries_; ///< scratch of apply()
+    std::size_t heard_ = 0;            ///< entries of replica_ with tier == kHeardTier
 };
 
 } // namespace dsoc::protocol

@@ -1,9 +1,9 @@
 #pragma once
-// A snapshot's three update columns (Snapshot.update_id, update_fields, update_values;
-// docs/protocol.md) held as the packed varints they are on the wire, written as the
-// encoder goes. A sender that frames its snapshots with encode_snapshot_frame() never
-// holds the updates as protobuf repeated fields, so it neither stores them twice nor
-// sizes, serializes or clears them again; the frame's bytes are exactly those of
+// How an update entry travels (Snapshot.update_head, update_fields, update_values;
+// docs/protocol.md), and a snapshot's update columns held as the packed varints they are
+// on the wire, written as the encoder goes. A sender that frames its snapshots with
+// encode_snapshot_frame() never holds the updates as protobuf repeated fields, so it neither stores
+// them twice nor sizes, serializes or clears them again; the frame's bytes are exactly those of
 // encode_frame() on the snapshot holding them as repeated fields.
 //
 // Threading: one per connection (or per thread); not thread-safe.
@@ -21,26 +21,66 @@
 
 namespace dsoc::protocol {
 
+/// Bits of an update entry's field mask.
+enum UpdateField : std::uint32_t {
+    kFieldX = 1u << 0,
+    kFieldY = 1u << 1,
+    kFieldZ = 1u << 2,
+    kFieldYaw = 1u << 3,
+    kFieldPitch = 1u << 4,
+    kFieldRebase = 1u << 5, ///< tier changed: the new tier, then all five fields absolute
+};
+
+/// The mask bits an update_head holds itself; an entry with any other bit (pitch,
+/// rebase) has 0 there and its whole mask in update_fields.
+inline constexpr int kHeadFieldBitCount = 4;
+inline constexpr std::uint32_t kHeadFields = kFieldX | kFieldY | kFieldZ | kFieldYaw;
+static_assert(kHeadFields == (1u << kHeadFieldBitCount) - 1);
+
+/// Whether an entry with field mask `fields` has its mask apart, in update_fields.
+[[nodiscard]] constexpr bool mask_apart(std::uint32_t fields) {
+    return (fields & ~kHeadFields) != 0;
+}
+
+/// The update_head of an entry `id_step` after the previous one's id (the first entry:
+/// its id) with field mask `fields`.
+[[nodiscard]] constexpr std::uint64_t update_head(std::uint64_t id_step, std::uint32_t fields) {
+    return id_step << kHeadFieldBitCount | (mask_apart(fields) ? 0 : fields);
+}
+
+/// One update entry of a received snapshot, located: its entity, its field mask and
+/// where its values start in update_values.
+struct UpdateEntry {
+    std::uint32_t id = 0;
+    std::uint32_t fields = 0;
+    int at = 0;
+};
+
 class UpdateColumns {
 public:
     /// Empties the columns; their memory is kept.
     void clear();
-    /// Appends one update entry: its id (as a delta from the previous entry's, the
-    /// first absolute), its UpdateField bits and its values (at most
-    /// kMaxValuesPerEntry).
-    void add(std::uint32_t id_delta, std::uint32_t fields, std::span<const std::int32_t> values) {
+    /// Appends one update entry: its id step (from the previous entry's id, the first
+    /// entry's: its id), its UpdateField bits (the head, and the mask apart when
+    /// mask_apart()) and its values (at most kMaxValuesPerEntry).
+    void add(std::uint32_t id_step, std::uint32_t fields, std::span<const std::int32_t> values) {
         assert(values.size() <= kMaxValuesPerEntry);
         if (count_ == capacity_) {
             grow();
         }
-        ids_.used = write_varint(id_delta, ids_);
-        fields_.used = write_varint(fields, fields_);
+        heads_.used = static_cast<std::size_t>(
+            google::protobuf::io::CodedOutputStream::WriteVarint64ToArray(
+                update_head(id_step, fields), heads_.bytes.data() + heads_.used) -
+            heads_.bytes.data());
+        if (mask_apart(fields)) {
+            fields_.used = write_varint(fields, fields_);
+        }
         for (const std::int32_t value : values) {
             values_.used = write_varint(
                 google::protobuf::internal::WireFormatLite::ZigZagEncode32(value), values_);
         }
         ++count_;
-        assert(ids_.used <= ids_.bytes.size() && fields_.used <= fields_.bytes.size() &&
+        assert(heads_.used <= heads_.bytes.size() && fields_.used <= fields_.bytes.size() &&
                values_.used <= values_.bytes.size());
     }
 
@@ -63,8 +103,9 @@ private:
         std::vector<std::uint8_t> bytes;
         std::size_t used = 0;
     };
-    /// The most bytes a 32-bit varint takes.
+    /// The most bytes a 32-bit varint takes, and a 64-bit one.
     static constexpr std::size_t kMaxVarintBytes = 5;
+    static constexpr std::size_t kMaxVarint64Bytes = 10;
 
     /// Writes `v` at the end of `to` (which has room) and returns the new length.
     static std::size_t write_varint(std::uint32_t v, Varints& to) {
@@ -75,7 +116,7 @@ private:
     /// Room for twice as many entries (at least 64) of the largest size.
     void grow();
 
-    Varints ids_;
+    Varints heads_;
     Varints fields_;
     Varints values_;
     std::size_t count_ = 0;
@@ -84,9 +125,8 @@ private:
 };
 
 /// Wire bytes of a snapshot's update columns held as repeated fields (field tags and
-/// lengths included; an acknowledged-delta snapshot's update_head among them): what the
-/// updates cost, enters, leaves and the tick left out. UpdateColumns::wire_bytes() of
-/// the same entries.
+/// lengths included): what the updates cost, enters, leaves and the tick left out.
+/// UpdateColumns::wire_bytes() of the same entries.
 [[nodiscard]] std::size_t update_column_bytes(const pb::Snapshot& snapshot);
 
 /// Appends one frame (framing.hpp) holding `envelope`, whose body is a snapshot with
