@@ -131,13 +131,20 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
         }
     }
 
-    std::optional<SnapshotProblem> stopped = read_update_entries(s, entries_);
+    UpdateEntryReader reader(s);
     const auto& values = s.update_values();
-    for (std::size_t i = 0; i < entries_.size(); ++i) {
-        if (i + kPrefetchAhead < entries_.size()) { // 500 clients' replicas do not fit in cache
-            replica_.prefetch(entries_[i + kPrefetchAhead].id);
+    // The ids a few entries ahead, only to prefetch their slots (500 clients' replicas
+    // do not fit in cache): a hint from the heads alone, whatever they hold.
+    int ahead = 0;
+    std::uint64_t ahead_id = 0;
+    const int heads = s.update_head_size();
+    UpdateEntry e;
+    for (int i = 0; reader.next(e); ++i) {
+        for (; ahead < heads && ahead <= i + kPrefetchAhead; ++ahead) {
+            const std::uint64_t step = s.update_head(ahead) >> kHeadFieldBitCount;
+            ahead_id = ahead == 0 ? step : ahead_id + step;
+            replica_.prefetch(static_cast<std::uint32_t>(ahead_id));
         }
-        const UpdateEntry& e = entries_[i];
         const std::uint32_t fields = e.fields;
         const int at = e.at;
         // Built only for a problem: this loop runs for every update a client receives.
@@ -195,8 +202,8 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
         }
         r.quantized = q;
     }
-    if (stopped) {
-        problems.push_back(std::move(*stopped));
+    if (reader.problem()) {
+        problems.push_back(*reader.problem());
     }
 
     for (const std::uint32_t id : s.leave()) {

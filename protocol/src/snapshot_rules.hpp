@@ -89,12 +89,101 @@ write_enter(std::uint32_t id, const QuantizedPose& q, std::uint8_t tier,
     return half;
 }
 
-/// Locates `s`'s update entries in `entries` (cleared first), checking their form: ids
-/// increasing, masks well formed, values and masks apart neither running out nor left
-/// over. Stops at the first malformed entry (the later ones cannot be located) and
-/// returns its problem; the entries before it are in `entries`.
-std::optional<SnapshotProblem> read_update_entries(const pb::Snapshot& s,
-                                                   std::vector<UpdateEntry>& entries);
+/// Walks a snapshot's update entries in order, checking their form as it goes: ids
+/// increasing, masks well formed and each written the one way, values and masks apart
+/// neither running out nor left over. One pass, nothing stored: the client's decoder
+/// runs it over every update it receives.
+class UpdateEntryReader {
+public:
+    explicit UpdateEntryReader(const pb::Snapshot& s)
+        : heads_(s.update_head().data()), masks_(s.update_fields().data()),
+          head_count_(s.update_head_size()), mask_count_(s.update_fields_size()),
+          value_count_(s.update_values_size()) {}
+
+    /// The next entry into `e`; false at the end, or at a malformed entry (the later
+    /// ones cannot be located): then problem() says why.
+    bool next(UpdateEntry& e) {
+        if (index_ >= head_count_) {
+            if (index_ == head_count_) {
+                index_ = head_count_ + 1; // checked once
+                check_nothing_left();
+            }
+            return false;
+        }
+        const std::uint64_t head = heads_[index_];
+        const std::uint64_t step = head >> kHeadFieldBitCount;
+        id_ = index_ == 0 ? step : id_ + step;
+        if ((index_ > 0 && step == 0) || id_ > 0xffffffffu) {
+            return stop("ids must increase");
+        }
+        auto fields = static_cast<std::uint32_t>(head & kHeadFields);
+        if (fields == 0) {
+            if (masks_apart_ == mask_count_) {
+                return stop("update_fields ends early");
+            }
+            fields = masks_[masks_apart_++];
+            if (!mask_apart(fields)) {
+                return stop("mask " + std::to_string(fields) + " belongs in update_head");
+            }
+        }
+        if (!valid_update_fields(fields)) {
+            return stop("bad field mask " + std::to_string(fields));
+        }
+        const int count = update_value_count(fields);
+        if (value_count_ - values_ < count) {
+            return stop("update_values ends early");
+        }
+        e = {static_cast<std::uint32_t>(id_), fields, values_};
+        values_ += count;
+        ++index_;
+        return true;
+    }
+
+    /// Why next() stopped early, if it did.
+    [[nodiscard]] const std::optional<SnapshotProblem>& problem() const { return problem_; }
+
+private:
+    bool stop(const std::string& why) {
+        problem_ = SnapshotProblem{"malformed_update",
+                                   "update entry " + std::to_string(index_) + " (" +
+                                       entity_name(static_cast<std::uint32_t>(id_)) + "): " + why};
+        index_ = head_count_ + 1;
+        return false;
+    }
+    void check_nothing_left() {
+        if (masks_apart_ != mask_count_) {
+            problem_ =
+                SnapshotProblem{"malformed_update", std::to_string(mask_count_ - masks_apart_) +
+                                                        " update_fields left over"};
+        } else if (values_ != value_count_) {
+            problem_ = SnapshotProblem{"malformed_update", std::to_string(value_count_ - values_) +
+                                                               " update_values left over"};
+        }
+    }
+
+    const std::uint64_t* heads_;
+    const std::uint32_t* masks_;
+    int head_count_;
+    int mask_count_;
+    int value_count_;
+    int index_ = 0;
+    int masks_apart_ = 0;
+    int values_ = 0;
+    std::uint64_t id_ = 0;
+    std::optional<SnapshotProblem> problem_;
+};
+
+/// Every update entry of `s` into `entries` (cleared first) with UpdateEntryReader;
+/// returns its problem, the entries before it in `entries`.
+inline std::optional<SnapshotProblem> read_update_entries(const pb::Snapshot& s,
+                                                          std::vector<UpdateEntry>& entries) {
+    entries.clear();
+    UpdateEntryReader reader(s);
+    for (UpdateEntry e; reader.next(e);) {
+        entries.push_back(e);
+    }
+    return reader.problem();
+}
 
 /// What is wrong with an entering entity's state, if anything: its tier, angles on the
 /// heard tier, a position beyond +-kMaxQuantizedCoordinate, or a yaw step outside

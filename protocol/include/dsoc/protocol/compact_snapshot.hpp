@@ -119,7 +119,6 @@ public:
 private:
     QuantizationSettings settings_;
     FlatIdMap<ReplicaEntity> replica_;
-    std::vector<UpdateEntry> entries_; ///< scratch of apply()
     std::size_t heard_ = 0;            ///< entries of replica_ with tier == kHeardTier
 };
 
