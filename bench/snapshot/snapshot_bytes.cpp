@@ -48,7 +48,12 @@ struct Totals {
     std::uint64_t update_bytes = 0;
     std::uint64_t frame_bytes = 0;
     std::uint64_t full_snapshot_bytes = 0; ///< every replicated entity, full state, every tick
+    std::uint64_t over_mtu = 0;            ///< frames larger than kMtuBytes
+    std::uint64_t largest = 0;             ///< the largest frame [bytes]
 };
+
+/// The datagram payload a UDP snapshot must fit without being split (issue 18's MTU).
+constexpr std::uint64_t kMtuBytes = 1200;
 
 void add(Totals& m, const eval::SnapshotCost& cost, std::uint64_t full_snapshot_bytes) {
     ++m.client_ticks;
@@ -58,6 +63,8 @@ void add(Totals& m, const eval::SnapshotCost& cost, std::uint64_t full_snapshot_
     m.update_bytes += cost.update_bytes;
     m.frame_bytes += cost.bytes;
     m.full_snapshot_bytes += full_snapshot_bytes;
+    m.over_mtu += cost.bytes > kMtuBytes ? 1 : 0;
+    m.largest = std::max<std::uint64_t>(m.largest, cost.bytes);
 }
 
 double ratio(double a, double b) {
@@ -224,7 +231,8 @@ int main(int argc, char** argv) {
                 100.0 * link.loss);
     std::printf("| policy | wire | update entries/client-tick | update bytes/client-tick | "
                 "update bytes/moving entity | vs reliable | frame bytes/client-tick | vs full "
-                "snapshots |\n|---|---|---|---|---|---|---|---|\n");
+                "snapshots | frames over 1,200 B | largest frame |\n"
+                "|---|---|---|---|---|---|---|---|---|---|\n");
     int status = 0;
     for (const Run& run : runs) {
         // One denominator for both wires: the entity updates that carried a new position
@@ -236,14 +244,16 @@ int main(int argc, char** argv) {
             const Totals& m = acked ? run.acked_totals : run.totals;
             const auto ct = static_cast<double>(m.client_ticks);
             const double per_moving = ratio(static_cast<double>(m.update_bytes), moving);
-            std::printf("| %.*s | %s | %.1f | %.0f | %.2f | %.3f | %.0f | %.3f |\n",
+            std::printf("| %.*s | %s | %.1f | %.0f | %.2f | %.3f | %.0f | %.3f | %.1f%% | %llu |\n",
                         static_cast<int>(run.policy->name().size()), run.policy->name().data(),
                         acked ? "acked" : "reliable", ratio(m.updates, ct),
                         ratio(static_cast<double>(m.update_bytes), ct), per_moving,
                         ratio(per_moving, reliable_per_moving),
                         ratio(static_cast<double>(m.frame_bytes), ct),
                         ratio(static_cast<double>(m.frame_bytes),
-                              static_cast<double>(m.full_snapshot_bytes)));
+                              static_cast<double>(m.full_snapshot_bytes)),
+                        100.0 * ratio(static_cast<double>(m.over_mtu), ct),
+                        static_cast<unsigned long long>(m.largest));
         }
         std::uint64_t mismatches = 0;
         std::uint64_t full = 0;
