@@ -119,7 +119,7 @@ public:
 private:
     QuantizationSettings settings_;
     FlatIdMap<ReplicaEntity> replica_;
-    std::size_t heard_ = 0;            ///< entries of replica_ with tier == kHeardTier
+    std::size_t heard_ = 0; ///< entries of replica_ with tier == kHeardTier
 };
 
 } // namespace dsoc::protocol
