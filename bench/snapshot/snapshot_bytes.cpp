@@ -1,14 +1,16 @@
 // dsoc-snapshot-bytes: runs an evaluation scenario's world (the same deterministic
 // motion as dsoc-eval, no oracle) through every named policy and encodes each
 // client's snapshots with the server's compact encoder (dsoc::eval::ClientReplication,
-// protocol version 3, every entity on the near tier). Reports, per policy:
-//   update bytes / update   the update columns (ids, field masks, deltas) per entity
-//                           update; an entity that did not move costs nothing
-//   vs full state           that against kFullStateBytes (24: id + five floats)
-//   frame bytes / update    whole frames (header, tick, enters, leaves included) per
-//                           entity update (enters + updates)
+// the current protocol version, every entity on the near tier). Reports, per policy
+// and wire:
+//   update entries, update bytes per client-tick   the update columns (heads, masks
+//                           apart, values)
+//   update bytes / moving entity   those over the entity updates that carried a new
+//                           position (an entity that did not move costs nothing)
+//   frame bytes / client-tick   whole frames (header, tick, enters, leaves included)
 //   vs full snapshots       frames against sending every replicated entity's full
 //                           state every tick (4-byte header + 9-byte tick + 24 each)
+//   frames over 1,200 B, largest frame   what a datagram of that size could not hold
 // Each policy is measured twice in the same run: "reliable" is the TCP wire (deltas
 // against what was last sent); "acked" the unreliable one (protocol::AckedSnapshotEncoder:
 // deltas against the newest frame the client acknowledged, positions as residuals

@@ -1,6 +1,6 @@
 #pragma once
 // What one client is sent: the enter/update/leave Snapshot between what it knew and
-// its new interest set, in the server's compact encoding (protocol version 2:
+// its new interest set, in the server's compact encoding (docs/protocol.md:
 // quantized poses, updates as deltas against what the client last received, only
 // changed fields present), written by the same dsoc::protocol::SnapshotEncoder the
 // server uses and sized by the real protocol encoder. Every entity seen is sent on the
