@@ -39,12 +39,14 @@ foreach(component ${dsoc_install_components})
     RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT dsoc_runtime
     INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
   # Public headers: <module>/include/dsoc/<module>/*.hpp (private headers live in src/).
-  # protocol/'s connect_token.hpp belongs to dsoc_connect_token, a library of the
-  # programs that the package does not hold (protocol/CMakeLists.txt): left out.
+  # protocol/'s connect_token.hpp and challenge_cookie.hpp belong to dsoc_connect_token,
+  # a library of the programs that the package does not hold (protocol/CMakeLists.txt):
+  # left out.
   get_target_property(source_dir ${target} SOURCE_DIR)
   install(DIRECTORY ${source_dir}/include/
     DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} COMPONENT dsoc_development
-    FILES_MATCHING PATTERN "*.hpp" PATTERN "connect_token.hpp" EXCLUDE)
+    FILES_MATCHING PATTERN "*.hpp" PATTERN "connect_token.hpp" EXCLUDE
+    PATTERN "challenge_cookie.hpp" EXCLUDE)
   install(EXPORT dsoc-${component}-targets
     NAMESPACE dsoc::
     FILE dsoc-${component}-targets.cmake

@@ -34,9 +34,9 @@ const dsoc::protocol::TokenKey& fuzz_key() {
     return key;
 }
 
-class FuzzHost final : public dsoc::server::SessionHost {
+class FuzzHost final : public dsoc::server::ConnectionHost {
 public:
-    void on_hello(Session& session, const pb::ClientHello& hello) override {
+    void on_hello(dsoc::server::Connection& session, const pb::ClientHello& hello) override {
         const auto& token = hello.connect_token();
         const auto check = dsoc::protocol::verify_connect_token(
             fuzz_key(),
@@ -52,7 +52,7 @@ public:
         session.set_entity_id(1);
         session.mark_active();
     }
-    void on_input(Session& session, const pb::ClientInput& in) override {
+    void on_input(dsoc::server::Connection& session, const pb::ClientInput& in) override {
         const double length =
             std::sqrt(double(in.move_x()) * in.move_x() + double(in.move_y()) * in.move_y() +
                       double(in.move_z()) * in.move_z());
@@ -62,7 +62,7 @@ public:
             std::abort(); // an unchecked input reached the game
         }
     }
-    void on_closed(Session&) override { ++closes; }
+    void on_closed(dsoc::server::Connection&) override { ++closes; }
     int closes = 0;
 };
 

@@ -375,18 +375,35 @@ std::vector<SnapshotProblem> AckedSnapshotDecoder::apply(const pb::Snapshot& s) 
     return problems;
 }
 
-std::optional<Pose> AckedSnapshotDecoder::pose(std::uint32_t id) const {
+const FrameEntity* AckedSnapshotDecoder::find(std::uint32_t id) const {
     const DeltaFrame* frame = newest();
     if (frame == nullptr) {
-        return std::nullopt;
+        return nullptr;
     }
     const auto it =
         std::lower_bound(frame->entities.begin(), frame->entities.end(), id,
                          [](const FrameEntity& e, std::uint32_t wanted) { return e.id < wanted; });
-    if (it == frame->entities.end() || it->id != id) {
+    return it != frame->entities.end() && it->id == id ? &*it : nullptr;
+}
+
+std::optional<Pose> AckedSnapshotDecoder::pose(std::uint32_t id) const {
+    const FrameEntity* e = find(id);
+    if (e == nullptr) {
         return std::nullopt;
     }
-    return dequantize(it->pose, settings_.quantum(it->tier), settings_.angle_steps);
+    return dequantize(e->pose, settings_.quantum(e->tier), settings_.angle_steps);
+}
+
+std::vector<SnapshotProblem> AckedSnapshotDecoder::check_audit(const pb::Snapshot& snapshot,
+                                                               double& max_error) const {
+    std::vector<SnapshotProblem> problems;
+    max_error = 0.0;
+    for (const pb::AuditPose& a : snapshot.audit()) {
+        const FrameEntity* known = find(a.id());
+        check_audit_pose(a, known != nullptr ? &known->pose : nullptr,
+                         known != nullptr ? known->tier : 0, settings_, max_error, problems);
+    }
+    return problems;
 }
 
 } // namespace dsoc::protocol

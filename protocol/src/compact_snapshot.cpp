@@ -223,28 +223,10 @@ std::vector<SnapshotProblem> SnapshotDecoder::check_audit(const pb::Snapshot& s,
                                                           double& max_error) const {
     std::vector<SnapshotProblem> problems;
     max_error = 0.0;
-    constexpr double kAllowed = 0.5 + 1e-3;
     for (const pb::AuditPose& a : s.audit()) {
         const ReplicaEntity* const known = replica_.find(a.id());
-        if (known == nullptr) {
-            problems.push_back({"audit_for_unknown_entity", entity_name(a.id()) + " is not known"});
-            continue;
-        }
-        if (known->tier == kHeardTier) {
-            problems.push_back({"audit_of_heard_entity",
-                                entity_name(a.id()) + " is heard-only; its exact pose was sent"});
-            continue;
-        }
-        const float quantum = settings_.position_quantum[known->tier];
-        const Pose replica = dequantize(known->quantized, quantum, settings_.angle_steps);
-        const Pose exact{a.x(), a.y(), a.z(), a.yaw(), a.pitch()};
-        const double error = quantization_error(replica, exact, quantum, settings_.angle_steps);
-        max_error = std::max(max_error, error);
-        if (error > kAllowed) {
-            problems.push_back({"pose_beyond_quantization",
-                                entity_name(a.id()) + " replica is " + std::to_string(error) +
-                                    " quanta from the server's pose (allowed 0.5)"});
-        }
+        check_audit_pose(a, known != nullptr ? &known->quantized : nullptr,
+                         known != nullptr ? known->tier : 0, settings_, max_error, problems);
     }
     return problems;
 }

@@ -5,6 +5,7 @@
 
 #include "dsoc/protocol/compact_snapshot.hpp"
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cstdint>
@@ -237,6 +238,34 @@ rebase_problem(const std::int32_t* values, std::uint32_t steps, const std::strin
         }
     }
     return std::nullopt;
+}
+
+/// Checks one audit pose against what the replica holds of its entity (`quantized` on
+/// `tier`, or nullptr when the entity is not known): known, not heard-only (its exact
+/// pose must never be sent), within half a quantum. Raises `max_error` (quanta).
+inline void check_audit_pose(const pb::AuditPose& a, const QuantizedPose* quantized,
+                             std::uint8_t tier, const QuantizationSettings& settings,
+                             double& max_error, std::vector<SnapshotProblem>& problems) {
+    constexpr double kAllowed = 0.5 + 1e-3;
+    if (quantized == nullptr) {
+        problems.push_back({"audit_for_unknown_entity", entity_name(a.id()) + " is not known"});
+        return;
+    }
+    if (tier == kHeardTier) {
+        problems.push_back({"audit_of_heard_entity",
+                            entity_name(a.id()) + " is heard-only; its exact pose was sent"});
+        return;
+    }
+    const float quantum = settings.position_quantum[tier];
+    const Pose replica = dequantize(*quantized, quantum, settings.angle_steps);
+    const Pose exact{a.x(), a.y(), a.z(), a.yaw(), a.pitch()};
+    const double error = quantization_error(replica, exact, quantum, settings.angle_steps);
+    max_error = std::max(max_error, error);
+    if (error > kAllowed) {
+        problems.push_back({"pose_beyond_quantization",
+                            entity_name(a.id()) + " replica is " + std::to_string(error) +
+                                " quanta from the server's pose (allowed 0.5)"});
+    }
 }
 
 } // namespace dsoc::protocol

@@ -2,6 +2,7 @@
 
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/quantization.hpp"
+#include "dsoc/server/udp_connection.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -44,7 +45,13 @@ void run_one(const interest::GameWorld& world, interest::InterestPolicy& policy,
             i.tier = i.tier == interest::kHeardTier ? i.tier : 0; // hearing stays coarse
         }
     }
-    if (job.build) {
+    if (job.build && job.replication->acked()) {
+        job.replication->build_acked_snapshot(world, interest, tick, job.acked_tick, job.audit,
+                                              *job.envelope->mutable_snapshot(), job.poses);
+        if (job.frame != nullptr) {
+            snapshot_frame(tick, *job.envelope, *job.frame);
+        }
+    } else if (job.build) {
         protocol::UpdateColumns* columns = job.frame != nullptr ? job.columns : nullptr;
         job.replication->build_snapshot(world, interest, tick, job.audit,
                                         *job.envelope->mutable_snapshot(), job.poses, columns);

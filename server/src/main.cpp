@@ -130,6 +130,15 @@ void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
     app.add_option("--handshake-timeout-ms", config.handshake_timeout_ms,
                    "Close connections that send no hello within this time [ms]")
         ->capture_default_str();
+    app.add_option("--udp", config.udp,
+                   "Also serve clients over UDP on the same port number (true/false)")
+        ->capture_default_str();
+    app.add_option("--udp-timeout-ms", config.udp_timeout_ms,
+                   "Disconnect a UDP client from which nothing arrived this long [ms]")
+        ->capture_default_str();
+    app.add_option("--udp-handshake-rate", config.udp_handshake_rate,
+                   "UDP handshake datagrams one source address may send per second [1/s]")
+        ->capture_default_str();
     app.add_option("--max-speed", config.max_speed, "Speed bound of every entity [units/s]")
         ->capture_default_str();
     app.add_option("--duration", config.duration_s,

@@ -109,6 +109,45 @@ void ReplicationState::build_snapshot(const interest::GameWorld& world,
     protocol::merge_interest(
         known_, interest, [](const interest::Interest& w) { return w.id; }, leave, send);
     known_.swap(next_known_);
+    last_updates_ = static_cast<std::size_t>(snapshot.enter_size()) +
+                    (columns != nullptr ? columns->count() : snapshot.update_head_size());
+}
+
+void ReplicationState::build_acked_snapshot(const interest::GameWorld& world,
+                                            std::span<const interest::Interest> interest,
+                                            std::uint64_t tick,
+                                            std::optional<std::uint64_t> acked_tick, bool audit,
+                                            protocol::pb::Snapshot& snapshot,
+                                            const SharedPoses* poses) {
+    assert(acked_encoder_ != nullptr);
+    protocol::AckedSnapshotEncoder& encoder = *acked_encoder_;
+    encoder.begin(tick, acked_tick, snapshot);
+    known_.clear();
+    const std::vector<interest::Entity>& entities = world.entities();
+    const std::uint32_t* ids = poses != nullptr ? poses->ids().data() : nullptr;
+    std::size_t next_entity = 0;
+    const auto id_at = [&](std::size_t k) { return ids != nullptr ? ids[k] : entities[k].id; };
+    for (const interest::Interest& wanted : interest) { // increasing ids, as the world's
+        while (next_entity < entities.size() && id_at(next_entity) < wanted.id) {
+            ++next_entity;
+        }
+        if (next_entity == entities.size() || id_at(next_entity) != wanted.id) {
+            continue; // contract breach: not in the world, so not known either
+        }
+        const interest::Entity& e = entities[next_entity];
+        const protocol::QuantizedPose pose =
+            poses != nullptr ? poses->at(next_entity, wanted.tier)
+                             : protocol::quantize(pose_of(e), encoder.settings(), wanted.tier);
+        const glm::vec3 half = world.box_of(e).half_extents();
+        encoder.add(wanted.id, pose, wanted.tier, static_cast<std::uint32_t>(e.kind),
+                    {half.x, half.y, half.z}, snapshot);
+        known_.push_back(wanted.id);
+        if (audit && wanted.tier == 0) {
+            add_audit(e, snapshot);
+        }
+    }
+    const protocol::AckedSnapshotCounts counts = encoder.finish(snapshot);
+    last_updates_ = counts.enters + counts.entries;
 }
 
 } // namespace dsoc::server

@@ -50,10 +50,16 @@ std::uint16_t Server::start() {
     acceptor_.bind(endpoint);
     acceptor_.listen();
     const std::uint16_t port = acceptor_.local_endpoint().port();
-    spdlog::info(
-        "dsoc-server listening on {}:{} map={} policy={} tick_rate={} Hz bots={} threads={}",
-        config_.bind_address, port, world_.map().name, policy_->name(), config_.tick_rate,
-        config_.bots, pool_.threads());
+    if (config_.udp) {
+        udp_ = std::make_unique<UdpEndpoint>(
+            io_, config_, static_cast<ConnectionHost&>(*this), [this] { return next_client_id_++; },
+            [this](const std::shared_ptr<Connection>& connection) { open_connection(connection); });
+        udp_->start(config_.bind_address, port);
+    }
+    spdlog::info("dsoc-server listening on {}:{} ({}) map={} policy={} tick_rate={} Hz bots={} "
+                 "threads={}",
+                 config_.bind_address, port, config_.udp ? "tcp and udp" : "tcp", world_.map().name,
+                 policy_->name(), config_.tick_rate, config_.bots, pool_.threads());
     if (!config_.trace_file.empty()) {
         trace::TraceHeader header;
         header.map = world_.map().name;
@@ -92,17 +98,21 @@ void Server::accept_next() {
             }
             const std::uint32_t id = next_client_id_++;
             auto session = std::make_shared<Session>(std::move(socket), id, config_,
-                                                     static_cast<SessionHost&>(*this));
-            sessions_[id] = session;
-            ++stats_.clients_accepted;
+                                                     static_cast<ConnectionHost&>(*this));
             session->start();
-            if (sessions_.size() > static_cast<std::size_t>(config_.max_clients)) {
-                session->disconnect(pb::DISCONNECT_REASON_SERVER_FULL,
-                                    "server holds " + std::to_string(config_.max_clients) +
-                                        " clients at most");
-            }
+            open_connection(session);
             accept_next();
         });
+}
+
+void Server::open_connection(const std::shared_ptr<Connection>& connection) {
+    sessions_[connection->client_id()] = connection;
+    ++stats_.clients_accepted;
+    if (sessions_.size() > static_cast<std::size_t>(config_.max_clients)) {
+        connection->disconnect(pb::DISCONNECT_REASON_SERVER_FULL,
+                               "server holds " + std::to_string(config_.max_clients) +
+                                   " clients at most");
+    }
 }
 
 void Server::schedule_tick() {
@@ -247,7 +257,7 @@ void Server::prepare_client_ticks() {
     tick_clients_.clear();
     const auto now = Clock::now();
     for (auto& [id, client] : clients_) {
-        Session& session = *client.session;
+        Connection& session = *client.session;
         if (!session.active()) {
             continue;
         }
@@ -276,6 +286,7 @@ void Server::prepare_client_ticks() {
         job.envelope = &client.envelope;
         job.frame = &client.frame;
         job.columns = &client.columns;
+        job.acked_tick = session.acked_tick();
         job.poses = &shared_poses_;
         job.build = build;
         job.audit = client.audit_every > 0 && tick_ % client.audit_every == 0;
@@ -311,9 +322,7 @@ void Server::send_snapshots() {
         if (!client.session->active()) {
             continue; // left or kicked during the phase
         }
-        const pb::Snapshot& snapshot = job.envelope->snapshot();
-        stats_.entity_updates_sent +=
-            static_cast<std::uint64_t>(snapshot.enter_size()) + client.columns.count();
+        stats_.entity_updates_sent += client.replication.last_updates();
         stats_.heard_entities_sent += client.heard;
         ++stats_.snapshots_sent;
         if (client.session->writable_now()) {
@@ -361,7 +370,7 @@ void Server::write_trace_tick() {
     }
     t.clients.clear();
     for (const auto& [id, client] : clients_) {
-        const Session& session = *client.session;
+        const Connection& session = *client.session;
         const interest::Entity* self = world_.find(session.entity_id());
         if (!session.active() || self == nullptr) {
             continue;
@@ -393,7 +402,7 @@ void Server::write_trace_tick() {
     trace_->write_tick(t);
 }
 
-void Server::on_hello(Session& session, const pb::ClientHello& client_hello) {
+void Server::on_hello(Connection& session, const pb::ClientHello& client_hello) {
     if (shutting_down_) {
         session.disconnect(pb::DISCONNECT_REASON_SERVER_SHUTDOWN, "server is shutting down");
         return;
@@ -448,7 +457,8 @@ void Server::on_hello(Session& session, const pb::ClientHello& client_hello) {
         clients_
             .try_emplace(session.client_id(),
                          Client{.session = it->second,
-                                .replication = ReplicationState(quantization(config_))})
+                                .replication = ReplicationState(
+                                    quantization(config_), session.transport() == Transport::udp)})
             .first->second;
     client.audit_every = client_hello.audit_every_ticks();
     pending_joins_.push_back(session.client_id());
@@ -456,7 +466,7 @@ void Server::on_hello(Session& session, const pb::ClientHello& client_hello) {
                   session.remote(), entity);
 }
 
-void Server::on_input(Session& session, const pb::ClientInput& input) {
+void Server::on_input(Connection& session, const pb::ClientInput& input) {
     // Kept until the next tick start: a phase may be reading the world now.
     const auto it = clients_.find(session.client_id());
     if (it != clients_.end()) {
@@ -466,7 +476,7 @@ void Server::on_input(Session& session, const pb::ClientInput& input) {
     }
 }
 
-void Server::on_closed(Session& session) {
+void Server::on_closed(Connection& session) {
     const std::uint32_t id = session.client_id();
     stats_.bytes_sent += session.bytes_sent();
     stats_.bytes_received += session.bytes_received();
@@ -518,6 +528,9 @@ void Server::shutdown(std::function<void()> on_done) {
     const auto open = sessions_; // copy: disconnect may close synchronously
     for (const auto& [id, session] : open) {
         session->disconnect(pb::DISCONNECT_REASON_SERVER_SHUTDOWN, "server shutting down");
+    }
+    if (udp_) {
+        udp_->stop(); // its connections closed at once, their reasons sent
     }
     asio::post(io_, [this] { maybe_finish_shutdown(); });
 }

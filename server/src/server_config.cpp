@@ -67,6 +67,10 @@ std::vector<std::string> validate(const ServerConfig& c) {
     check(p, c.max_send_queue_bytes >= c.max_frame_bytes, "max_send_queue_bytes",
           "must be at least max_frame_bytes");
     check(p, c.handshake_timeout_ms > 0, "handshake_timeout_ms", "must be > 0");
+    check(p, c.udp_timeout_ms >= 500 && c.udp_timeout_ms <= 60000, "udp_timeout_ms",
+          "must be 500..60000 ms, got " + std::to_string(c.udp_timeout_ms));
+    check(p, c.udp_handshake_rate >= 1 && c.udp_handshake_rate <= 1000000, "udp_handshake_rate",
+          "must be 1..1000000 per second, got " + std::to_string(c.udp_handshake_rate));
     check(p, c.threads >= 0 && c.threads <= 256, "threads",
           "must be 0 (one per core)..256, got " + std::to_string(c.threads));
     for (auto& problem : protocol::validate(quantization(c))) {

@@ -93,6 +93,20 @@ std::string Server::render_metrics() const {
         disconnects.push_back({{{"reason", reason}}, d(count)});
     }
     out.counter_family("dsoc_disconnects_total", "Closed connections by reason.", disconnects);
+    if (udp_) {
+        out.counter("dsoc_udp_datagrams_received_total", "Datagrams received on the UDP port.",
+                    d(udp_->datagrams_received()));
+        out.counter("dsoc_udp_challenges_sent_total",
+                    "UDP handshake challenges sent (one per request within its address's budget).",
+                    d(udp_->challenges_sent()));
+        std::vector<std::pair<MetricLabels, double>> drops;
+        for (std::size_t r = 0; r < kUdpDropReasons; ++r) {
+            drops.push_back(
+                {{{"reason", udp_drop_name(static_cast<UdpDrop>(r))}}, d(udp_->drops()[r])});
+        }
+        out.counter_family("dsoc_udp_datagrams_dropped_total",
+                           "UDP datagrams dropped unanswered, by reason.", drops);
+    }
     return out.text();
 }
 

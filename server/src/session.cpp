@@ -20,7 +20,6 @@ namespace pb = protocol::pb;
 namespace {
 
 constexpr auto kCloseGrace = std::chrono::seconds(1);
-constexpr std::size_t kMaxNameBytes = 64;
 constexpr std::size_t kKernelSlack = 16 * 1024; ///< [Units: bytes]
 /// The first block of a thread's decoding arena: a client's messages (inputs, pings,
 /// a hello with its token) are small. [Units: bytes]
@@ -34,10 +33,9 @@ std::string body_name(const pb::Envelope& message) {
 } // namespace
 
 Session::Session(asio::ip::tcp::socket socket, std::uint32_t client_id, const ServerConfig& config,
-                 SessionHost& host)
-    : socket_(std::move(socket)), deadline_(socket_.get_executor()), client_id_(client_id),
-      config_(config), host_(host), decoder_(config.max_frame_bytes),
-      limiter_(config.max_inputs_per_second, Clock::now()) {
+                 ConnectionHost& host)
+    : Connection(client_id, config.max_inputs_per_second, host), socket_(std::move(socket)),
+      deadline_(socket_.get_executor()), config_(config), decoder_(config.max_frame_bytes) {
     boost::system::error_code ec;
     const auto endpoint = socket_.remote_endpoint(ec);
     remote_ =
@@ -51,7 +49,7 @@ Session::Session(asio::ip::tcp::socket socket, std::uint32_t client_id, const Se
 
 void Session::start() {
     deadline_.expires_after(std::chrono::milliseconds(config_.handshake_timeout_ms));
-    deadline_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+    deadline_.async_wait([self = self()](const boost::system::error_code& ec) {
         if (!ec && self->state_ == State::awaiting_hello) {
             self->disconnect(pb::DISCONNECT_REASON_HANDSHAKE_TIMEOUT,
                              "no client_hello within " +
@@ -62,21 +60,20 @@ void Session::start() {
 }
 
 void Session::read_some() {
-    socket_.async_read_some(
-        asio::buffer(read_buffer_),
-        [self = shared_from_this()](const boost::system::error_code& ec, std::size_t n) {
-            if (self->state_ == State::closed) {
-                return;
-            }
-            if (ec) {
-                if (self->close_reason_ == pb::DISCONNECT_REASON_UNSPECIFIED) {
-                    self->close_reason_ = pb::DISCONNECT_REASON_CLIENT_QUIT;
-                }
-                self->close_now();
-                return;
-            }
-            self->on_read(n);
-        });
+    socket_.async_read_some(asio::buffer(read_buffer_),
+                            [self = self()](const boost::system::error_code& ec, std::size_t n) {
+                                if (self->state_ == State::closed) {
+                                    return;
+                                }
+                                if (ec) {
+                                    if (self->close_reason_ == pb::DISCONNECT_REASON_UNSPECIFIED) {
+                                        self->close_reason_ = pb::DISCONNECT_REASON_CLIENT_QUIT;
+                                    }
+                                    self->close_now();
+                                    return;
+                                }
+                                self->on_read(n);
+                            });
 }
 
 void Session::on_read(std::size_t bytes) {
@@ -139,7 +136,7 @@ void Session::handle(const pb::Envelope& message) {
         close_reason_ = pb::DISCONNECT_REASON_CLIENT_QUIT;
         state_ = State::closing;
         deadline_.expires_after(kCloseGrace);
-        deadline_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+        deadline_.async_wait([self = self()](const boost::system::error_code& ec) {
             if (!ec) {
                 self->close_now();
             }
@@ -157,49 +154,20 @@ void Session::handle(const pb::Envelope& message) {
 }
 
 void Session::handle_client_message(const pb::Envelope& message) {
-    switch (limiter_.on_message(Clock::now())) {
-    case InputRateLimiter::Decision::accept:
-        break;
-    case InputRateLimiter::Decision::drop:
-        return;
-    case InputRateLimiter::Decision::flood:
-        disconnect(pb::DISCONNECT_REASON_INPUT_FLOOD,
-                   "input flood: more than twice the cap of " +
-                       std::to_string(config_.max_inputs_per_second) + " messages per second");
+    if (!admit_message()) {
         return;
     }
     if (message.has_ping()) {
-        pb::Envelope reply;
-        auto& pong = *reply.mutable_pong();
-        pong.set_nonce(message.ping().nonce());
-        pong.set_client_time_us(message.ping().client_time_us());
-        send(reply);
-        return;
+        send(pong_for(message.ping()));
+    } else {
+        deliver_input(message.client_input());
     }
-    input_ = message.client_input();
-    const InputVerdict verdict = sanitize_input(input_);
-    if (!verdict.usable) {
-        disconnect(pb::DISCONNECT_REASON_INVALID_INPUT, verdict.why);
-        return;
-    }
-    inputs_clamped_ += static_cast<std::uint64_t>(verdict.clamped_fields > 0);
-    host_.on_input(*this, input_);
 }
 
 void Session::handle_hello(const pb::ClientHello& hello) {
-    if (hello.protocol_version() != protocol::kProtocolVersion) {
-        disconnect(pb::DISCONNECT_REASON_VERSION_MISMATCH,
-                   "client speaks protocol " + std::to_string(hello.protocol_version()) +
-                       ", server speaks " + std::to_string(protocol::kProtocolVersion));
+    if (!accept_hello(hello)) {
         return;
     }
-    if (hello.name().size() > kMaxNameBytes) {
-        disconnect(pb::DISCONNECT_REASON_INVALID_INPUT,
-                   "client_hello.name is " + std::to_string(hello.name().size()) +
-                       " bytes; at most " + std::to_string(kMaxNameBytes) + " allowed");
-        return;
-    }
-    name_ = hello.name();
     host_.on_hello(*this, hello);
     if (state_ == State::active) {
         deadline_.cancel();
@@ -329,7 +297,7 @@ void Session::disconnect(pb::DisconnectReason reason, const std::string& text) {
     enqueue(std::move(frame), false); // beyond the queue limit on purpose: the reason must go out
     make_room_for_queue();
     deadline_.expires_after(kCloseGrace);
-    deadline_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+    deadline_.async_wait([self = self()](const boost::system::error_code& ec) {
         if (!ec) {
             self->close_now();
         }
@@ -368,32 +336,31 @@ void Session::write_next() {
         return;
     }
     writing_ = true;
-    asio::async_write(
-        socket_, asio::buffer(write_queue_.front().bytes),
-        [self = shared_from_this()](const boost::system::error_code& ec, std::size_t n) {
-            self->writing_ = false;
-            if (self->state_ == State::closed) {
-                return;
-            }
-            if (ec) {
-                self->close_now();
-                return;
-            }
-            self->bytes_sent_ += n;
-            self->queued_bytes_ -= self->write_queue_.front().bytes.size();
-            if (self->write_queue_.front().snapshot) {
-                self->snapshot_queued_ = false;
-                self->spare_frame_.swap(self->write_queue_.front().bytes);
-            }
-            self->write_queue_.pop_front();
-            if (!self->write_queue_.empty()) {
-                self->write_next();
-            } else if (self->state_ == State::closing) {
-                // Half-close: the peer reads our last frames, then closes.
-                boost::system::error_code ignored;
-                self->socket_.shutdown(asio::ip::tcp::socket::shutdown_send, ignored);
-            }
-        });
+    asio::async_write(socket_, asio::buffer(write_queue_.front().bytes),
+                      [self = self()](const boost::system::error_code& ec, std::size_t n) {
+                          self->writing_ = false;
+                          if (self->state_ == State::closed) {
+                              return;
+                          }
+                          if (ec) {
+                              self->close_now();
+                              return;
+                          }
+                          self->bytes_sent_ += n;
+                          self->queued_bytes_ -= self->write_queue_.front().bytes.size();
+                          if (self->write_queue_.front().snapshot) {
+                              self->snapshot_queued_ = false;
+                              self->spare_frame_.swap(self->write_queue_.front().bytes);
+                          }
+                          self->write_queue_.pop_front();
+                          if (!self->write_queue_.empty()) {
+                              self->write_next();
+                          } else if (self->state_ == State::closing) {
+                              // Half-close: the peer reads our last frames, then closes.
+                              boost::system::error_code ignored;
+                              self->socket_.shutdown(asio::ip::tcp::socket::shutdown_send, ignored);
+                          }
+                      });
 }
 
 void Session::close_now() {

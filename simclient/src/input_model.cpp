@@ -19,8 +19,8 @@ void set_move(protocol::pb::ClientInput& input, float yaw_deg, float speed) {
 InputModel::InputModel(Behaviour behaviour, std::uint64_t seed)
     : behaviour_(behaviour), rng_(seed) {}
 
-void InputModel::next(protocol::pb::ClientInput& input, int tick_rate,
-                      const protocol::SnapshotDecoder& replica, std::uint32_t own_entity) {
+void InputModel::next(protocol::pb::ClientInput& input, int tick_rate, const KnownEntities& replica,
+                      std::uint32_t own_entity) {
     if (behaviour_ == Behaviour::camper) {
         camp(input, tick_rate);
     } else if (behaviour_ == Behaviour::spectator) {
@@ -31,14 +31,11 @@ void InputModel::next(protocol::pb::ClientInput& input, int tick_rate,
 }
 
 void InputModel::spectate(protocol::pb::ClientInput& input, int tick_rate,
-                          const protocol::SnapshotDecoder& replica, std::uint32_t own_entity) {
+                          const KnownEntities& replica, std::uint32_t own_entity) {
     if (--ticks_left_ <= 0 || (watch_ != 0 && !replica.knows(watch_))) {
         players_.clear();
-        replica.entities().for_each([&](std::uint32_t id, const protocol::ReplicaEntity& e) {
-            if (e.kind == 1 && id != own_entity) { // kind 1: a player (EntityState.kind)
-                players_.push_back(id);
-            }
-        });
+        replica.players(players_);
+        std::erase(players_, own_entity);
         std::sort(players_.begin(), players_.end()); // the map's order is not the seed's
         watch_ = 0;
         if (!players_.empty()) {

@@ -113,6 +113,19 @@ int main(int argc, char** argv) {
                    "Announce this protocol version in the hello (testing aid: a server refuses "
                    "any other than its own)")
         ->capture_default_str();
+    const std::map<std::string, dsoc::simclient::LoadConfig::Transport> transports{
+        {"tcp", dsoc::simclient::LoadConfig::Transport::tcp},
+        {"udp", dsoc::simclient::LoadConfig::Transport::udp}};
+    app.add_option("--transport", config.transport,
+                   "tcp: compact snapshots over a TCP stream; udp: acknowledged-delta snapshots "
+                   "over UDP datagrams (docs/protocol.md)")
+        ->transform(CLI::CheckedTransformer(transports, CLI::ignore_case))
+        ->default_str("tcp");
+    app.add_option("--udp-loss", config.udp_loss,
+                   "UDP only: drop each datagram either way with this probability (emulated "
+                   "loss)")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 0.9));
     app.add_option("--threads", threads,
                    "Threads, each running its share of the clients (at most one per client; "
                    "a load generator on a machine of its own wants one per core)")

@@ -18,6 +18,9 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 constexpr auto kCloseGrace = std::chrono::seconds(2);
+/// A UDP client that hears nothing from the server this long gives up (the server's own
+/// timeout, udp_timeout_ms, is 5 s by default).
+constexpr auto kUdpSilence = std::chrono::seconds(5);
 
 /// When an input due at `due` leaves: the next whole millisecond of the steady clock.
 /// Clients whose inputs fall due within the same millisecond then share one wakeup of
@@ -90,6 +93,10 @@ void SimClient::start() {
 }
 
 void SimClient::on_resolved(const asio::ip::tcp::resolver::results_type& endpoints) {
+    if (config_.transport == LoadConfig::Transport::udp) {
+        connect_udp(endpoints.begin()->endpoint());
+        return;
+    }
     asio::async_connect(socket_, endpoints,
                         [self = shared_from_this()](const boost::system::error_code& ec,
                                                     const asio::ip::tcp::endpoint&) {
@@ -112,6 +119,11 @@ void SimClient::on_connected() {
     boost::system::error_code ec;
     socket_.set_option(asio::ip::tcp::no_delay(true), ec);
     state_ = State::awaiting_hello;
+    send(make_hello());
+    read_some();
+}
+
+pb::Envelope SimClient::make_hello() const {
     pb::Envelope hello;
     hello.mutable_client_hello()->set_protocol_version(config_.protocol_version);
     hello.mutable_client_hello()->set_name(name());
@@ -126,8 +138,78 @@ void SimClient::on_connected() {
                                                         config_.connect_token.size());
     }
     hello.mutable_client_hello()->set_audit_every_ticks(config_.audit_every_ticks);
-    send(hello);
-    read_some();
+    return hello;
+}
+
+void SimClient::connect_udp(const asio::ip::tcp::endpoint& server) {
+    state_ = State::awaiting_hello;
+    std::weak_ptr<SimClient> weak = weak_from_this();
+    UdpLink::Handlers handlers;
+    handlers.on_envelope = [weak](const pb::Envelope& message) {
+        if (auto self = weak.lock()) {
+            self->receive_udp(message);
+        }
+    };
+    handlers.on_bytes_down = [weak](std::size_t n) {
+        if (auto self = weak.lock()) {
+            self->stats_.bytes_down += n;
+        }
+    };
+    handlers.on_bytes_up = [weak](std::size_t n) {
+        if (auto self = weak.lock()) {
+            self->stats_.bytes_up += n;
+        }
+    };
+    handlers.on_error = [weak](const std::string& kind) {
+        if (auto self = weak.lock()) {
+            self->error(kind);
+        }
+    };
+    udp_ = std::make_unique<UdpLink>(io_, std::move(handlers), config_.udp_loss,
+                                     config_.seed ^ (setup_.session << 3));
+    std::string why;
+    if (!udp_->connect(asio::ip::udp::endpoint(server.address(), server.port()), make_hello(),
+                       shared_from_this(), why)) {
+        stats_.connect_failed = true;
+        fail(failure::connection_lost, why);
+        close();
+    }
+}
+
+void SimClient::receive_udp(const pb::Envelope& message) {
+    last_heard_ = Clock::now();
+    if (!delay_in_) {
+        handle(message);
+        if (message.has_disconnect()) {
+            close(); // the server has closed its side: there is no stream to end
+        }
+        return;
+    }
+    delay_in_->push(
+        [self = shared_from_this(), message] {
+            if (self->state_ == State::closed) {
+                return;
+            }
+            self->handle(message);
+            if (message.has_disconnect()) {
+                self->close();
+            }
+        },
+        shared_from_this());
+}
+
+void SimClient::send_udp(const pb::Envelope& message) {
+    if (state_ == State::closed) {
+        return;
+    }
+    if (message.has_client_input()) {
+        udp_->send_input(message.client_input(), acked_replica_.newest_tick().value_or(0));
+    } else {
+        udp_->send_message(message);
+        if (message.has_disconnect()) {
+            udp_->send_message(message); // nothing acknowledges it: twice, as the server does
+        }
+    }
 }
 
 void SimClient::read_some() {
@@ -255,9 +337,11 @@ void SimClient::on_server_hello(const pb::ServerHello& hello) {
         error("bad_quantization");
     }
     replica_.set_settings(quantization);
+    acked_replica_ = protocol::AckedSnapshotDecoder(quantization);
     state_ = State::active;
     active_since_ = Clock::now();
     stats_.connect_ms = ms_between(started_at_, active_since_);
+    last_heard_ = active_since_;
     next_input_at_ = active_since_;
     schedule_input();
 }
@@ -284,7 +368,7 @@ void SimClient::on_disconnect(const pb::Disconnect& disconnect) {
     }
 }
 
-void SimClient::apply_snapshot(const pb::Snapshot& s) {
+void SimClient::count_snapshot(const pb::Snapshot& s) {
     const auto now = Clock::now();
     if (stats_.snapshots > 0) {
         if (s.server_tick() <= last_snapshot_tick_) {
@@ -299,18 +383,31 @@ void SimClient::apply_snapshot(const pb::Snapshot& s) {
     last_snapshot_tick_ = s.server_tick();
     last_snapshot_at_ = now;
     ++stats_.snapshots;
-    for (const auto& problem : replica_.apply(s)) {
+    stats_.entity_updates += static_cast<std::uint64_t>(s.enter_size() + s.update_head_size());
+}
+
+template <typename Replica>
+void SimClient::apply_and_audit(Replica& replica, const pb::Snapshot& s) {
+    count_snapshot(s);
+    for (const auto& problem : replica.apply(s)) {
         error(problem.kind);
     }
     if (s.audit_size() > 0) {
         double worst = 0.0;
-        for (const auto& problem : replica_.check_audit(s, worst)) {
+        for (const auto& problem : replica.check_audit(s, worst)) {
             error(problem.kind);
         }
         stats_.audited_poses += static_cast<std::uint64_t>(s.audit_size());
         stats_.max_audit_error = std::max(stats_.max_audit_error, worst);
     }
-    stats_.entity_updates += static_cast<std::uint64_t>(s.enter_size() + s.update_head_size());
+}
+
+void SimClient::apply_snapshot(const pb::Snapshot& s) {
+    if (udp_) {
+        apply_acked_snapshot(s);
+        return;
+    }
+    apply_and_audit(replica_, s);
     if (replica_.knows(stats_.entity_id)) {
         stats_.saw_own_entity = true;
     }
@@ -318,11 +415,70 @@ void SimClient::apply_snapshot(const pb::Snapshot& s) {
     stats_.heard_samples.add(static_cast<double>(replica_.heard()));
 }
 
+void SimClient::apply_acked_snapshot(const pb::Snapshot& s) {
+    // A snapshot arrives whole or not at all (the link reassembles it); one older than the
+    // newest applied never arrives (the link drops it), so every one here must apply.
+    apply_and_audit(acked_replica_, s);
+    if (acked_replica_.find(stats_.entity_id) != nullptr) {
+        stats_.saw_own_entity = true;
+    }
+    const protocol::DeltaFrame* frame = acked_replica_.newest();
+    std::size_t heard = 0;
+    if (frame != nullptr) {
+        for (const protocol::FrameEntity& e : frame->entities) {
+            heard += e.tier == protocol::kHeardTier ? 1 : 0;
+        }
+    }
+    stats_.known_samples.add(static_cast<double>(known()));
+    stats_.heard_samples.add(static_cast<double>(heard));
+}
+
+std::size_t SimClient::known() const {
+    if (udp_) {
+        const protocol::DeltaFrame* frame = acked_replica_.newest();
+        return frame != nullptr ? frame->entities.size() : 0;
+    }
+    return replica_.size();
+}
+
+bool SimClient::knows(std::uint32_t id) const {
+    return udp_ ? acked_replica_.find(id) != nullptr : replica_.knows(id);
+}
+
+void SimClient::players(std::vector<std::uint32_t>& out) const {
+    constexpr std::uint32_t kPlayer = 1; // EntityState.kind
+    if (udp_) {
+        if (const protocol::DeltaFrame* frame = acked_replica_.newest()) {
+            for (const protocol::FrameEntity& e : frame->entities) {
+                if (e.kind == kPlayer) {
+                    out.push_back(e.id);
+                }
+            }
+        }
+        return;
+    }
+    replica_.entities().for_each([&](std::uint32_t id, const protocol::ReplicaEntity& e) {
+        if (e.kind == kPlayer) {
+            out.push_back(id);
+        }
+    });
+}
+
 void SimClient::schedule_input() {
     next_input_at_ += std::chrono::nanoseconds(1'000'000'000LL / tick_rate_);
     input_timer_.expires_at(on_whole_millisecond(next_input_at_));
     input_timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
         if (ec || self->state_ != State::active) {
+            return;
+        }
+        if (self->udp_ && Clock::now() - self->last_heard_ > kUdpSilence) {
+            self->stats_.unexpected_disconnect = true;
+            self->stats_.disconnect_reason = "connection_lost";
+            self->fail(
+                failure::connection_lost,
+                fmt::format("nothing from the server over UDP for {} s",
+                            std::chrono::duration_cast<std::chrono::seconds>(kUdpSilence).count()));
+            self->close();
             return;
         }
         self->send_input();
@@ -334,7 +490,7 @@ void SimClient::send_input() {
     pb::Envelope message;
     auto& input = *message.mutable_client_input();
     input.set_tick(++input_seq_);
-    input_model_.next(input, tick_rate_, replica_, stats_.entity_id);
+    input_model_.next(input, tick_rate_, *this, stats_.entity_id);
     send(message);
     if (input_seq_ % static_cast<std::uint64_t>(tick_rate_) == 0) {
         pb::Envelope ping;
@@ -347,6 +503,15 @@ void SimClient::send_input() {
 }
 
 void SimClient::send(const pb::Envelope& message, bool goodbye) {
+    if (udp_) {
+        if (!delay_out_) {
+            send_udp(message);
+        } else {
+            delay_out_->push([self = shared_from_this(), message] { self->send_udp(message); },
+                             shared_from_this());
+        }
+        return;
+    }
     if (!delay_out_) {
         // Frames queued while a write is in flight go out together in the next write:
         // one send() per batch, and no allocation once the two buffers have grown.
@@ -415,6 +580,10 @@ void SimClient::stop() {
         bye.mutable_disconnect()->set_text("load run finished");
         send(bye, /*goodbye=*/true);
     }
+    if (udp_ && !delay_out_) {
+        close(); // over UDP nothing ends a stream: the goodbye has gone
+        return;
+    }
     close_timer_.expires_after(kCloseGrace);
     close_timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
         if (!ec) {
@@ -457,6 +626,9 @@ void SimClient::close() {
     }
     boost::system::error_code ec;
     socket_.close(ec);
+    if (udp_) {
+        udp_->close();
+    }
     if (setup_.on_closed) {
         asio::post(io_, [self = shared_from_this()] { self->setup_.on_closed(*self); });
     }

@@ -39,6 +39,8 @@ public:
 
     [[nodiscard]] std::uint16_t port() const { return port_; }
     [[nodiscard]] const server::ServerStats& stats() const { return server_.stats(); }
+    /// After stop().
+    [[nodiscard]] const server::UdpEndpoint* udp_endpoint() const { return server_.udp_endpoint(); }
 
 private:
     static server::ServerConfig prepare(server::ServerConfig c) {

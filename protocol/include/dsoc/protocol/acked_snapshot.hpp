@@ -94,6 +94,14 @@ public:
     [[nodiscard]] std::optional<std::uint64_t> newest_tick() const { return newest_tick_; }
     /// The newest frame's pose of `id`, or nothing when the entity is not known.
     [[nodiscard]] std::optional<Pose> pose(std::uint32_t id) const;
+    /// The newest frame's entity `id`, or nullptr.
+    [[nodiscard]] const FrameEntity* find(std::uint32_t id) const;
+    /// Compares the newest frame against `snapshot`'s audit poses (the snapshot just
+    /// applied), as SnapshotDecoder::check_audit does: every audited entity known, not
+    /// heard-only, within half a quantum. `max_error`: the largest error, in quanta.
+    [[nodiscard]] std::vector<SnapshotProblem> check_audit(const pb::Snapshot& snapshot,
+                                                           double& max_error) const;
+    [[nodiscard]] const QuantizationSettings& settings() const { return settings_; }
 
 private:
     QuantizationSettings settings_;

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <exception>
 #include <functional>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -31,8 +32,12 @@ struct ClientTick {
     std::vector<interest::Interest>* interest = nullptr; ///< receives the interest set
     protocol::pb::Envelope* envelope = nullptr;          ///< receives the snapshot when `build`
     /// When not null and `build`: receives the snapshot encoded as one wire frame
-    /// (cleared first; its capacity is reused), so serialization runs on the pool too.
+    /// (cleared first; its capacity is reused), so serialization runs on the pool too: a
+    /// TCP frame, or when replication->acked() the form snapshot_frame() gives (what a
+    /// UdpConnection takes).
     std::vector<std::uint8_t>* frame = nullptr;
+    /// When replication->acked(): the newest snapshot tick the client acknowledged.
+    std::optional<std::uint64_t> acked_tick;
     /// Optional, with `frame`: the snapshot's update entries are written here in wire
     /// form and framed by protocol::encode_snapshot_frame() (the same bytes, without a
     /// second pass over them); `envelope`'s snapshot then holds no update entries.

@@ -47,6 +47,9 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("max_frame_bytes", config.max_frame_bytes);
     visit("max_send_queue_bytes", config.max_send_queue_bytes);
     visit("handshake_timeout_ms", config.handshake_timeout_ms);
+    visit("udp", config.udp);
+    visit("udp_timeout_ms", config.udp_timeout_ms);
+    visit("udp_handshake_rate", config.udp_handshake_rate);
     visit("slow_client_timeout_ms", config.slow_client_timeout_ms);
     visit("socket_send_buffer_bytes", config.socket_send_buffer_bytes);
     visit("io_gather_us", config.io_gather_us);

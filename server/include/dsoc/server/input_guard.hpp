@@ -46,6 +46,7 @@ public:
     [[nodiscard]] Decision on_message(Clock::time_point now);
 
     [[nodiscard]] std::uint64_t dropped() const { return dropped_total_; }
+    [[nodiscard]] double per_second() const { return per_second_; }
 
 private:
     double per_second_;

@@ -8,10 +8,13 @@
 
 #include "dsoc/interest/game_world.hpp"
 #include "dsoc/interest/interest_policy.hpp"
+#include "dsoc/protocol/acked_snapshot.hpp"
 #include "dsoc/protocol/compact_snapshot.hpp"
 #include "dsoc/protocol/messages.hpp"
 
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -48,9 +51,16 @@ private:
 
 class ReplicationState {
 public:
-    /// `quantization` must have passed protocol::validate().
-    explicit ReplicationState(const protocol::QuantizationSettings& quantization = {})
-        : encoder_(quantization) {}
+    /// `quantization` must have passed protocol::validate(). `acked`: the client's
+    /// transport loses snapshots and acknowledges the ones it applied (UDP): snapshots are
+    /// built with build_acked_snapshot(), else with build_snapshot().
+    explicit ReplicationState(const protocol::QuantizationSettings& quantization = {},
+                              bool acked = false)
+        : encoder_(quantization),
+          acked_encoder_(acked ? std::make_unique<protocol::AckedSnapshotEncoder>(quantization)
+                               : nullptr) {}
+
+    [[nodiscard]] bool acked() const { return acked_encoder_ != nullptr; }
 
     /// Fills `snapshot` (cleared first) for `tick`: entities in `interest` (increasing
     /// ids, each present in `world`) that the client did not know enter with full
@@ -71,11 +81,27 @@ public:
                         const SharedPoses* poses = nullptr,
                         protocol::UpdateColumns* columns = nullptr);
 
+    /// The acknowledged-delta snapshot of `tick` (protocol/acked_snapshot.hpp) that moves
+    /// the client to `interest`, coded against the frame of `acked_tick` (the newest tick
+    /// the client acknowledged) when the encoder still holds it, else against nothing.
+    /// Entities on tier t > 0 are updated on the same staggered ticks as build_snapshot()'s
+    /// and carried at their prediction on the others. `audit`: the exact pose of every
+    /// tier-0 entity (those are updated every tick). `poses`: as build_snapshot()'s.
+    /// Only when acked().
+    void build_acked_snapshot(const interest::GameWorld& world,
+                              std::span<const interest::Interest> interest, std::uint64_t tick,
+                              std::optional<std::uint64_t> acked_tick, bool audit,
+                              protocol::pb::Snapshot& snapshot, const SharedPoses* poses = nullptr);
+
+    /// Enters and update entries the last snapshot built holds.
+    [[nodiscard]] std::size_t last_updates() const { return last_updates_; }
     [[nodiscard]] std::size_t known_count() const { return known_.size(); }
     [[nodiscard]] const std::vector<std::uint32_t>& known() const { return known_; }
 
 private:
     protocol::SnapshotEncoder encoder_;
+    std::unique_ptr<protocol::AckedSnapshotEncoder> acked_encoder_; // when acked()
+    std::size_t last_updates_ = 0;
     std::vector<std::uint32_t> known_; // increasing
     std::vector<std::uint32_t> next_known_;
 };

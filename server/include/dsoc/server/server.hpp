@@ -40,6 +40,7 @@
 #include "dsoc/server/server_config.hpp"
 #include "dsoc/server/session.hpp"
 #include "dsoc/server/tick_schedule.hpp"
+#include "dsoc/server/udp_endpoint.hpp"
 #include "dsoc/trace/trace_writer.hpp"
 
 #include <boost/asio/io_context.hpp>
@@ -111,7 +112,7 @@ struct ServerStats {
     std::uint64_t heard_entities_sent = 0;
 };
 
-class Server final : private SessionHost {
+class Server final : private ConnectionHost {
 public:
     /// `config` must have passed validate(); `map` is the loaded config.map.
     Server(boost::asio::io_context& io, ServerConfig config, std::shared_ptr<const maps::Map> map);
@@ -121,9 +122,10 @@ public:
     Server(const Server&) = delete;
     Server& operator=(const Server&) = delete;
 
-    /// Binds, listens and starts the tick loop. Returns the bound port (useful with
-    /// port 0). Throws boost::system::system_error when the address cannot be bound,
-    /// std::runtime_error when the trace file or the token key cannot be read.
+    /// Binds, listens and starts the tick loop: TCP on config.port, and UDP on the same
+    /// port number when config.udp. Returns the bound port (useful with port 0). Throws
+    /// boost::system::system_error when the address cannot be bound, std::runtime_error when the
+    /// trace file or the token key cannot be read.
     std::uint16_t start();
 
     /// The loop that runs the I/O thread, when it gathers events (io_loop.hpp): woken
@@ -137,6 +139,9 @@ public:
     void shutdown(std::function<void()> on_done = {});
 
     [[nodiscard]] const ServerStats& stats() const { return stats_; }
+    /// The UDP endpoint (null without config.udp, or before start()); read it on the
+    /// io_context thread or after run() returned.
+    [[nodiscard]] const UdpEndpoint* udp_endpoint() const { return udp_.get(); }
     [[nodiscard]] const ServerConfig& config() const { return config_; }
     [[nodiscard]] std::size_t session_count() const { return sessions_.size(); }
     [[nodiscard]] std::uint64_t tick() const { return tick_; }
@@ -151,7 +156,7 @@ public:
 
 private:
     struct Client {
-        std::shared_ptr<Session> session;
+        std::shared_ptr<Connection> session;
         ReplicationState replication;             // written by this client's job during a phase
         std::vector<interest::Interest> interest; // this tick's set, written by the job
         protocol::pb::Envelope envelope;          // this tick's snapshot, written by the job
@@ -182,14 +187,17 @@ private:
     void maybe_finish_shutdown();
     void write_trace_tick();
 
-    void on_hello(Session& session, const protocol::pb::ClientHello& hello) override;
-    void on_input(Session& session, const protocol::pb::ClientInput& input) override;
-    void on_closed(Session& session) override;
+    void on_hello(Connection& session, const protocol::pb::ClientHello& hello) override;
+    void on_input(Connection& session, const protocol::pb::ClientInput& input) override;
+    void on_closed(Connection& session) override;
+    /// A new connection (either transport): registered, and refused when over max_clients.
+    void open_connection(const std::shared_ptr<Connection>& connection);
 
     boost::asio::io_context& io_;
     IoLoop* io_loop_ = nullptr;
     ServerConfig config_;
     boost::asio::ip::tcp::acceptor acceptor_;
+    std::unique_ptr<UdpEndpoint> udp_; // when config.udp, from start()
     boost::asio::steady_timer tick_timer_;
     std::chrono::nanoseconds tick_period_;
     TickSchedule schedule_; // when ticks are due; missed ones are dropped, not burst
@@ -198,8 +206,8 @@ private:
     std::uint64_t tick_ = 0;
     interest::GameWorld world_;
     std::unique_ptr<interest::InterestPolicy> policy_;
-    std::map<std::uint32_t, Client> clients_;                    // active (after hello)
-    std::map<std::uint32_t, std::shared_ptr<Session>> sessions_; // all open connections
+    std::map<std::uint32_t, Client> clients_;                       // active (after hello)
+    std::map<std::uint32_t, std::shared_ptr<Connection>> sessions_; // all open connections
     std::uint32_t next_client_id_ = 1;
     std::unique_ptr<protocol::TokenKey> token_key_;        // null when insecure
     std::map<std::uint64_t, std::uint32_t> token_clients_; // token client id -> connection

@@ -6,7 +6,6 @@
 // spectators stand still and watch a player entity they know (not their own), another
 // every 5-10 s or as soon as the watched one is gone from their replica.
 
-#include "dsoc/protocol/compact_snapshot.hpp"
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/simclient/scenario.hpp"
 
@@ -16,20 +15,29 @@
 
 namespace dsoc::simclient {
 
+/// What the input model asks of a client's replica, whichever decoder holds it.
+class KnownEntities {
+public:
+    virtual ~KnownEntities() = default;
+    [[nodiscard]] virtual bool knows(std::uint32_t id) const = 0;
+    /// Appends the ids of the player entities known (EntityState.kind 1), in any order.
+    virtual void players(std::vector<std::uint32_t>& out) const = 0;
+};
+
 class InputModel {
 public:
     InputModel(Behaviour behaviour, std::uint64_t seed);
 
     /// Fills the movement, view and watched entity of the next input (not its tick).
     /// `replica`: what the client knows now; `own_entity`: its own entity's id.
-    void next(protocol::pb::ClientInput& input, int tick_rate,
-              const protocol::SnapshotDecoder& replica, std::uint32_t own_entity);
+    void next(protocol::pb::ClientInput& input, int tick_rate, const KnownEntities& replica,
+              std::uint32_t own_entity);
 
 private:
     void wander(protocol::pb::ClientInput& input, int tick_rate);
     void camp(protocol::pb::ClientInput& input, int tick_rate);
-    void spectate(protocol::pb::ClientInput& input, int tick_rate,
-                  const protocol::SnapshotDecoder& replica, std::uint32_t own_entity);
+    void spectate(protocol::pb::ClientInput& input, int tick_rate, const KnownEntities& replica,
+                  std::uint32_t own_entity);
 
     Behaviour behaviour_;
     std::mt19937_64 rng_;

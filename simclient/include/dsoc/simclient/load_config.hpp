@@ -55,6 +55,13 @@ struct LoadConfig {
     /// The protocol version sent in the hello. A testing aid: a server refuses any
     /// other than its own (version_mismatch).
     std::uint32_t protocol_version = protocol::kProtocolVersion;
+    /// How the clients reach the server: a TCP stream of compact snapshots, or UDP
+    /// datagrams with acknowledged-delta snapshots (docs/protocol.md, "UDP transport").
+    enum class Transport : std::uint8_t { tcp, udp };
+    Transport transport = Transport::tcp;
+    /// UDP only: each datagram either way is dropped with this probability (emulated
+    /// loss, on top of the groups' latency and jitter). [Limit: 0..0.9]
+    double udp_loss = 0.0;
 };
 
 } // namespace dsoc::simclient

@@ -1,10 +1,12 @@
 #pragma once
-// One headless simulated client session: resolves, connects, says hello, sends its
-// behaviour's input every tick, decodes the compact snapshots into its own replica of
+// One headless simulated client session: resolves, connects (over TCP, or over UDP with
+// udp_link.hpp), says hello, sends its behaviour's input every tick, decodes the
+// snapshots (compact over TCP, acknowledged deltas over UDP) into its own replica of
 // the world and checks the protocol's invariants - including, when it asks the server
 // for audits, that every replicated pose is within half a quantum of the server's own.
 // Every way it can fail is named (ClientStats::failure, failure_reason.hpp).
 
+#include "dsoc/protocol/acked_snapshot.hpp"
 #include "dsoc/protocol/compact_snapshot.hpp"
 #include "dsoc/protocol/framing.hpp"
 #include "dsoc/protocol/messages.hpp"
@@ -13,6 +15,7 @@
 #include "dsoc/simclient/input_model.hpp"
 #include "dsoc/simclient/load_config.hpp"
 #include "dsoc/simclient/scenario.hpp"
+#include "dsoc/simclient/udp_link.hpp"
 
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/steady_timer.hpp>
@@ -45,7 +48,7 @@ struct SessionSetup {
     std::function<void(SimClient&)> on_closed;   ///< once, when finished() became true
 };
 
-class SimClient : public std::enable_shared_from_this<SimClient> {
+class SimClient : public std::enable_shared_from_this<SimClient>, private KnownEntities {
 public:
     SimClient(boost::asio::io_context& io, const LoadConfig& config, SessionSetup setup);
 
@@ -65,15 +68,31 @@ public:
     }
     [[nodiscard]] bool finished() const { return state_ == State::closed; }
     /// Entities in the replica right now.
-    [[nodiscard]] std::size_t known() const { return replica_.size(); }
-    /// The replica (quantized poses as decoded).
+    [[nodiscard]] std::size_t known() const;
+    /// The replica over TCP (quantized poses as decoded; empty over UDP).
     [[nodiscard]] const protocol::SnapshotDecoder& replica() const { return replica_; }
+    /// The replica over UDP (empty over TCP).
+    [[nodiscard]] const protocol::AckedSnapshotDecoder& acked_replica() const {
+        return acked_replica_;
+    }
 
 private:
     enum class State : std::uint8_t { idle, connecting, awaiting_hello, active, stopping, closed };
 
     void on_resolved(const boost::asio::ip::tcp::resolver::results_type& endpoints);
     void on_connected();
+    [[nodiscard]] protocol::pb::Envelope make_hello() const;
+    void connect_udp(const boost::asio::ip::tcp::endpoint& server);
+    void receive_udp(const protocol::pb::Envelope& message);
+    void send_udp(const protocol::pb::Envelope& message);
+    void apply_acked_snapshot(const protocol::pb::Snapshot& snapshot);
+    /// Applies `snapshot` to `replica` (either decoder), checks its audit, counts it.
+    template <typename Replica>
+    void apply_and_audit(Replica& replica, const protocol::pb::Snapshot& snapshot);
+    /// The interarrival and tick checks every snapshot gets, whatever the transport.
+    void count_snapshot(const protocol::pb::Snapshot& snapshot);
+    [[nodiscard]] bool knows(std::uint32_t id) const override;
+    void players(std::vector<std::uint32_t>& out) const override;
     void read_some();
     void consume(std::span<const std::uint8_t> bytes);
     void on_read_error(const boost::system::error_code& ec);
@@ -109,6 +128,9 @@ private:
     bool writing_ = false;
     bool goodbye_sent_ = false;
     protocol::SnapshotDecoder replica_;
+    std::unique_ptr<UdpLink> udp_;                     // over UDP
+    protocol::AckedSnapshotDecoder acked_replica_;     // over UDP
+    std::chrono::steady_clock::time_point last_heard_; // over UDP: the last envelope received
     ClientStats stats_;
     InputModel input_model_;
     std::uint64_t last_snapshot_tick_ = 0;

@@ -1,0 +1,109 @@
+#pragma once
+// One client's UDP session (docs/protocol.md, "UDP transport"): created by the
+// UdpEndpoint once the client's response carried a valid cookie, so its address is
+// proven; from then on it takes the client's datagrams the endpoint routes to it (by
+// session id, from that address only, sequence numbers never taken before) and sends the
+// hello reply, pongs, its disconnect and its snapshots as datagrams.
+//
+// Snapshots are acknowledged deltas (protocol/acked_snapshot.hpp): every input datagram
+// carries the newest snapshot tick the client applied, and the server codes the next
+// snapshot against it. Nothing is queued or retransmitted: a snapshot the kernel does not
+// take, or the network loses, is simply replaced by the next one.
+//
+// Threading: as Connection; write_now() may run on a pool thread while the io thread
+// waits (it sends on the endpoint's socket, which the kernel lets several threads use).
+
+#include "dsoc/protocol/datagram.hpp"
+#include "dsoc/server/connection.hpp"
+#include "dsoc/server/server_config.hpp"
+
+#include <boost/asio/ip/udp.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace dsoc::server {
+
+class UdpEndpoint;
+
+class UdpConnection final : public Connection {
+public:
+    /// `session`: the id the server assigned; `nonce`: the client's, from its request;
+    /// `peer`: its proven address.
+    UdpConnection(UdpEndpoint& endpoint, std::uint32_t client_id, std::uint64_t session,
+                  std::uint64_t nonce, const boost::asio::ip::udp::endpoint& peer,
+                  const ServerConfig& config, ConnectionHost& host);
+
+    [[nodiscard]] Transport transport() const override { return Transport::udp; }
+
+    /// The hello of the client's response: the version and name checks, then the host.
+    void hello(const protocol::pb::ClientHello& hello);
+
+    /// Awaiting the hello: the reply goes out as the `accepted` datagram (kept, and sent
+    /// again for a duplicate response); afterwards as a `message` datagram.
+    void send(const protocol::pb::Envelope& message) override;
+    /// True while active: nothing ever waits in a queue.
+    [[nodiscard]] bool offer_snapshot(Clock::time_point now) override;
+    void send_snapshot_frame(std::vector<std::uint8_t>& frame) override;
+    /// A snapshot frame is snapshot_frame()'s form: the tick, then the serialized envelope.
+    [[nodiscard]] bool writable_now() const override { return active(); }
+    /// Splits the frame into snapshot datagrams and sends them; returns the bytes the
+    /// kernel took (0: none, e.g. a full socket buffer: the snapshot is dropped).
+    [[nodiscard]] std::size_t write_now(std::span<const std::uint8_t> frame) noexcept override;
+    bool finish_write_now(std::vector<std::uint8_t>& frame, std::size_t written) override;
+    /// Sends the Disconnect (twice, in case one is lost: no acknowledgement is awaited)
+    /// and closes at once.
+    void disconnect(protocol::pb::DisconnectReason reason, const std::string& text) override;
+    [[nodiscard]] std::optional<std::uint64_t> acked_tick() const override { return acked_; }
+
+    /// Called by the endpoint for each datagram of this session that passed the replay
+    /// window: `kind` is message or input. Returns false when the body does not parse
+    /// (the endpoint counts it as bad_body).
+    [[nodiscard]] bool receive(protocol::DatagramKind kind, std::span<const std::uint8_t> body,
+                               std::size_t datagram_bytes, Clock::time_point now);
+    /// A second response with this session's nonce and a valid cookie: the accepted
+    /// datagram was lost; send it again.
+    void resend_accepted();
+    /// Disconnects with timed_out when nothing was heard for the configured time.
+    void check_timeout(Clock::time_point now);
+
+    /// The replay window of the client's sequence numbers (the endpoint's check).
+    [[nodiscard]] protocol::ReplayWindow& replay_window() { return window_; }
+    [[nodiscard]] std::uint64_t session() const { return session_; }
+    [[nodiscard]] std::uint64_t nonce() const { return nonce_; }
+    [[nodiscard]] const boost::asio::ip::udp::endpoint& peer() const { return peer_; }
+    /// Snapshot datagrams the kernel refused (counted as dropped snapshots too).
+    [[nodiscard]] std::uint64_t datagrams_refused() const { return datagrams_refused_; }
+
+private:
+    [[nodiscard]] bool handle_message(std::span<const std::uint8_t> body);
+    void send_datagram(std::span<const std::uint8_t> datagram);
+    void close_now();
+
+    UdpEndpoint& endpoint_;
+    const ServerConfig& config_;
+    std::uint64_t session_;
+    std::uint64_t nonce_;
+    boost::asio::ip::udp::endpoint peer_;
+    protocol::ReplayWindow window_;
+    std::uint32_t next_sequence_ = 1;
+    std::optional<std::uint64_t> acked_;
+    std::uint64_t newest_snapshot_tick_ = 0; ///< the newest snapshot sent
+    std::uint64_t newest_input_ = 0;         ///< ClientInput.tick of the newest input taken
+    Clock::time_point last_heard_;
+    std::vector<std::uint8_t> accepted_; ///< the accepted datagram, for a duplicate response
+    std::vector<std::uint8_t> datagram_; ///< scratch of the io thread
+    std::vector<std::uint8_t> packed_;   ///< scratch of write_now()
+    std::uint64_t datagrams_refused_ = 0;
+};
+
+/// The frame the server's job builds for a UDP client: the snapshot's tick (u64
+/// little-endian), then the serialized envelope (clears `frame` first).
+void snapshot_frame(std::uint64_t tick, const protocol::pb::Envelope& envelope,
+                    std::vector<std::uint8_t>& frame);
+
+} // namespace dsoc::server

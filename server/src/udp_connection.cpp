@@ -1,0 +1,242 @@
+#include "dsoc/server/udp_connection.hpp"
+
+#include "dsoc/protocol/codec.hpp"
+#include "dsoc/server/udp_endpoint.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <sys/socket.h>
+
+namespace dsoc::server {
+
+namespace pb = protocol::pb;
+using protocol::DatagramKind;
+
+namespace {
+
+constexpr std::size_t kTickBytes = 8;
+/// The first block of a thread's decoding arena: a client's messages are small.
+constexpr std::size_t kIncomingArenaBytes = 4 * 1024;
+
+std::uint64_t get_u64(const std::uint8_t* in) {
+    std::uint64_t v = 0;
+    for (std::size_t i = 0; i < kTickBytes; ++i) {
+        v |= static_cast<std::uint64_t>(in[i]) << (8 * i);
+    }
+    return v;
+}
+
+} // namespace
+
+void snapshot_frame(std::uint64_t tick, const pb::Envelope& envelope,
+                    std::vector<std::uint8_t>& frame) {
+    frame.clear();
+    for (std::size_t i = 0; i < kTickBytes; ++i) {
+        frame.push_back(static_cast<std::uint8_t>(tick >> (8 * i)));
+    }
+    const std::size_t size = envelope.ByteSizeLong();
+    frame.resize(kTickBytes + size);
+    envelope.SerializeToArray(frame.data() + kTickBytes, static_cast<int>(size));
+}
+
+UdpConnection::UdpConnection(UdpEndpoint& endpoint, std::uint32_t client_id, std::uint64_t session,
+                             std::uint64_t nonce, const boost::asio::ip::udp::endpoint& peer,
+                             const ServerConfig& config, ConnectionHost& host)
+    : Connection(client_id, config.max_inputs_per_second, host), endpoint_(endpoint),
+      config_(config), session_(session), nonce_(nonce), peer_(peer), last_heard_(Clock::now()) {
+    remote_ = "udp:" + peer.address().to_string() + ":" + std::to_string(peer.port());
+}
+
+void UdpConnection::hello(const pb::ClientHello& hello) {
+    if (accept_hello(hello)) {
+        host_.on_hello(*this, hello);
+    }
+}
+
+void UdpConnection::send(const pb::Envelope& message) {
+    if (state_ == State::awaiting_hello) {
+        std::array<std::uint8_t, 8> id{};
+        for (std::size_t i = 0; i < id.size(); ++i) {
+            id[i] = static_cast<std::uint8_t>(session_ >> (8 * i));
+        }
+        if (protocol::write_envelope_datagram({DatagramKind::accepted, nonce_, 0}, id, &message,
+                                              accepted_)) {
+            send_datagram(accepted_);
+        }
+        return;
+    }
+    if (state_ != State::active) {
+        return;
+    }
+    if (protocol::write_envelope_datagram({DatagramKind::message, session_, next_sequence_}, {},
+                                          &message, datagram_)) {
+        ++next_sequence_;
+        send_datagram(datagram_);
+    } else {
+        spdlog::warn("client {} ({}): a {}-byte message does not fit in one datagram; not sent",
+                     client_id_, remote_, message.ByteSizeLong());
+    }
+}
+
+void UdpConnection::resend_accepted() {
+    if (!accepted_.empty()) {
+        send_datagram(accepted_);
+    }
+}
+
+bool UdpConnection::offer_snapshot(Clock::time_point) {
+    return active();
+}
+
+void UdpConnection::send_snapshot_frame(std::vector<std::uint8_t>& frame) {
+    finish_write_now(frame, write_now(frame));
+}
+
+std::size_t UdpConnection::write_now(std::span<const std::uint8_t> frame) noexcept {
+    if (frame.size() <= kTickBytes) {
+        return 0;
+    }
+    const std::uint64_t tick = get_u64(frame.data());
+    packed_.clear();
+    const std::size_t count = protocol::write_snapshot_datagrams(
+        session_, next_sequence_, tick, frame.subspan(kTickBytes), packed_);
+    if (count == 0) {
+        ++datagrams_refused_;
+        return 0; // larger than kMaxSnapshotBytes: dropped
+    }
+    next_sequence_ += static_cast<std::uint32_t>(count);
+    newest_snapshot_tick_ = tick;
+    const boost::asio::ip::udp::endpoint& to = peer_;
+    std::size_t sent = 0;
+    for (std::size_t at = 0; at + 2 <= packed_.size();) {
+        const std::size_t size = packed_[at] | (static_cast<std::size_t>(packed_[at + 1]) << 8);
+        const ssize_t n =
+            ::sendto(endpoint_.native_handle(), packed_.data() + at + 2, size,
+                     MSG_DONTWAIT | MSG_NOSIGNAL, to.data(), static_cast<socklen_t>(to.size()));
+        if (n > 0) {
+            sent += static_cast<std::size_t>(n);
+        } else {
+            ++datagrams_refused_;
+        }
+        at += 2 + size;
+    }
+    return sent;
+}
+
+bool UdpConnection::finish_write_now(std::vector<std::uint8_t>& frame, std::size_t written) {
+    bytes_sent_ += written;
+    snapshots_dropped_ += written == 0 ? 1 : 0;
+    frame.clear();
+    return false;
+}
+
+void UdpConnection::disconnect(pb::DisconnectReason reason, const std::string& text) {
+    if (state_ == State::closing || state_ == State::closed) {
+        return;
+    }
+    spdlog::info("client {} ({}) disconnected: {}: {}", client_id_, remote_,
+                 protocol::disconnect_reason_name(reason), text);
+    close_reason_ = reason;
+    pb::Envelope message;
+    message.mutable_disconnect()->set_reason(reason);
+    message.mutable_disconnect()->set_text(text);
+    if (state_ == State::awaiting_hello) {
+        send(message); // as the accepted datagram: the client has no session yet
+    } else {
+        send(message);
+        send(message);
+    }
+    close_now();
+}
+
+void UdpConnection::check_timeout(Clock::time_point now) {
+    const auto silent = now - last_heard_;
+    if (state_ == State::active && silent > std::chrono::milliseconds(config_.udp_timeout_ms)) {
+        disconnect(pb::DISCONNECT_REASON_TIMED_OUT,
+                   "nothing heard for " +
+                       std::to_string(
+                           std::chrono::duration_cast<std::chrono::milliseconds>(silent).count()) +
+                       " ms (limit " + std::to_string(config_.udp_timeout_ms) + " ms)");
+    }
+}
+
+bool UdpConnection::receive(DatagramKind kind, std::span<const std::uint8_t> body,
+                            std::size_t datagram_bytes, Clock::time_point now) {
+    if (state_ != State::active) {
+        return true;
+    }
+    bytes_received_ += datagram_bytes;
+    last_heard_ = now;
+    if (kind == DatagramKind::message) {
+        return handle_message(body);
+    }
+    protocol::InputBody inputs;
+    if (protocol::read_input_body(body, inputs) != protocol::DatagramError::none) {
+        return false;
+    }
+    // Only an acknowledgement of a snapshot really sent counts: a forged one newer than
+    // that would make the server code against a frame the client does not hold.
+    if (inputs.ack != 0 && inputs.ack <= newest_snapshot_tick_ &&
+        (!acked_ || inputs.ack > *acked_)) {
+        acked_ = inputs.ack;
+    }
+    thread_local pb::ClientInput input;
+    bool parsed_all = true;
+    // The oldest first: each input newer than the newest taken goes to the host in order.
+    for (std::size_t i = inputs.count; i-- > 0;) {
+        if (!input.ParseFromArray(inputs.inputs[i].data(),
+                                  static_cast<int>(inputs.inputs[i].size()))) {
+            parsed_all = false;
+            continue;
+        }
+        if (input.tick() <= newest_input_) {
+            continue; // sent again for redundancy, already taken
+        }
+        if (!admit_message()) { // the rate cap counts inputs, not datagrams
+            return true;
+        }
+        newest_input_ = input.tick();
+        if (!deliver_input(input)) {
+            return true;
+        }
+    }
+    return parsed_all;
+}
+
+bool UdpConnection::handle_message(std::span<const std::uint8_t> body) {
+    thread_local protocol::EnvelopeArena incoming(kIncomingArenaBytes);
+    const pb::Envelope* message = nullptr;
+    if (incoming.decode(body, message) != protocol::DecodeError::none) {
+        return false;
+    }
+    switch (message->body_case()) {
+    case pb::Envelope::kPing:
+        if (admit_message()) {
+            send(pong_for(message->ping()));
+        }
+        return true;
+    case pb::Envelope::kDisconnect:
+        close_reason_ = pb::DISCONNECT_REASON_CLIENT_QUIT;
+        close_now();
+        return true;
+    default:
+        return false; // nothing else is meaningful from a client in a message datagram
+    }
+}
+
+void UdpConnection::send_datagram(std::span<const std::uint8_t> datagram) {
+    if (endpoint_.send_to(peer_, datagram)) {
+        bytes_sent_ += datagram.size();
+    }
+}
+
+void UdpConnection::close_now() {
+    if (state_ == State::closed) {
+        return;
+    }
+    state_ = State::closed;
+    endpoint_.forget(*this);
+    host_.on_closed(*this);
+}
+
+} // namespace dsoc::server

@@ -1,0 +1,98 @@
+#pragma once
+// A simulated client's UDP transport (docs/protocol.md, "UDP transport"): the handshake
+// (request padded to a full datagram, the server's challenge cookie echoed in the
+// response, retried until accepted), message and input datagrams (each input datagram
+// carries the newest snapshot tick applied and the last kMaxRedundantInputs inputs, so
+// one lost datagram loses no input), and the reassembly of snapshot fragments. What it
+// receives from the server it hands over as envelopes; datagrams from elsewhere, of
+// another session, replayed or malformed are dropped and counted.
+//
+// Threading: the io_context's thread only. Lifetime: the handlers are not called after
+// close().
+
+#include "dsoc/protocol/datagram.hpp"
+#include "dsoc/protocol/messages.hpp"
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/udp.hpp>
+#include <boost/asio/steady_timer.hpp>
+
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <random>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace dsoc::simclient {
+
+class UdpLink {
+public:
+    struct Handlers {
+        /// A message from the server: the hello reply (or the disconnect refusing it), a
+        /// pong, a disconnect, or a snapshot (Envelope.snapshot, reassembled).
+        std::function<void(const protocol::pb::Envelope&)> on_envelope;
+        /// Bytes of a datagram (ours or not) received, and of one sent.
+        std::function<void(std::size_t)> on_bytes_down;
+        std::function<void(std::size_t)> on_bytes_up;
+        /// Something the server sent that a correct server never sends (a protocol error).
+        std::function<void(const std::string&)> on_error;
+    };
+    /// Emulated loss: each datagram either way is dropped with probability `loss`.
+    UdpLink(boost::asio::io_context& io, Handlers handlers, double loss, std::uint64_t seed);
+
+    /// Opens a socket towards `server` and sends the request carrying `hello` (retried
+    /// every 250 ms, the response likewise, until the accepted datagram arrives).
+    /// Returns false (with `error`) when the socket cannot be opened or the hello does
+    /// not fit.
+    /// `owner` is kept alive by every pending handler (the SimClient that owns this link).
+    bool connect(const boost::asio::ip::udp::endpoint& server, const protocol::pb::Envelope& hello,
+                 std::shared_ptr<void> owner, std::string& error);
+    /// A message datagram (ping, disconnect), once the session is accepted.
+    void send_message(const protocol::pb::Envelope& message);
+    /// An input datagram with `input` and the inputs sent before it, and `ack`.
+    void send_input(const protocol::pb::ClientInput& input, std::uint64_t ack);
+    void close();
+
+    [[nodiscard]] bool accepted() const { return session_ != 0; }
+    /// Datagrams dropped: not from the server, another session, replayed, malformed, or
+    /// by the emulated loss.
+    [[nodiscard]] std::uint64_t dropped() const { return dropped_; }
+    [[nodiscard]] std::uint64_t emulated_losses() const { return emulated_losses_; }
+    /// Snapshots given up with fragments missing.
+    [[nodiscard]] std::uint64_t snapshots_incomplete() const { return assembler_.abandoned(); }
+
+private:
+    void receive_next();
+    void on_datagram(std::size_t bytes);
+    void retry_handshake();
+    void send(std::span<const std::uint8_t> datagram);
+    [[nodiscard]] bool lose();
+
+    Handlers handlers_;
+    std::shared_ptr<void> owner_;
+    boost::asio::ip::udp::socket socket_;
+    boost::asio::steady_timer retry_timer_;
+    boost::asio::ip::udp::endpoint server_;
+    boost::asio::ip::udp::endpoint sender_;
+    std::array<std::uint8_t, protocol::kMaxDatagramBytes + 1> buffer_{};
+    std::vector<std::uint8_t> datagram_;
+    std::vector<std::uint8_t> request_;
+    std::vector<std::uint8_t> response_;
+    std::uint64_t nonce_ = 0;
+    std::uint64_t session_ = 0;
+    std::uint32_t next_sequence_ = 1;
+    protocol::ReplayWindow window_;
+    protocol::SnapshotAssembler assembler_;
+    std::deque<protocol::pb::ClientInput> recent_inputs_; ///< the newest first
+    double loss_;
+    std::mt19937_64 rng_;
+    std::uint64_t dropped_ = 0;
+    std::uint64_t emulated_losses_ = 0;
+    bool closed_ = false;
+};
+
+} // namespace dsoc::simclient

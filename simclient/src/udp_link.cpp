@@ -1,0 +1,221 @@
+#include "dsoc/simclient/udp_link.hpp"
+
+#include "dsoc/protocol/challenge_cookie.hpp"
+#include "dsoc/protocol/codec.hpp"
+
+#include <boost/asio/buffer.hpp>
+
+namespace dsoc::simclient {
+
+namespace asio = boost::asio;
+namespace pb = protocol::pb;
+using protocol::DatagramKind;
+
+namespace {
+constexpr auto kHandshakeRetry = std::chrono::milliseconds(250);
+/// The first block of a thread's decoding arena: a whole snapshot fits.
+constexpr std::size_t kIncomingArenaBytes = 256 * 1024;
+} // namespace
+
+UdpLink::UdpLink(asio::io_context& io, Handlers handlers, double loss, std::uint64_t seed)
+    : handlers_(std::move(handlers)), socket_(io), retry_timer_(io), loss_(loss), rng_(seed) {}
+
+bool UdpLink::connect(const asio::ip::udp::endpoint& server, const pb::Envelope& hello,
+                      std::shared_ptr<void> owner, std::string& error) {
+    owner_ = std::move(owner);
+    server_ = server;
+    nonce_ = protocol::random_nonzero_u64();
+    boost::system::error_code ec;
+    socket_.open(server.protocol(), ec);
+    if (!ec) {
+        socket_.connect(server, ec); // the kernel then drops datagrams from anywhere else
+    }
+    if (ec) {
+        error = "UDP socket towards " + server.address().to_string() + ": " + ec.message();
+        return false;
+    }
+    socket_.non_blocking(true, ec);
+    if (!protocol::write_request(nonce_, hello, request_) ||
+        !protocol::write_response(nonce_, protocol::ChallengeCookie{}, hello, response_)) {
+        error = "the hello does not fit in one datagram";
+        return false;
+    }
+    response_.clear(); // written for real once the cookie arrives
+    receive_next();
+    send(request_);
+    retry_handshake();
+    return true;
+}
+
+void UdpLink::retry_handshake() {
+    retry_timer_.expires_after(kHandshakeRetry);
+    retry_timer_.async_wait([this, keep = owner_](const boost::system::error_code& ec) {
+        if (ec || closed_ || session_ != 0) {
+            return;
+        }
+        send(response_.empty() ? request_ : response_);
+        retry_handshake();
+    });
+}
+
+void UdpLink::send_message(const pb::Envelope& message) {
+    if (session_ == 0 || closed_) {
+        return;
+    }
+    if (protocol::write_envelope_datagram({DatagramKind::message, session_, next_sequence_}, {},
+                                          &message, datagram_)) {
+        ++next_sequence_;
+        send(datagram_);
+    }
+}
+
+void UdpLink::send_input(const pb::ClientInput& input, std::uint64_t ack) {
+    recent_inputs_.push_front(input);
+    if (recent_inputs_.size() > protocol::kMaxRedundantInputs) {
+        recent_inputs_.pop_back();
+    }
+    if (session_ == 0 || closed_) {
+        return;
+    }
+    const std::vector<pb::ClientInput> inputs(recent_inputs_.begin(), recent_inputs_.end());
+    if (protocol::write_input({DatagramKind::input, session_, next_sequence_}, ack, inputs,
+                              datagram_)) {
+        ++next_sequence_;
+        send(datagram_);
+    }
+}
+
+void UdpLink::close() {
+    closed_ = true;
+    retry_timer_.cancel();
+    boost::system::error_code ec;
+    socket_.close(ec);
+    owner_.reset();
+}
+
+bool UdpLink::lose() {
+    if (loss_ <= 0.0 || !std::bernoulli_distribution(loss_)(rng_)) {
+        return false;
+    }
+    ++emulated_losses_;
+    return true;
+}
+
+void UdpLink::send(std::span<const std::uint8_t> datagram) {
+    if (lose()) {
+        return;
+    }
+    boost::system::error_code ec;
+    const std::size_t n = socket_.send(asio::buffer(datagram.data(), datagram.size()), 0, ec);
+    if (!ec && handlers_.on_bytes_up) {
+        handlers_.on_bytes_up(n);
+    }
+}
+
+void UdpLink::receive_next() {
+    socket_.async_receive(
+        asio::buffer(buffer_),
+        [this, keep = owner_](const boost::system::error_code& ec, std::size_t n) {
+            if (closed_ || ec == asio::error::operation_aborted) {
+                return;
+            }
+            if (!ec) {
+                on_datagram(n);
+            }
+            if (!closed_) {
+                receive_next();
+            }
+        });
+}
+
+void UdpLink::on_datagram(std::size_t bytes) {
+    if (handlers_.on_bytes_down) {
+        handlers_.on_bytes_down(bytes);
+    }
+    if (lose()) {
+        return;
+    }
+    protocol::DatagramHeader header;
+    std::span<const std::uint8_t> body;
+    if (protocol::read_datagram(std::span<const std::uint8_t>(buffer_.data(), bytes), header,
+                                body) != protocol::DatagramError::none) {
+        ++dropped_;
+        return;
+    }
+    thread_local protocol::EnvelopeArena incoming(kIncomingArenaBytes);
+    const pb::Envelope* message = nullptr;
+    switch (header.kind) {
+    case DatagramKind::challenge:
+        if (header.session != nonce_ || session_ != 0 || body.size() != protocol::kCookieBytes) {
+            ++dropped_;
+            return;
+        }
+        if (response_.empty()) {
+            pb::Envelope hello;
+            std::span<const std::uint8_t> cookie;
+            std::span<const std::uint8_t> hello_bytes;
+            // The request holds the hello: read it back rather than keep a copy.
+            const auto request_body =
+                std::span<const std::uint8_t>(request_).subspan(protocol::kDatagramHeaderBytes);
+            if (protocol::read_hello_body(DatagramKind::request, request_body, cookie,
+                                          hello_bytes) != protocol::DatagramError::none ||
+                !hello.ParseFromArray(hello_bytes.data(), static_cast<int>(hello_bytes.size())) ||
+                !protocol::write_response(nonce_, body, hello, response_)) {
+                handlers_.on_error("udp_response_unwritable");
+                return;
+            }
+        }
+        send(response_);
+        return;
+    case DatagramKind::accepted: {
+        std::uint64_t session = 0;
+        std::span<const std::uint8_t> envelope;
+        if (header.session != nonce_ || session_ != 0 ||
+            protocol::read_accepted_body(body, session, envelope) !=
+                protocol::DatagramError::none ||
+            incoming.decode(envelope, message) != protocol::DecodeError::none) {
+            ++dropped_;
+            return;
+        }
+        session_ = session;
+        retry_timer_.cancel();
+        handlers_.on_envelope(*message);
+        return;
+    }
+    case DatagramKind::message:
+    case DatagramKind::snapshot:
+        break;
+    default:
+        ++dropped_;
+        return;
+    }
+    if (session_ == 0 || header.session != session_ || !window_.accept(header.sequence)) {
+        ++dropped_;
+        return;
+    }
+    if (header.kind == DatagramKind::message) {
+        if (incoming.decode(body, message) != protocol::DecodeError::none) {
+            handlers_.on_error("undecodable_message");
+            return;
+        }
+        handlers_.on_envelope(*message);
+        return;
+    }
+    protocol::SnapshotFragment fragment;
+    if (protocol::read_snapshot_body(body, fragment) != protocol::DatagramError::none) {
+        handlers_.on_error("bad_snapshot_fragment");
+        return;
+    }
+    std::span<const std::uint8_t> whole;
+    if (assembler_.add(fragment, whole) != protocol::SnapshotAssembler::Result::complete) {
+        return;
+    }
+    if (incoming.decode(whole, message) != protocol::DecodeError::none ||
+        !message->has_snapshot()) {
+        handlers_.on_error("undecodable_snapshot");
+        return;
+    }
+    handlers_.on_envelope(*message);
+}
+
+} // namespace dsoc::simclient

@@ -1,0 +1,308 @@
+// The UDP transport end to end: simulated clients over real UDP sockets to a real
+// server get their snapshots, audits and own entity, with and without emulated loss;
+// hostile datagrams are dropped and counted by reason, never answered with more bytes
+// than they carried, while the honest clients keep their snapshots; a silent client is
+// timed out with a reason.
+
+#include "server_fixture.hpp"
+
+#include "dsoc/protocol/codec.hpp"
+#include "dsoc/protocol/datagram.hpp"
+#include "dsoc/simclient/load_run.hpp"
+
+#include <boost/asio/ip/udp.hpp>
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <optional>
+#include <thread>
+
+namespace dsoc {
+namespace {
+
+namespace asio = boost::asio;
+namespace pb = protocol::pb;
+using protocol::DatagramKind;
+using server::UdpDrop;
+
+/// A blocking raw UDP socket towards the server, sending whatever the test wants.
+class RawUdp {
+public:
+    explicit RawUdp(std::uint16_t port)
+        : socket_(io_), server_(asio::ip::make_address("127.0.0.1"), port) {
+        socket_.open(asio::ip::udp::v4());
+        socket_.bind({asio::ip::make_address("127.0.0.1"), 0});
+    }
+
+    void send(std::span<const std::uint8_t> bytes) {
+        socket_.send_to(asio::buffer(bytes.data(), bytes.size()), server_);
+    }
+
+    /// The next datagram from the server within `timeout`, or nothing.
+    std::optional<std::vector<std::uint8_t>>
+    receive(std::chrono::milliseconds timeout = std::chrono::milliseconds(1000)) {
+        const auto until = std::chrono::steady_clock::now() + timeout;
+        std::array<std::uint8_t, 2048> buffer{};
+        socket_.non_blocking(true);
+        while (std::chrono::steady_clock::now() < until) {
+            boost::system::error_code ec;
+            asio::ip::udp::endpoint from;
+            const std::size_t n = socket_.receive_from(asio::buffer(buffer), from, 0, ec);
+            if (!ec) {
+                return std::vector<std::uint8_t>(buffer.begin(), buffer.begin() + n);
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        }
+        return std::nullopt;
+    }
+
+    /// The next datagram of `kind` within `timeout` (others are skipped).
+    std::optional<std::vector<std::uint8_t>> receive_kind(DatagramKind kind,
+                                                          std::chrono::milliseconds timeout) {
+        const auto until = std::chrono::steady_clock::now() + timeout;
+        while (std::chrono::steady_clock::now() < until) {
+            auto d = receive(std::chrono::duration_cast<std::chrono::milliseconds>(
+                until - std::chrono::steady_clock::now()));
+            protocol::DatagramHeader h;
+            std::span<const std::uint8_t> body;
+            if (d && protocol::read_datagram(*d, h, body) == protocol::DatagramError::none &&
+                h.kind == kind) {
+                return d;
+            }
+        }
+        return std::nullopt;
+    }
+
+    /// Request, challenge, response, accepted: returns the session id (0 on failure).
+    std::uint64_t handshake(std::uint64_t nonce) {
+        pb::Envelope hello;
+        hello.mutable_client_hello()->set_protocol_version(protocol::kProtocolVersion);
+        hello.mutable_client_hello()->set_name("raw-udp");
+        std::vector<std::uint8_t> request;
+        EXPECT_TRUE(protocol::write_request(nonce, hello, request));
+        send(request);
+        const auto challenge = receive_kind(DatagramKind::challenge, std::chrono::seconds(2));
+        if (!challenge) {
+            return 0;
+        }
+        challenge_bytes = challenge->size();
+        protocol::DatagramHeader h;
+        std::span<const std::uint8_t> cookie;
+        EXPECT_EQ(protocol::read_datagram(*challenge, h, cookie), protocol::DatagramError::none);
+        std::vector<std::uint8_t> response;
+        EXPECT_TRUE(protocol::write_response(nonce, cookie, hello, response));
+        send(response);
+        const auto accepted = receive_kind(DatagramKind::accepted, std::chrono::seconds(2));
+        if (!accepted) {
+            return 0;
+        }
+        std::span<const std::uint8_t> body;
+        EXPECT_EQ(protocol::read_datagram(*accepted, h, body), protocol::DatagramError::none);
+        std::uint64_t session = 0;
+        std::span<const std::uint8_t> envelope;
+        EXPECT_EQ(protocol::read_accepted_body(body, session, envelope),
+                  protocol::DatagramError::none);
+        pb::Envelope reply;
+        EXPECT_EQ(protocol::decode_payload(envelope, reply), protocol::DecodeError::none);
+        EXPECT_TRUE(reply.has_server_hello());
+        return session;
+    }
+
+    std::size_t challenge_bytes = 0;
+
+private:
+    asio::io_context io_;
+    asio::ip::udp::socket socket_;
+    asio::ip::udp::endpoint server_;
+};
+
+std::vector<std::uint8_t> input_datagram(std::uint64_t session, std::uint32_t sequence) {
+    pb::ClientInput input;
+    input.set_tick(sequence);
+    input.set_move_x(1.0f);
+    std::vector<std::uint8_t> out;
+    EXPECT_TRUE(protocol::write_input({DatagramKind::input, session, sequence}, 0,
+                                      std::span(&input, 1), out));
+    return out;
+}
+
+simclient::LoadConfig udp_load(const testing::RunningServer& server, int clients,
+                               double duration_s) {
+    simclient::LoadConfig lc = testing::load_config(server, clients, duration_s, 0.2);
+    lc.transport = simclient::LoadConfig::Transport::udp;
+    lc.audit_every_ticks = 5;
+    return lc;
+}
+
+std::uint64_t drops(const testing::RunningServer& server, UdpDrop reason) {
+    return server.udp_endpoint()->drops()[static_cast<std::size_t>(reason)];
+}
+
+server::ServerConfig udp_config() {
+    server::ServerConfig c;
+    c.bots = 30;
+    return c;
+}
+
+TEST(UdpTransport, ClientsGetSnapshotsAuditsAndTheirOwnEntity) {
+    testing::RunningServer server(udp_config());
+    const simclient::LoadReport report = testing::run_load(udp_load(server, 6, 3.0));
+    // A UDP client's goodbye is one datagram, not the end of a stream the client waits
+    // to see closed: give the server a moment to read them before it shuts down.
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    server.stop();
+    EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
+    EXPECT_EQ(report.connected, 6);
+    EXPECT_GE(report.snapshots, 6u * 70u); // ~2.8 s at 30 Hz each
+    EXPECT_GT(report.audited_poses, 0u);
+    EXPECT_LE(report.max_audit_error, 0.5 + 1e-3);
+    EXPECT_LT(report.snapshot_interarrival_ms.p99, 100.0);
+    EXPECT_EQ(server.stats().disconnects.at("client_quit"), 6u);
+    EXPECT_GT(server.stats().snapshots_sent, 0u);
+    for (std::size_t r = 0; r < server::kUdpDropReasons; ++r) {
+        // Each client says goodbye twice (nothing acknowledges it): the second one finds
+        // its session closed.
+        const std::uint64_t expected = static_cast<UdpDrop>(r) == UdpDrop::closed_session ? 6 : 0;
+        EXPECT_EQ(server.udp_endpoint()->drops()[r], expected)
+            << server::udp_drop_name(static_cast<UdpDrop>(r));
+    }
+}
+
+TEST(UdpTransport, UnderLossTheReplicaStaysWithinAQuantumAndNothingIsStale) {
+    testing::RunningServer server(udp_config());
+    simclient::LoadConfig lc = udp_load(server, 4, 3.0);
+    lc.udp_loss = 0.2; // each way
+    const simclient::LoadReport report = testing::run_load(lc);
+    server.stop();
+    // Every snapshot that arrived applied against a frame the client held (no
+    // baseline_missing, no stale or unknown entity), and every audit was within half a
+    // quantum: loss costs snapshots, never correctness.
+    EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
+    EXPECT_GT(report.audited_poses, 0u);
+    EXPECT_LT(report.snapshots, server.stats().snapshots_sent); // some were lost
+    EXPECT_GT(report.snapshots, server.stats().snapshots_sent / 3);
+}
+
+TEST(UdpTransport, HostileDatagramsAreDroppedByReasonWhileClientsKeepTheirSnapshots) {
+    testing::RunningServer server(udp_config());
+    const simclient::LoadConfig lc = udp_load(server, 4, 2.5);
+    asio::io_context io;
+    simclient::LoadRun run(io, lc);
+    run.start();
+    std::thread good_clients([&] { io.run(); });
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+
+    RawUdp raw(server.port());
+    const std::vector<std::uint8_t> garbage(40, 0xff);
+    raw.send(garbage);                                     // not_dsoc
+    raw.send(std::vector<std::uint8_t>{0x44, 0x53, 0x4f}); // truncated
+    raw.send(std::vector<std::uint8_t>(1300, 0));          // oversized
+    std::vector<std::uint8_t> header;
+    protocol::begin_datagram({DatagramKind::message, 5, 1}, header);
+    auto wrong_version = header;
+    wrong_version[4] = 9;
+    raw.send(wrong_version); // wrong_version
+    auto unknown_kind = header;
+    unknown_kind[5] = 77;
+    raw.send(unknown_kind); // unknown_kind
+    protocol::begin_datagram({DatagramKind::snapshot, 5, 1}, header);
+    raw.send(header);                   // unexpected_kind: only servers send snapshots
+    raw.send(input_datagram(12345, 1)); // unknown_session
+    // A response with a cookie this server never made.
+    pb::Envelope hello;
+    hello.mutable_client_hello()->set_protocol_version(protocol::kProtocolVersion);
+    std::vector<std::uint8_t> forged;
+    ASSERT_TRUE(protocol::write_response(77, protocol::ChallengeCookie{}, hello, forged));
+    raw.send(forged); // forged_cookie
+    // A request cut short of the full size: never answered (no amplification).
+    std::vector<std::uint8_t> request;
+    ASSERT_TRUE(protocol::write_request(78, hello, request));
+    request.resize(200);
+    raw.send(request); // truncated
+    EXPECT_FALSE(raw.receive(std::chrono::milliseconds(200)).has_value())
+        << "nothing above is ever answered";
+
+    // A real session, then its datagrams from elsewhere and replayed.
+    const std::uint64_t session = raw.handshake(79);
+    ASSERT_NE(session, 0u);
+    EXPECT_LT(raw.challenge_bytes, protocol::kMaxDatagramBytes) << "amplification";
+    raw.send(input_datagram(session, 1));
+    raw.send(input_datagram(session, 1)); // replayed
+    RawUdp elsewhere(server.port());
+    elsewhere.send(input_datagram(session, 2)); // wrong_source
+    // The raw session keeps receiving snapshots of its own.
+    EXPECT_TRUE(raw.receive_kind(DatagramKind::snapshot, std::chrono::seconds(1)).has_value());
+
+    good_clients.join();
+    server.stop();
+    const auto report = run.report();
+    EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
+    EXPECT_LT(report.snapshot_interarrival_ms.p99, 100.0) << simclient::format_summary(report);
+    for (const auto& client : run.clients()) {
+        EXPECT_GE(client->stats().snapshots, 55u); // ~2.3 s at 30 Hz = 69
+    }
+    EXPECT_EQ(drops(server, UdpDrop::not_dsoc), 1u);
+    EXPECT_EQ(drops(server, UdpDrop::truncated), 2u);
+    EXPECT_EQ(drops(server, UdpDrop::oversized), 1u);
+    EXPECT_EQ(drops(server, UdpDrop::wrong_version), 1u);
+    EXPECT_EQ(drops(server, UdpDrop::unknown_kind), 1u);
+    EXPECT_EQ(drops(server, UdpDrop::unexpected_kind), 1u);
+    EXPECT_EQ(drops(server, UdpDrop::unknown_session), 1u);
+    EXPECT_EQ(drops(server, UdpDrop::forged_cookie), 1u);
+    EXPECT_EQ(drops(server, UdpDrop::replayed), 1u);
+    EXPECT_EQ(drops(server, UdpDrop::wrong_source), 1u);
+    EXPECT_EQ(drops(server, UdpDrop::rate_limited), 0u);
+}
+
+TEST(UdpTransport, ASilentClientIsTimedOutWithAReason) {
+    auto c = udp_config();
+    c.udp_timeout_ms = 600;
+    testing::RunningServer server(c);
+    RawUdp raw(server.port());
+    const std::uint64_t session = raw.handshake(80);
+    ASSERT_NE(session, 0u);
+    const auto start = std::chrono::steady_clock::now();
+    std::optional<pb::Disconnect> disconnect;
+    while (!disconnect && std::chrono::steady_clock::now() - start < std::chrono::seconds(3)) {
+        const auto d = raw.receive_kind(DatagramKind::message, std::chrono::milliseconds(500));
+        protocol::DatagramHeader h;
+        std::span<const std::uint8_t> body;
+        pb::Envelope message;
+        if (d && protocol::read_datagram(*d, h, body) == protocol::DatagramError::none &&
+            protocol::decode_payload(body, message) == protocol::DecodeError::none &&
+            message.has_disconnect()) {
+            disconnect = message.disconnect();
+        }
+    }
+    server.stop();
+    ASSERT_TRUE(disconnect.has_value());
+    EXPECT_EQ(disconnect->reason(), pb::DISCONNECT_REASON_TIMED_OUT) << disconnect->text();
+    EXPECT_EQ(server.stats().disconnects.at("timed_out"), 1u);
+}
+
+TEST(UdpTransport, HandshakesBeyondASourcesRateAreDroppedUnanswered) {
+    auto c = udp_config();
+    c.udp_handshake_rate = 3;
+    testing::RunningServer server(c);
+    RawUdp raw(server.port());
+    pb::Envelope hello;
+    hello.mutable_client_hello()->set_protocol_version(protocol::kProtocolVersion);
+    std::vector<std::uint8_t> request;
+    ASSERT_TRUE(protocol::write_request(81, hello, request));
+    for (int i = 0; i < 10; ++i) {
+        raw.send(request);
+    }
+    int challenges = 0;
+    while (raw.receive_kind(DatagramKind::challenge, std::chrono::milliseconds(300))) {
+        ++challenges;
+    }
+    server.stop();
+    // A burst of one second's worth (3) is answered; the refill in the few milliseconds
+    // the burst takes is well under one more.
+    EXPECT_EQ(challenges, 3);
+    EXPECT_EQ(drops(server, UdpDrop::rate_limited), 7u);
+}
+
+} // namespace
+} // namespace dsoc
