@@ -50,16 +50,21 @@ QuantizedPose predict(const FrameEntity& base, std::uint64_t ticks, std::uint32_
 void set_motion(FrameEntity& e, const QuantizedPose& from, std::uint64_t ticks,
                 std::uint32_t angle_steps) {
     const auto t = static_cast<std::int64_t>(ticks);
+    // Acknowledged every tick (t = 1, motion_ticks = 1) is the common case: its divisions
+    // by 1 and 2 are exact, so it skips them (the same results, without a division by a
+    // number only known at run time, for every entity of every snapshot at both ends).
     const auto per_tick = [t](std::int64_t change) {
-        return clamp_coordinate(divide_rounded(change * kVelocityScale, t));
+        return clamp_coordinate(t == 1 ? change * kVelocityScale
+                                       : divide_rounded(change * kVelocityScale, t));
     };
     const std::int32_t vz = per_tick(static_cast<std::int64_t>(e.pose.z) - from.z);
     // The old and the new mean z velocity stand (t + motion_ticks) / 2 ticks apart.
+    const std::int64_t twice_change = (static_cast<std::int64_t>(vz) - e.velocity[2]) * 2;
+    const std::int64_t apart = t + e.motion_ticks;
     e.fall_rate =
         e.motion_ticks == 0
             ? 0
-            : clamp_coordinate(divide_rounded((static_cast<std::int64_t>(vz) - e.velocity[2]) * 2,
-                                              t + e.motion_ticks));
+            : clamp_coordinate(apart == 2 ? twice_change / 2 : divide_rounded(twice_change, apart));
     e.velocity = {per_tick(static_cast<std::int64_t>(e.pose.x) - from.x),
                   per_tick(static_cast<std::int64_t>(e.pose.y) - from.y), vz};
     e.turn_rate =
@@ -120,20 +125,21 @@ void AckedSnapshotEncoder::add(std::uint32_t id, const QuantizedPose& pose, std:
     leave_baseline_below(id, out);
     const bool carried =
         base_ != nullptr && base_at_ < base_->entities.size() && base_->entities[base_at_].id == id;
+    // Each entity is written once, in place: a frame is rewritten for every client every
+    // tick, so its copies are most of the encoder's cost.
     if (!carried) {
-        FrameEntity n;
+        FrameEntity& n = next_.entities.emplace_back();
         n.pose = pose;
         n.id = id;
         n.kind = kind;
         n.half_extents = write_enter(id, pose, tier, half_extents, kind, settings_, out);
         n.tier = tier;
         n.enter_tier = tier;
-        next_.entities.push_back(n);
         ++counts_.enters;
         return;
     }
-    const FrameEntity& b = base_->entities[base_at_++];
-    FrameEntity n = b;
+    const FrameEntity& b = base_->entities[base_at_++]; // in the ring, not in next_
+    FrameEntity& n = next_.entities.emplace_back(b);
     const std::uint32_t steps = settings_.angle_steps;
     const QuantizedPose predicted = predict(b, ticks_since_base_, steps);
     const std::int64_t rx = static_cast<std::int64_t>(pose.x) - predicted.x;
@@ -175,7 +181,6 @@ void AckedSnapshotEncoder::add(std::uint32_t id, const QuantizedPose& pose, std:
         set_motion(n, b.pose, ticks_since_base_, steps);
     }
     counts_.moved += same_position(n.pose, b.pose) ? 0 : 1;
-    next_.entities.push_back(n);
 }
 
 AckedSnapshotCounts AckedSnapshotEncoder::finish(pb::Snapshot& out) {
@@ -350,12 +355,13 @@ std::vector<SnapshotProblem> AckedSnapshotDecoder::apply(const pb::Snapshot& s) 
             continue;
         }
         entry_at += entry != nullptr ? 1 : 0;
-        FrameEntity n;
+        // In place (next_ is rebuilt from scratch by every apply(), so a rejected
+        // snapshot leaves nothing behind that matters).
+        FrameEntity& n = next_.entities.emplace_back();
         if (auto problem = carry(b, entry, s, tick, ticks, settings_.angle_steps, n)) {
             problems.push_back(std::move(*problem));
             return problems;
         }
-        next_.entities.push_back(n);
     }
     take_enters_below(std::uint64_t{1} << 32);
     if (leave_at < leaves.size()) {

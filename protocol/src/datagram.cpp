@@ -333,6 +333,9 @@ bool ReplayWindow::accept(std::uint32_t sequence) {
     }
     if (sequence > newest_) {
         const std::uint32_t shift = sequence - newest_;
+        if (newest_ != 0 && shift > kMaxSequenceJump) {
+            return false;
+        }
         seen_ = shift >= 64 ? 0 : seen_ << shift;
         seen_ |= 1;
         newest_ = sequence;

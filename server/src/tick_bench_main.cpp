@@ -19,10 +19,12 @@
 #include "dsoc/maps/map_source.hpp"
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/compact_snapshot.hpp"
+#include "dsoc/protocol/datagram.hpp"
 #include "dsoc/server/client_tick.hpp"
 #include "dsoc/server/interest_setup.hpp"
 #include "dsoc/server/replication_state.hpp"
 #include "dsoc/server/server_config.hpp"
+#include "dsoc/server/udp_connection.hpp"
 
 #include "program_options.hpp"
 
@@ -73,6 +75,7 @@ struct Player {
     std::vector<std::uint8_t> frame;
     protocol::UpdateColumns columns;   // the update entries in wire form, as the server keeps them
     protocol::SnapshotDecoder decoder; // the client's side
+    protocol::AckedSnapshotDecoder acked_decoder; // the client's side over UDP
     float heading_deg = 0.0f;
     int ticks_until_turn = 0;
 };
@@ -105,6 +108,7 @@ int main(int argc, char** argv) {
     int players = 500;
     int ticks = 90;
     int warm_up = 30;
+    bool udp = false;
     CLI::App app{"dsoc-tick-bench: CPU per server tick for N players, by phase, no sockets"};
     cli::set_up(app, "dsoc-tick-bench");
     server::add_world_options(app, config);
@@ -118,6 +122,10 @@ int main(int argc, char** argv) {
     app.add_option("--warm-up", warm_up, "Ticks run before measuring (players join over them)")
         ->capture_default_str()
         ->check(CLI::Range(1, 1000000));
+    app.add_option("--udp", udp,
+                   "Snapshots as over UDP: acknowledged deltas, each client acknowledging every "
+                   "snapshot before the next tick (a LAN), split into datagrams (true/false)")
+        ->capture_default_str();
     if (const auto stop = cli::parse(app, argc, argv)) {
         return *stop;
     }
@@ -147,6 +155,8 @@ int main(int argc, char** argv) {
     std::uint64_t updates = 0;
     std::uint64_t bytes = 0;
     std::uint64_t decode_problems = 0;
+    std::uint64_t fragments = 0;                  // datagrams (--udp)
+    std::vector<std::uint8_t> datagrams;          // one snapshot's (--udp)
     protocol::EnvelopeArena incoming(256 * 1024); // as the simulated clients decode
     for (int t = 1; t <= warm_up + ticks; ++t) {
         const auto tick = static_cast<std::uint64_t>(t);
@@ -164,8 +174,9 @@ int main(int argc, char** argv) {
             auto c = std::make_unique<Player>();
             c->client_id = static_cast<std::uint32_t>(clients.size() + 1);
             c->entity_id = world.spawn_player();
-            c->replication = server::ReplicationState(server::quantization(config));
+            c->replication = server::ReplicationState(server::quantization(config), udp);
             c->decoder.set_settings(server::quantization(config));
+            c->acked_decoder = protocol::AckedSnapshotDecoder(server::quantization(config));
             policy->add_viewer(c->client_id, c->entity_id);
             clients.push_back(std::move(c));
         }
@@ -197,6 +208,32 @@ int main(int argc, char** argv) {
             heard += measured ? heard_now : 0;
             lap(p.hearing);
             server::add_own_entity(c->interest, c->entity_id);
+            if (udp) {
+                c->replication.build_acked_snapshot(world, c->interest, tick,
+                                                    c->acked_decoder.newest_tick(), false,
+                                                    *c->envelope.mutable_snapshot(), &poses);
+                lap(p.snapshot);
+                // As the server: the frame on the pool, its datagrams in write_now().
+                server::snapshot_frame(tick, c->envelope, c->frame);
+                datagrams.clear();
+                const std::size_t count = protocol::write_snapshot_datagrams(
+                    1, 1, tick, std::span(c->frame).subspan(8), datagrams);
+                lap(p.encode);
+                const protocol::pb::Envelope* received = nullptr;
+                if (count == 0 || incoming.decode(std::span(c->frame).subspan(8), received) !=
+                                      protocol::DecodeError::none) {
+                    ++decode_problems;
+                } else {
+                    decode_problems += c->acked_decoder.apply(received->snapshot()).size();
+                }
+                lap(p.decode);
+                if (measured) {
+                    updates += c->replication.last_updates();
+                    bytes += datagrams.size() - 2 * count; // without the length prefixes
+                    fragments += count;
+                }
+                continue;
+            }
             c->replication.build_snapshot(world, c->interest, tick, false,
                                           *c->envelope.mutable_snapshot(), &poses, &c->columns);
             lap(p.snapshot);
@@ -227,9 +264,10 @@ int main(int argc, char** argv) {
                              n;
     const double client_tick = static_cast<double>(clients.size()) * n;
     fmt::print("dsoc-tick-bench: map {} policy {} bots {} players {} tick rate {} Hz, {} ticks "
-               "measured after {}\n",
+               "measured after {}, snapshots {}\n",
                map->name, dsoc::interest::name_of(config.policy), config.bots, clients.size(),
-               config.tick_rate, ticks, warm_up);
+               config.tick_rate, ticks, warm_up,
+               udp ? "acknowledged deltas in datagrams (--udp)" : "compact, TCP frames");
     fmt::print("  server CPU per tick  {:8.2f} ms (one thread; budget {:.1f} ms per core)\n",
                server_ms, 1000.0 / config.tick_rate);
     const auto row = [&](const char* name, double ms) {
@@ -255,5 +293,9 @@ int main(int argc, char** argv) {
                100.0 * hearing_us / select_us, select_us);
     fmt::print("  checksum             {} entity updates, {} bytes, {} decode problems\n", updates,
                bytes, decode_problems);
+    if (udp) {
+        fmt::print("  datagrams            {:.3f} per snapshot\n",
+                   static_cast<double>(fragments) / client_tick);
+    }
     return decode_problems == 0 ? cli::exit_ok : cli::exit_failure;
 }

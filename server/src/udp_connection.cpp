@@ -93,7 +93,8 @@ void UdpConnection::send_snapshot_frame(std::vector<std::uint8_t>& frame) {
 }
 
 std::size_t UdpConnection::write_now(std::span<const std::uint8_t> frame) noexcept {
-    if (frame.size() <= kTickBytes) {
+    last_write_whole_ = false;
+    if (frame.size() <= kTickBytes || next_sequence_ > kLastSequence) {
         return 0;
     }
     const std::uint64_t tick = get_u64(frame.data());
@@ -101,13 +102,13 @@ std::size_t UdpConnection::write_now(std::span<const std::uint8_t> frame) noexce
     const std::size_t count = protocol::write_snapshot_datagrams(
         session_, next_sequence_, tick, frame.subspan(kTickBytes), packed_);
     if (count == 0) {
-        ++datagrams_refused_;
-        return 0; // larger than kMaxSnapshotBytes: dropped
+        oversized_ = true; // warned on the io thread (finish_write_now)
+        return 0;
     }
     next_sequence_ += static_cast<std::uint32_t>(count);
-    newest_snapshot_tick_ = tick;
     const boost::asio::ip::udp::endpoint& to = peer_;
     std::size_t sent = 0;
+    std::size_t refused = 0;
     for (std::size_t at = 0; at + 2 <= packed_.size();) {
         const std::size_t size = packed_[at] | (static_cast<std::size_t>(packed_[at + 1]) << 8);
         const ssize_t n =
@@ -116,17 +117,36 @@ std::size_t UdpConnection::write_now(std::span<const std::uint8_t> frame) noexce
         if (n > 0) {
             sent += static_cast<std::size_t>(n);
         } else {
-            ++datagrams_refused_;
+            ++refused;
         }
         at += 2 + size;
+    }
+    datagrams_refused_ += refused;
+    if (refused == 0 && tick > newest_snapshot_tick_) {
+        const std::uint64_t shift = tick - newest_snapshot_tick_;
+        sent_ticks_ = (shift >= 64 ? 0 : sent_ticks_ << shift) | 1;
+        newest_snapshot_tick_ = tick;
+        last_write_whole_ = true;
     }
     return sent;
 }
 
 bool UdpConnection::finish_write_now(std::vector<std::uint8_t>& frame, std::size_t written) {
     bytes_sent_ += written;
-    snapshots_dropped_ += written == 0 ? 1 : 0;
+    snapshots_dropped_ += last_write_whole_ ? 0 : 1;
+    if (oversized_ && !warned_oversized_) {
+        warned_oversized_ = true;
+        spdlog::warn("client {} ({}): a snapshot of {} bytes is larger than {} datagrams carry "
+                     "({} bytes); such snapshots are dropped",
+                     client_id_, remote_, frame.size() - kTickBytes,
+                     protocol::kMaxSnapshotFragments, protocol::kMaxSnapshotBytes);
+    }
+    oversized_ = false;
     frame.clear();
+    if (next_sequence_ > kLastSequence && state_ == State::active) {
+        disconnect(protocol::pb::DISCONNECT_REASON_PROTOCOL_ERROR,
+                   "the session has used its sequence numbers; reconnect");
+    }
     return false;
 }
 
@@ -174,10 +194,14 @@ bool UdpConnection::receive(DatagramKind kind, std::span<const std::uint8_t> bod
     if (protocol::read_input_body(body, inputs) != protocol::DatagramError::none) {
         return false;
     }
-    // Only an acknowledgement of a snapshot really sent counts: a forged one newer than
-    // that would make the server code against a frame the client does not hold.
-    if (inputs.ack != 0 && inputs.ack <= newest_snapshot_tick_ &&
-        (!acked_ || inputs.ack > *acked_)) {
+    // The rate cap counts datagrams (an honest client sends one a tick), whatever they
+    // hold: redundant inputs already taken and bodies that do not parse cost a token too.
+    if (!admit_message()) {
+        return true;
+    }
+    // Only an acknowledgement of a snapshot the kernel took whole counts: another one
+    // would make the server code against a frame the client does not hold.
+    if (acked_by_client(inputs.ack) && (!acked_ || inputs.ack > *acked_)) {
         acked_ = inputs.ack;
     }
     thread_local pb::ClientInput input;
@@ -192,9 +216,6 @@ bool UdpConnection::receive(DatagramKind kind, std::span<const std::uint8_t> bod
         if (input.tick() <= newest_input_) {
             continue; // sent again for redundancy, already taken
         }
-        if (!admit_message()) { // the rate cap counts inputs, not datagrams
-            return true;
-        }
         newest_input_ = input.tick();
         if (!deliver_input(input)) {
             return true;
@@ -203,7 +224,15 @@ bool UdpConnection::receive(DatagramKind kind, std::span<const std::uint8_t> bod
     return parsed_all;
 }
 
+bool UdpConnection::acked_by_client(std::uint64_t ack) const {
+    return ack != 0 && ack <= newest_snapshot_tick_ && newest_snapshot_tick_ - ack < 64 &&
+           ((sent_ticks_ >> (newest_snapshot_tick_ - ack)) & 1) != 0;
+}
+
 bool UdpConnection::handle_message(std::span<const std::uint8_t> body) {
+    if (!admit_message()) {
+        return true;
+    }
     thread_local protocol::EnvelopeArena incoming(kIncomingArenaBytes);
     const pb::Envelope* message = nullptr;
     if (incoming.decode(body, message) != protocol::DecodeError::none) {
@@ -211,9 +240,7 @@ bool UdpConnection::handle_message(std::span<const std::uint8_t> body) {
     }
     switch (message->body_case()) {
     case pb::Envelope::kPing:
-        if (admit_message()) {
-            send(pong_for(message->ping()));
-        }
+        send(pong_for(message->ping()));
         return true;
     case pb::Envelope::kDisconnect:
         close_reason_ = pb::DISCONNECT_REASON_CLIENT_QUIT;

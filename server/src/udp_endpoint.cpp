@@ -15,22 +15,42 @@ using protocol::DatagramKind;
 
 namespace {
 
-/// Source addresses whose handshake budget is remembered at most; beyond it the full
-/// budgets are forgotten first (a flood from many spoofed addresses costs bounded memory).
+/// Sources whose handshake budget is remembered at most (a flood from many spoofed
+/// addresses costs bounded memory); while all are spending, new sources are refused
+/// until a sweep forgets the budgets that are full again.
 constexpr std::size_t kMaxBudgets = 65536;
 /// How long a challenge cookie is good for. [Units: ms]
 constexpr std::uint64_t kCookieLifetimeMs = 10'000;
-/// How long a closed session's id is remembered (closed_session).
-constexpr auto kRememberClosed = std::chrono::seconds(10);
+/// How long a closed session's id and nonce are remembered (closed_session): at least a
+/// cookie's life, so that no response of a closed session can open a new one.
+constexpr auto kRememberClosed = std::chrono::milliseconds(kCookieLifetimeMs + 1000);
 /// How often silent connections and closed sessions past kRememberClosed are looked for.
 constexpr auto kSweepPeriod = std::chrono::milliseconds(250);
 /// Kernel buffers of the UDP socket: one socket carries every client's snapshots.
 constexpr int kSocketBufferBytes = 8 * 1024 * 1024;
 
-std::uint64_t unix_now_ms() {
+/// The cookies' clock: milliseconds of the steady clock (the key lives as long as the
+/// process, so wall time adds nothing, and a step of the wall clock must not expire or
+/// stretch cookies in flight).
+std::uint64_t cookie_now_ms() {
     return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::milliseconds>(
-                                          std::chrono::system_clock::now().time_since_epoch())
+                                          std::chrono::steady_clock::now().time_since_epoch())
                                           .count());
+}
+
+/// Whose handshake budget a source spends: an IPv4 address, or an IPv6 /64 (one host
+/// holds a whole /64; keyed by the /128 it could spend as many budgets as it likes).
+std::uint64_t budget_key(const asio::ip::udp::endpoint& peer) {
+    const asio::ip::address a = peer.address();
+    if (a.is_v4()) {
+        return a.to_v4().to_uint();
+    }
+    const auto bytes = a.to_v6().to_bytes();
+    std::uint64_t key = 0;
+    for (std::size_t i = 0; i < 8; ++i) {
+        key = (key << 8) | bytes[i];
+    }
+    return key | (std::uint64_t{1} << 63) | (std::uint64_t{1} << 32); // never an IPv4 key
 }
 
 } // namespace
@@ -81,6 +101,7 @@ void UdpEndpoint::forget(const UdpConnection& connection) {
     by_session_.erase(connection.session());
     session_of_nonce_.erase(connection.nonce());
     recently_closed_[connection.session()] = Clock::now();
+    closed_nonces_[connection.nonce()] = Clock::now();
 }
 
 void UdpEndpoint::receive_next() {
@@ -147,24 +168,17 @@ void UdpEndpoint::on_datagram(std::size_t bytes) {
 
 bool UdpEndpoint::within_handshake_budget(Clock::time_point now) {
     const auto rate = static_cast<double>(config_.udp_handshake_rate); // and the burst
-    if (budgets_.size() >= kMaxBudgets) {
-        std::erase_if(budgets_, [&](const auto& entry) {
-            const double refill =
-                std::chrono::duration<double>(now - entry.second.refilled).count() * rate;
-            return entry.second.tokens + refill >= rate;
-        });
+    const std::uint64_t key = budget_key(sender_);
+    auto it = budgets_.find(key);
+    if (it == budgets_.end()) {
         if (budgets_.size() >= kMaxBudgets) {
-            return false; // every remembered address is spending: refuse newcomers for now
+            return false; // every remembered source is spending: none new until a sweep
         }
+        it = budgets_.emplace(key, Budget{rate, now}).first;
     }
-    const auto [it, fresh] = budgets_.try_emplace(sender_.address().to_string());
     Budget& b = it->second;
-    if (fresh) {
-        b.tokens = rate;
-    } else {
-        b.tokens = std::min(
-            rate, b.tokens + std::chrono::duration<double>(now - b.refilled).count() * rate);
-    }
+    b.tokens =
+        std::min(rate, b.tokens + std::chrono::duration<double>(now - b.refilled).count() * rate);
     b.refilled = now;
     if (b.tokens < 1) {
         return false;
@@ -173,16 +187,12 @@ bool UdpEndpoint::within_handshake_budget(Clock::time_point now) {
     return true;
 }
 
-bool UdpEndpoint::admit_handshake(DatagramKind kind, std::span<const std::uint8_t> body,
-                                  std::span<const std::uint8_t>& cookie,
-                                  std::span<const std::uint8_t>& hello) {
+bool UdpEndpoint::read_handshake(DatagramKind kind, std::span<const std::uint8_t> body,
+                                 std::span<const std::uint8_t>& cookie,
+                                 std::span<const std::uint8_t>& hello) {
     if (const auto error = protocol::read_hello_body(kind, body, cookie, hello);
         error != protocol::DatagramError::none) {
         drop(udp_drop_of(error));
-        return false;
-    }
-    if (!within_handshake_budget(Clock::now())) {
-        drop(UdpDrop::rate_limited);
         return false;
     }
     return true;
@@ -191,11 +201,15 @@ bool UdpEndpoint::admit_handshake(DatagramKind kind, std::span<const std::uint8_
 void UdpEndpoint::on_request(std::uint64_t nonce, std::span<const std::uint8_t> body) {
     std::span<const std::uint8_t> cookie;
     std::span<const std::uint8_t> hello;
-    if (!admit_handshake(DatagramKind::request, body, cookie, hello)) {
+    if (!read_handshake(DatagramKind::request, body, cookie, hello)) {
         return;
     }
-    const protocol::ChallengeCookie made =
-        protocol::make_challenge_cookie(cookie_key_, source_address(sender_), nonce, unix_now_ms());
+    if (!within_handshake_budget(Clock::now())) {
+        drop(UdpDrop::rate_limited);
+        return;
+    }
+    const protocol::ChallengeCookie made = protocol::make_challenge_cookie(
+        cookie_key_, source_address(sender_), nonce, cookie_now_ms());
     if (protocol::write_envelope_datagram({DatagramKind::challenge, nonce, 0}, made, nullptr,
                                           reply_)) {
         ++challenges_;
@@ -206,11 +220,13 @@ void UdpEndpoint::on_request(std::uint64_t nonce, std::span<const std::uint8_t> 
 void UdpEndpoint::on_response(std::uint64_t nonce, std::span<const std::uint8_t> body) {
     std::span<const std::uint8_t> cookie;
     std::span<const std::uint8_t> hello_bytes;
-    if (!admit_handshake(DatagramKind::response, body, cookie, hello_bytes)) {
+    if (!read_handshake(DatagramKind::response, body, cookie, hello_bytes)) {
         return;
     }
+    // The cookie first: a response only a spoofer could send (one without the cookie its
+    // address was given) must not spend that address's budget.
     switch (protocol::check_challenge_cookie(cookie_key_, cookie, source_address(sender_), nonce,
-                                             unix_now_ms(), kCookieLifetimeMs)) {
+                                             cookie_now_ms(), kCookieLifetimeMs)) {
     case protocol::CookieStatus::valid:
         break;
     case protocol::CookieStatus::forged:
@@ -221,6 +237,14 @@ void UdpEndpoint::on_response(std::uint64_t nonce, std::span<const std::uint8_t>
         return;
     }
     // The address is proven from here on.
+    if (!within_handshake_budget(Clock::now())) {
+        drop(UdpDrop::rate_limited);
+        return;
+    }
+    if (closed_nonces_.contains(nonce)) {
+        drop(UdpDrop::closed_session); // a late or replayed response of a session now closed
+        return;
+    }
     if (const auto known = session_of_nonce_.find(nonce); known != session_of_nonce_.end()) {
         const auto it = by_session_.find(known->second);
         if (it != by_session_.end() && it->second->peer() == sender_) {
@@ -265,6 +289,15 @@ void UdpEndpoint::sweep() {
     }
     std::erase_if(recently_closed_,
                   [&](const auto& entry) { return now - entry.second > kRememberClosed; });
+    std::erase_if(closed_nonces_,
+                  [&](const auto& entry) { return now - entry.second > kRememberClosed; });
+    // Budgets back at their full burst are forgotten (a new one starts full anyway).
+    const auto rate = static_cast<double>(config_.udp_handshake_rate);
+    std::erase_if(budgets_, [&](const auto& entry) {
+        return entry.second.tokens +
+                   std::chrono::duration<double>(now - entry.second.refilled).count() * rate >=
+               rate;
+    });
     sweep_timer_.expires_after(kSweepPeriod);
     sweep_timer_.async_wait([this](const boost::system::error_code& ec) {
         if (!ec) {

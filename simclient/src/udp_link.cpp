@@ -22,7 +22,7 @@ UdpLink::UdpLink(asio::io_context& io, Handlers handlers, double loss, std::uint
 
 bool UdpLink::connect(const asio::ip::udp::endpoint& server, const pb::Envelope& hello,
                       std::shared_ptr<void> owner, std::string& error) {
-    owner_ = std::move(owner);
+    owner_ = owner;
     server_ = server;
     nonce_ = protocol::random_nonzero_u64();
     boost::system::error_code ec;
@@ -48,8 +48,12 @@ bool UdpLink::connect(const asio::ip::udp::endpoint& server, const pb::Envelope&
 }
 
 void UdpLink::retry_handshake() {
+    auto keep = owner_.lock();
+    if (!keep) {
+        return;
+    }
     retry_timer_.expires_after(kHandshakeRetry);
-    retry_timer_.async_wait([this, keep = owner_](const boost::system::error_code& ec) {
+    retry_timer_.async_wait([this, keep](const boost::system::error_code& ec) {
         if (ec || closed_ || session_ != 0) {
             return;
         }
@@ -90,7 +94,6 @@ void UdpLink::close() {
     retry_timer_.cancel();
     boost::system::error_code ec;
     socket_.close(ec);
-    owner_.reset();
 }
 
 bool UdpLink::lose() {

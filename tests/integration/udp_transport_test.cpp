@@ -6,7 +6,9 @@
 
 #include "server_fixture.hpp"
 
+#include "dsoc/protocol/challenge_cookie.hpp"
 #include "dsoc/protocol/codec.hpp"
+#include "dsoc/protocol/connect_token.hpp"
 #include "dsoc/protocol/datagram.hpp"
 #include "dsoc/simclient/load_run.hpp"
 
@@ -15,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <fstream>
 #include <optional>
 #include <thread>
 
@@ -74,11 +77,9 @@ public:
         return std::nullopt;
     }
 
-    /// Request, challenge, response, accepted: returns the session id (0 on failure).
-    std::uint64_t handshake(std::uint64_t nonce) {
-        pb::Envelope hello;
-        hello.mutable_client_hello()->set_protocol_version(protocol::kProtocolVersion);
-        hello.mutable_client_hello()->set_name("raw-udp");
+    /// Request, challenge, response, accepted: returns the session id (0 on failure);
+    /// `reply` gets the accepted datagram's envelope (a ServerHello or a Disconnect).
+    std::uint64_t handshake(std::uint64_t nonce, const pb::Envelope& hello, pb::Envelope& reply) {
         std::vector<std::uint8_t> request;
         EXPECT_TRUE(protocol::write_request(nonce, hello, request));
         send(request);
@@ -90,25 +91,40 @@ public:
         protocol::DatagramHeader h;
         std::span<const std::uint8_t> cookie;
         EXPECT_EQ(protocol::read_datagram(*challenge, h, cookie), protocol::DatagramError::none);
-        std::vector<std::uint8_t> response;
         EXPECT_TRUE(protocol::write_response(nonce, cookie, hello, response));
         send(response);
-        const auto accepted = receive_kind(DatagramKind::accepted, std::chrono::seconds(2));
-        if (!accepted) {
+        const auto got = receive_kind(DatagramKind::accepted, std::chrono::seconds(2));
+        if (!got) {
             return 0;
         }
+        accepted = *got;
         std::span<const std::uint8_t> body;
-        EXPECT_EQ(protocol::read_datagram(*accepted, h, body), protocol::DatagramError::none);
+        EXPECT_EQ(protocol::read_datagram(accepted, h, body), protocol::DatagramError::none);
         std::uint64_t session = 0;
         std::span<const std::uint8_t> envelope;
         EXPECT_EQ(protocol::read_accepted_body(body, session, envelope),
                   protocol::DatagramError::none);
-        pb::Envelope reply;
         EXPECT_EQ(protocol::decode_payload(envelope, reply), protocol::DecodeError::none);
-        EXPECT_TRUE(reply.has_server_hello());
         return session;
     }
 
+    /// The same with an insecure hello; the session id of a ServerHello (0 otherwise).
+    std::uint64_t handshake(std::uint64_t nonce) {
+        pb::Envelope reply;
+        const std::uint64_t session = handshake(nonce, plain_hello(), reply);
+        EXPECT_TRUE(reply.has_server_hello());
+        return reply.has_server_hello() ? session : 0;
+    }
+
+    static pb::Envelope plain_hello() {
+        pb::Envelope hello;
+        hello.mutable_client_hello()->set_protocol_version(protocol::kProtocolVersion);
+        hello.mutable_client_hello()->set_name("raw-udp");
+        return hello;
+    }
+
+    std::vector<std::uint8_t> response; ///< the last handshake's
+    std::vector<std::uint8_t> accepted; ///< the last handshake's
     std::size_t challenge_bytes = 0;
 
 private:
@@ -279,6 +295,51 @@ TEST(UdpTransport, ASilentClientIsTimedOutWithAReason) {
     ASSERT_TRUE(disconnect.has_value());
     EXPECT_EQ(disconnect->reason(), pb::DISCONNECT_REASON_TIMED_OUT) << disconnect->text();
     EXPECT_EQ(server.stats().disconnects.at("timed_out"), 1u);
+}
+
+TEST(UdpTransport, ALostAcceptedIsSentAgainAndAResponseAfterTheCloseOpensNothing) {
+    testing::RunningServer server(udp_config());
+    RawUdp raw(server.port());
+    const std::uint64_t session = raw.handshake(90);
+    ASSERT_NE(session, 0u);
+    const std::vector<std::uint8_t> first = raw.accepted;
+    raw.send(raw.response); // as if the accepted datagram had been lost
+    const auto again = raw.receive_kind(DatagramKind::accepted, std::chrono::seconds(1));
+    ASSERT_TRUE(again.has_value());
+    EXPECT_EQ(*again, first) << "the same session, the same reply";
+
+    pb::Envelope bye;
+    bye.mutable_disconnect()->set_reason(pb::DISCONNECT_REASON_CLIENT_QUIT);
+    std::vector<std::uint8_t> goodbye;
+    ASSERT_TRUE(
+        protocol::write_envelope_datagram({DatagramKind::message, session, 1}, {}, &bye, goodbye));
+    raw.send(goodbye);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    raw.send(raw.response); // replayed within the cookie's life: must not open a session
+    EXPECT_FALSE(raw.receive_kind(DatagramKind::accepted, std::chrono::milliseconds(300)));
+    server.stop();
+    EXPECT_EQ(server.stats().clients_accepted, 1u);
+    EXPECT_EQ(server.stats().disconnects.at("client_quit"), 1u);
+    EXPECT_EQ(drops(server, UdpDrop::closed_session), 1u);
+}
+
+TEST(UdpTransport, AHelloTheServerRefusesIsAnsweredWithTheReasonInTheAcceptedDatagram) {
+    const std::string key_file = ::testing::TempDir() + "/udp_transport_test.key";
+    {
+        std::ofstream out(key_file);
+        out << protocol::format_token_key(protocol::generate_token_key()) << "\n";
+    }
+    auto c = udp_config();
+    c.token_key_file = key_file;
+    testing::RunningServer server(c);
+    RawUdp raw(server.port());
+    pb::Envelope reply;
+    raw.handshake(91, RawUdp::plain_hello(), reply); // no token
+    server.stop();
+    ASSERT_TRUE(reply.has_disconnect());
+    EXPECT_EQ(reply.disconnect().reason(), pb::DISCONNECT_REASON_UNAUTHORIZED)
+        << reply.disconnect().text();
+    EXPECT_EQ(server.stats().disconnects.at("unauthorized"), 1u);
 }
 
 TEST(UdpTransport, HandshakesBeyondASourcesRateAreDroppedUnanswered) {

@@ -792,10 +792,19 @@ TEST(ReplayWindow, RemembersTheLast64AndForgetsAllBehindAJumpOf64) {
     EXPECT_TRUE(jumped.accept(65)); // 1 is 64 behind: too late to tell
     EXPECT_FALSE(jumped.accept(1));
     EXPECT_TRUE(jumped.accept(2)); // 63 behind, never seen
-    EXPECT_TRUE(jumped.accept(1'000'000));
+    EXPECT_TRUE(jumped.accept(60'000));
     EXPECT_FALSE(jumped.accept(65));
-    EXPECT_TRUE(jumped.accept(1'000'000 - 63));
-    EXPECT_FALSE(jumped.accept(1'000'000 - 64));
+    EXPECT_TRUE(jumped.accept(60'000 - 63));
+    EXPECT_FALSE(jumped.accept(60'000 - 64));
+}
+
+TEST(ReplayWindow, RefusesAJumpFurtherAheadThanAnHonestSenderSkips) {
+    ReplayWindow window;
+    EXPECT_TRUE(window.accept(100)); // the first may be anything
+    EXPECT_FALSE(window.accept(100 + ReplayWindow::kMaxSequenceJump + 1));
+    EXPECT_FALSE(window.accept(0xffffffffu)); // a forged top would lock the sender out
+    EXPECT_EQ(window.newest(), 100u);
+    EXPECT_TRUE(window.accept(100 + ReplayWindow::kMaxSequenceJump));
 }
 
 TEST(ReplayWindow, WorksAtTheTopOfTheSequenceRange) {
@@ -812,8 +821,8 @@ TEST(ReplayWindow, WorksAtTheTopOfTheSequenceRange) {
 }
 
 TEST(ReplayWindow, AgreesWithASetOfEverySequenceTaken) {
-    // The contract: accept s iff s != 0, s was never accepted, and s is newer than the
-    // newest or less than 64 behind it.
+    // The contract: accept s iff s != 0, s was never accepted, and s is less than 64
+    // behind the newest or newer by at most kMaxSequenceJump (anything, before the first).
     constexpr std::int64_t kTop = 0xffffffff;
     std::size_t accepted = 0;
     std::size_t refused = 0;
@@ -852,8 +861,10 @@ TEST(ReplayWindow, AgreesWithASetOfEverySequenceTaken) {
                     }
                     s = std::clamp<std::int64_t>(s, 0, kTop);
                     const auto sequence = static_cast<std::uint32_t>(s);
-                    const bool expected = sequence != 0 && taken.count(sequence) == 0 &&
-                                          (s > newest || newest - s < 64);
+                    const bool expected =
+                        sequence != 0 && taken.count(sequence) == 0 &&
+                        (s > newest ? newest == 0 || s - newest <= ReplayWindow::kMaxSequenceJump
+                                    : newest - s < 64);
                     ASSERT_EQ(window.accept(sequence), expected)
                         << "step " << step << " sequence " << sequence << " newest " << newest;
                     if (expected) {

@@ -9,8 +9,9 @@
 //   [0, 4)   protocol id "DSOC" (0x44 0x53 0x4f 0x43)
 //   [4]      datagram format version, kDatagramVersion
 //   [5]      kind (DatagramKind)
-//   [6, 14)  session: the client's nonce in request, challenge and response; the session
-//            id the server assigned in accepted and everything after
+//   [6, 14)  session: the client's nonce in request, challenge, response and accepted
+//            (whose body carries the session id the server assigned); that session id in
+//            everything after
 //   [14, 18) sequence: per sender and session, increasing from 1 (0 in request,
 //            challenge, response)
 // followed by the kind's body (DatagramKind). Decoding never trusts the bytes: every
@@ -184,10 +185,13 @@ private:
 };
 
 /// The receiver's record of the sequence numbers it took from one sender: refuses a
-/// number taken before or more than 64 behind the newest (a replay, a duplicate, or so
-/// late that the receiver no longer knows).
+/// number taken before or 64 or more behind the newest (a replay, a duplicate, or so late
+/// that the receiver no longer knows), and one more than kMaxSequenceJump ahead of the
+/// newest (no honest sender skips that many: one forged datagram must not push the
+/// window to the top of the range and lock the sender out).
 class ReplayWindow {
 public:
+    static constexpr std::uint32_t kMaxSequenceJump = 1u << 16;
     /// True (and records it) when `sequence` (>= 1) is new; false for a replay.
     bool accept(std::uint32_t sequence);
     [[nodiscard]] std::uint32_t newest() const { return newest_; }

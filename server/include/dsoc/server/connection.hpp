@@ -29,8 +29,8 @@ public:
     /// A hello with the right version and a sane name arrived; the host checks the
     /// connect token and sends the ServerHello (or disconnects).
     virtual void on_hello(Connection& connection, const protocol::pb::ClientHello& hello) = 0;
-    /// An input within the rate cap, already checked and clamped (sanitize_input), newer
-    /// than every input before it.
+    /// An input within the rate cap, already checked and clamped (sanitize_input); over
+    /// UDP also newer (ClientInput.tick) than every input before it.
     virtual void on_input(Connection& connection, const protocol::pb::ClientInput& input) = 0;
     /// The connection is closed; called exactly once per connection.
     virtual void on_closed(Connection& connection) = 0;

@@ -34,12 +34,12 @@ struct ServerConfig {
     /// A UDP client from which nothing arrived for this long is disconnected with
     /// timed_out. [Units: ms] [Limit: 500..60000]
     int udp_timeout_ms = 5000;
-    /// UDP handshake datagrams (requests and responses) one source address may send per
-    /// second, with a burst of one second's worth; beyond it they are dropped unanswered
-    /// (rate_limited). One address can hold many honest clients (a NAT, a load
-    /// generator): each sends two datagrams to connect, and retries every 250 ms.
-    /// [Units: 1/s] [Limit: 1..1000000]
-    int udp_handshake_rate = 1000;
+    /// UDP handshake datagrams (requests, and responses with a valid cookie) one source
+    /// address (an IPv6 /64) may send per second, with a burst of one second's worth;
+    /// beyond it they are dropped unanswered (rate_limited). One address can hold many
+    /// honest clients (a NAT, a load generator): each sends two to connect, and retries
+    /// every 250 ms while it waits. [Units: 1/s] [Limit: 1..1000000]
+    int udp_handshake_rate = 100;
     /// Simulation and snapshot rate. [Units: Hz] [Limit: 1..240]
     int tick_rate = visibility::DSOCConfig{}.tick_rate;
     /// Wandering bots. [Limit: 0..100000]

@@ -52,7 +52,9 @@ public:
     /// A snapshot frame is snapshot_frame()'s form: the tick, then the serialized envelope.
     [[nodiscard]] bool writable_now() const override { return active(); }
     /// Splits the frame into snapshot datagrams and sends them; returns the bytes the
-    /// kernel took (0: none, e.g. a full socket buffer: the snapshot is dropped).
+    /// kernel took. A snapshot the kernel did not take whole (a full socket buffer), or
+    /// one too large for kMaxSnapshotFragments datagrams (warned once), is dropped: the
+    /// client cannot assemble it, and its tick is never taken as an acknowledgement.
     [[nodiscard]] std::size_t write_now(std::span<const std::uint8_t> frame) noexcept override;
     bool finish_write_now(std::vector<std::uint8_t>& frame, std::size_t written) override;
     /// Sends the Disconnect (twice, in case one is lost: no acknowledgement is awaited)
@@ -76,11 +78,16 @@ public:
     [[nodiscard]] std::uint64_t session() const { return session_; }
     [[nodiscard]] std::uint64_t nonce() const { return nonce_; }
     [[nodiscard]] const boost::asio::ip::udp::endpoint& peer() const { return peer_; }
-    /// Snapshot datagrams the kernel refused (counted as dropped snapshots too).
+    /// Snapshot datagrams the kernel refused (their snapshots count as dropped).
     [[nodiscard]] std::uint64_t datagrams_refused() const { return datagrams_refused_; }
+    /// Before this many datagrams a session is ended (reconnect): sequence numbers never
+    /// wrap. A session at 60 Hz sending 8 datagrams a tick lasts over 90 days.
+    static constexpr std::uint32_t kLastSequence = 0xffff0000u;
 
 private:
     [[nodiscard]] bool handle_message(std::span<const std::uint8_t> body);
+    /// Whether `ack` names a snapshot whose datagrams all went to the kernel.
+    [[nodiscard]] bool acked_by_client(std::uint64_t ack) const;
     void send_datagram(std::span<const std::uint8_t> datagram);
     void close_now();
 
@@ -92,8 +99,14 @@ private:
     protocol::ReplayWindow window_;
     std::uint32_t next_sequence_ = 1;
     std::optional<std::uint64_t> acked_;
-    std::uint64_t newest_snapshot_tick_ = 0; ///< the newest snapshot sent
-    std::uint64_t newest_input_ = 0;         ///< ClientInput.tick of the newest input taken
+    std::uint64_t newest_snapshot_tick_ = 0; ///< the newest snapshot the kernel took whole
+    /// Bit i: every datagram of the snapshot of newest_snapshot_tick_ - i went to the
+    /// kernel (only those may be acknowledged).
+    std::uint64_t sent_ticks_ = 0;
+    bool warned_oversized_ = false;
+    bool oversized_ = false;         ///< write_now() met a snapshot too large (pool thread)
+    bool last_write_whole_ = false;  ///< write_now() sent every datagram (pool thread)
+    std::uint64_t newest_input_ = 0; ///< ClientInput.tick of the newest input taken
     Clock::time_point last_heard_;
     std::vector<std::uint8_t> accepted_; ///< the accepted datagram, for a duplicate response
     std::vector<std::uint8_t> datagram_; ///< scratch of the io thread

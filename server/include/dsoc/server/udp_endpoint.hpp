@@ -9,7 +9,8 @@
 // - response with that cookie and the hello -> a UdpConnection, its hello checked by the
 //   host as over TCP (version, token, one connection per token client id), and the
 //   accepted datagram with the session id.
-// Handshake datagrams are rate-limited per source address. After it, a datagram reaches
+// Requests, and responses with a valid cookie, are rate-limited per source address (an
+// IPv6 /64). After it, a datagram reaches
 // its connection only from the connection's own address, with its session id and a
 // sequence number not taken before. Everything else is dropped and counted by reason
 // (udp_drop.hpp); nothing a datagram holds can end another client's session.
@@ -67,12 +68,12 @@ private:
     void on_datagram(std::size_t bytes);
     void on_request(std::uint64_t nonce, std::span<const std::uint8_t> body);
     void on_response(std::uint64_t nonce, std::span<const std::uint8_t> body);
-    /// The body checks and the rate limit every handshake datagram passes (counted when
-    /// not); `cookie` and `hello` view the body's.
-    [[nodiscard]] bool admit_handshake(protocol::DatagramKind kind,
-                                       std::span<const std::uint8_t> body,
-                                       std::span<const std::uint8_t>& cookie,
-                                       std::span<const std::uint8_t>& hello);
+    /// The body checks of a handshake datagram (counted when it fails them); `cookie`
+    /// and `hello` view the body's.
+    [[nodiscard]] bool read_handshake(protocol::DatagramKind kind,
+                                      std::span<const std::uint8_t> body,
+                                      std::span<const std::uint8_t>& cookie,
+                                      std::span<const std::uint8_t>& hello);
     [[nodiscard]] bool within_handshake_budget(Clock::time_point now);
     void sweep();
     void drop(UdpDrop reason) { ++drops_[static_cast<std::size_t>(reason)]; }
@@ -98,7 +99,9 @@ private:
     /// Sessions closed lately, and when: their late datagrams are closed_session, not
     /// unknown_session (a client's goodbye goes twice; snapshots' inputs cross it).
     std::unordered_map<std::uint64_t, Clock::time_point> recently_closed_;
-    std::unordered_map<std::string, Budget> budgets_; ///< by source address (no port)
+    std::unordered_map<std::uint64_t, Budget> budgets_; ///< by source (budget_key)
+    /// Nonces of sessions closed lately: their responses never open a new session.
+    std::unordered_map<std::uint64_t, Clock::time_point> closed_nonces_;
     UdpDropCounts drops_{};
     std::uint64_t received_ = 0;
     std::uint64_t challenges_ = 0;

@@ -73,7 +73,8 @@ private:
     [[nodiscard]] bool lose();
 
     Handlers handlers_;
-    std::shared_ptr<void> owner_;
+    /// The owner: each pending handler holds it alive, the link itself does not (no cycle).
+    std::weak_ptr<void> owner_;
     boost::asio::ip::udp::socket socket_;
     boost::asio::steady_timer retry_timer_;
     boost::asio::ip::udp::endpoint server_;
