@@ -72,7 +72,9 @@ void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
                  "without serving; exit 0 when the server would start, 2 (naming every "
                  "problem) when not");
     app.add_option("--bind", config.bind_address, "Address to listen on")->capture_default_str();
-    app.add_option("--port", config.port, "TCP port; 0 picks a free one")->capture_default_str();
+    app.add_option("--port", config.port,
+                   "TCP port (and UDP's, with --udp true); 0 picks a free one")
+        ->capture_default_str();
     dsoc::server::add_world_options(app, config);
     dsoc::server::add_policy_options(app, config);
     app.add_option("--tbv-strategy", config.tbv_strategy, "dsoc TBVs: adaptive | explicit | fuzzy")

@@ -26,7 +26,8 @@ struct DsocSetting {
 struct ServerConfig {
     /// Address to listen on. Loopback by default: expose deliberately.
     std::string bind_address = "127.0.0.1";
-    /// TCP port; 0 picks a free port (printed at start). [Limit: 0..65535]
+    /// TCP port, and UDP's with `udp`; 0 picks a free port (printed at start).
+    /// [Limit: 0..65535]
     std::uint16_t port = 27960;
     /// Also serve clients over UDP (docs/protocol.md, "UDP transport"), on the same port
     /// number as TCP (the one bound, when `port` is 0).
