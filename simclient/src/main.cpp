@@ -121,9 +121,18 @@ int main(int argc, char** argv) {
                    "over UDP datagrams (docs/protocol.md)")
         ->transform(CLI::CheckedTransformer(transports, CLI::ignore_case))
         ->default_str("tcp");
-    app.add_option("--udp-loss", config.udp_loss,
+    app.add_option("--udp-loss", config.udp_faults.loss,
                    "UDP only: drop each datagram either way with this probability (emulated "
                    "loss)")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 0.9));
+    app.add_option("--udp-duplicate", config.udp_faults.duplicate,
+                   "UDP only: deliver each datagram either way twice with this probability")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 0.9));
+    app.add_option("--udp-reorder", config.udp_faults.reorder,
+                   "UDP only: hold each datagram either way back behind the next one with this "
+                   "probability")
         ->capture_default_str()
         ->check(CLI::Range(0.0, 0.9));
     app.add_option("--threads", threads,

@@ -6,6 +6,10 @@
 
 namespace dsoc::simclient {
 
+DatagramFaults DatagramFaults::worst_with(const DatagramFaults& o) const {
+    return {std::max(loss, o.loss), std::max(duplicate, o.duplicate), std::max(reorder, o.reorder)};
+}
+
 std::string_view to_string(Behaviour behaviour) {
     switch (behaviour) {
     case Behaviour::wanderer:
@@ -133,6 +137,12 @@ std::string validate(const Scenario& scenario) {
         if (!(g.network.latency_ms >= 0.0 && g.network.latency_ms <= 10000.0) ||
             !(g.network.jitter_ms >= 0.0 && g.network.jitter_ms <= 10000.0)) {
             return which + ": latency and jitter must be 0..10 s";
+        }
+        const DatagramFaults& f = g.network.faults;
+        for (const double p : {f.loss, f.duplicate, f.reorder}) {
+            if (!(p >= 0.0 && p <= 0.9)) {
+                return which + ": loss, duplicate and reorder must be 0..0.9";
+            }
         }
     }
     if (!(scenario.connect_timeout_s > 0.0)) {

@@ -135,7 +135,8 @@ ClientGroup read_group(const Reader& r, const toml::node& node, const std::strin
                        std::size_t index) {
     const toml::table& t = r.table(node, where);
     r.only(t, where + ".",
-           {"name", "behaviour", "weight", "churn_per_s", "respawn_every", "latency", "jitter"});
+           {"name", "behaviour", "weight", "churn_per_s", "respawn_every", "latency", "jitter",
+            "loss", "duplicate", "reorder"});
     ClientGroup g;
     g.name = "group-" + std::to_string(index + 1);
     for (const auto& [k, v] : t) {
@@ -169,6 +170,16 @@ ClientGroup read_group(const Reader& r, const toml::node& node, const std::strin
             g.network.latency_ms = 1000.0 * r.duration_s(v, key);
         } else if (name_of_key == "jitter") {
             g.network.jitter_ms = 1000.0 * r.duration_s(v, key);
+        } else if (name_of_key == "loss" || name_of_key == "duplicate" ||
+                   name_of_key == "reorder") {
+            const double p = r.number(v, key);
+            if (!(p >= 0.0 && p <= 0.9)) {
+                r.fail(v, key, "must be a probability 0..0.9 (UDP only)");
+            }
+            DatagramFaults& f = g.network.faults;
+            (name_of_key == "loss"        ? f.loss
+             : name_of_key == "duplicate" ? f.duplicate
+                                          : f.reorder) = p;
         }
     }
     return g;

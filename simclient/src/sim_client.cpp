@@ -165,7 +165,10 @@ void SimClient::connect_udp(const asio::ip::tcp::endpoint& server) {
             self->error(kind);
         }
     };
-    udp_ = std::make_unique<UdpLink>(io_, std::move(handlers), config_.udp_loss,
+    const DatagramFaults faults = setup_.group != nullptr
+                                      ? config_.udp_faults.worst_with(setup_.group->network.faults)
+                                      : config_.udp_faults;
+    udp_ = std::make_unique<UdpLink>(io_, std::move(handlers), faults,
                                      config_.seed ^ (setup_.session << 3));
     std::string why;
     if (!udp_->connect(asio::ip::udp::endpoint(server.address(), server.port()), make_hello(),

@@ -17,8 +17,9 @@ constexpr auto kHandshakeRetry = std::chrono::milliseconds(250);
 constexpr std::size_t kIncomingArenaBytes = 256 * 1024;
 } // namespace
 
-UdpLink::UdpLink(asio::io_context& io, Handlers handlers, double loss, std::uint64_t seed)
-    : handlers_(std::move(handlers)), socket_(io), retry_timer_(io), loss_(loss), rng_(seed) {}
+UdpLink::UdpLink(asio::io_context& io, Handlers handlers, const DatagramFaults& faults,
+                 std::uint64_t seed)
+    : handlers_(std::move(handlers)), socket_(io), retry_timer_(io), faults_(faults), rng_(seed) {}
 
 bool UdpLink::connect(const asio::ip::udp::endpoint& server, const pb::Envelope& hello,
                       std::shared_ptr<void> owner, std::string& error) {
@@ -96,18 +97,31 @@ void UdpLink::close() {
     socket_.close(ec);
 }
 
-bool UdpLink::lose() {
-    if (loss_ <= 0.0 || !std::bernoulli_distribution(loss_)(rng_)) {
-        return false;
-    }
-    ++emulated_losses_;
-    return true;
+bool UdpLink::happens(double probability) {
+    return probability > 0.0 && std::bernoulli_distribution(probability)(rng_);
 }
 
 void UdpLink::send(std::span<const std::uint8_t> datagram) {
-    if (lose()) {
+    if (happens(faults_.loss)) {
+        ++emulated_losses_;
         return;
     }
+    if (held_out_.empty() && happens(faults_.reorder)) {
+        held_out_.assign(datagram.begin(), datagram.end()); // goes after the next one
+        return;
+    }
+    transmit(datagram);
+    if (happens(faults_.duplicate)) {
+        transmit(datagram);
+    }
+    if (!held_out_.empty()) {
+        std::vector<std::uint8_t> held;
+        held.swap(held_out_);
+        transmit(held);
+    }
+}
+
+void UdpLink::transmit(std::span<const std::uint8_t> datagram) {
     boost::system::error_code ec;
     const std::size_t n = socket_.send(asio::buffer(datagram.data(), datagram.size()), 0, ec);
     if (!ec && handlers_.on_bytes_up) {
@@ -135,13 +149,30 @@ void UdpLink::on_datagram(std::size_t bytes) {
     if (handlers_.on_bytes_down) {
         handlers_.on_bytes_down(bytes);
     }
-    if (lose()) {
+    const std::span<const std::uint8_t> datagram(buffer_.data(), bytes);
+    if (happens(faults_.loss)) {
+        ++emulated_losses_;
         return;
     }
+    if (held_in_.empty() && happens(faults_.reorder)) {
+        held_in_.assign(datagram.begin(), datagram.end()); // handled after the next one
+        return;
+    }
+    process(datagram);
+    if (!closed_ && happens(faults_.duplicate)) {
+        process(datagram);
+    }
+    if (!closed_ && !held_in_.empty()) {
+        std::vector<std::uint8_t> held;
+        held.swap(held_in_);
+        process(held);
+    }
+}
+
+void UdpLink::process(std::span<const std::uint8_t> datagram) {
     protocol::DatagramHeader header;
     std::span<const std::uint8_t> body;
-    if (protocol::read_datagram(std::span<const std::uint8_t>(buffer_.data(), bytes), header,
-                                body) != protocol::DatagramError::none) {
+    if (protocol::read_datagram(datagram, header, body) != protocol::DatagramError::none) {
         ++dropped_;
         return;
     }

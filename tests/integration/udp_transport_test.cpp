@@ -185,10 +185,10 @@ TEST(UdpTransport, ClientsGetSnapshotsAuditsAndTheirOwnEntity) {
     }
 }
 
-TEST(UdpTransport, UnderLossTheReplicaStaysWithinAQuantumAndNothingIsStale) {
+TEST(UdpTransport, UnderLossDuplicationAndReorderingTheReplicaStaysExactAndNothingIsStale) {
     testing::RunningServer server(udp_config());
     simclient::LoadConfig lc = udp_load(server, 4, 3.0);
-    lc.udp_loss = 0.2; // each way
+    lc.udp_faults = {.loss = 0.2, .duplicate = 0.1, .reorder = 0.1}; // each way
     const simclient::LoadReport report = testing::run_load(lc);
     server.stop();
     // Every snapshot that arrived applied against a frame the client held (no

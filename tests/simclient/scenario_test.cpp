@@ -69,6 +69,8 @@ name = "campers"
 behaviour = "camper"
 latency = "40ms"
 jitter = "5ms"
+loss = 0.05
+reorder = 0.01
 
 [[groups]]
 behaviour = "respawner"
@@ -93,6 +95,10 @@ TEST(ScenarioFile, ReadsStagesGroupsAndThresholds) {
     EXPECT_EQ(s.groups[1].behaviour, Behaviour::camper);
     EXPECT_DOUBLE_EQ(s.groups[1].network.latency_ms, 40.0);
     EXPECT_DOUBLE_EQ(s.groups[1].network.jitter_ms, 5.0);
+    EXPECT_DOUBLE_EQ(s.groups[1].network.faults.loss, 0.05);
+    EXPECT_DOUBLE_EQ(s.groups[1].network.faults.duplicate, 0.0);
+    EXPECT_DOUBLE_EQ(s.groups[1].network.faults.reorder, 0.01);
+    EXPECT_FALSE(s.groups[0].network.faults.any());
     EXPECT_EQ(s.groups[2].name, "group-3");
     EXPECT_EQ(s.groups[2].behaviour, Behaviour::respawner);
     EXPECT_DOUBLE_EQ(s.groups[2].respawn_every_s, 8.0);
@@ -131,6 +137,10 @@ TEST(ScenarioFile, NamesWhereAndWhatIsWrong) {
                          "[[groups]]\nname = \"a\"\n[[groups]]\nname = \"a\"\n"),
               "s.toml: group 'a': the name is used twice");
     EXPECT_NE(file_error("stages = [").find("s.toml:1:"), std::string::npos);
+    EXPECT_NE(file_error("stages = [{ duration = \"1s\", target = 2 }]\n[[groups]]\n"
+                         "loss = 1.5\n")
+                  .find("groups[0].loss: must be a probability 0..0.9 (UDP only)"),
+              std::string::npos);
 }
 
 } // namespace

@@ -59,9 +59,10 @@ struct LoadConfig {
     /// datagrams with acknowledged-delta snapshots (docs/protocol.md, "UDP transport").
     enum class Transport : std::uint8_t { tcp, udp };
     Transport transport = Transport::tcp;
-    /// UDP only: each datagram either way is dropped with this probability (emulated
-    /// loss, on top of the groups' latency and jitter). [Limit: 0..0.9]
-    double udp_loss = 0.0;
+    /// UDP only: datagram faults for every client (emulated loss, duplication and
+    /// reordering, on top of the groups' latency and jitter); a group's own faults
+    /// (scenario files) count where larger.
+    DatagramFaults udp_faults;
 };
 
 } // namespace dsoc::simclient

@@ -32,13 +32,28 @@ enum class Behaviour {
 /// false for an unknown name.
 [[nodiscard]] bool behaviour_from_string(std::string_view name, Behaviour& out);
 
-/// Latency added on the client's side of a TCP connection: every frame it sends waits
-/// latency (+ up to jitter) before it is written, every byte it reads waits as long
-/// before it is decoded. TCP keeps order, so jitter never reorders; TCP also
-/// retransmits, so packet loss cannot be emulated honestly (it would only be latency).
+/// Faults of a UDP link, emulated in the simulated client's UDP layer on each datagram,
+/// each direction: dropped, delivered twice, or held back and delivered after the next
+/// one. Probabilities. [Limit: each 0..0.9]
+struct DatagramFaults {
+    double loss = 0.0;
+    double duplicate = 0.0;
+    double reorder = 0.0;
+    [[nodiscard]] bool any() const { return loss > 0.0 || duplicate > 0.0 || reorder > 0.0; }
+    /// The larger of each fault's two probabilities.
+    [[nodiscard]] DatagramFaults worst_with(const DatagramFaults& o) const;
+};
+
+/// Latency added on the client's side of a connection: every frame (TCP) or datagram
+/// (UDP) it sends waits latency (+ up to jitter) before it is written, every byte it
+/// reads waits as long before it is decoded. Jitter never reorders: TCP keeps order, and
+/// over UDP reordering is a fault of its own. TCP retransmits, so packet loss cannot be
+/// emulated honestly over it (it would only be latency): `faults` apply over UDP only.
 struct NetworkConditions {
     double latency_ms = 0.0; ///< one way, each direction [Units: ms] [Limit: 0..10000]
     double jitter_ms = 0.0;  ///< uniform extra 0..jitter per chunk [Units: ms]
+    DatagramFaults faults;   ///< UDP only
+    /// Whether there is a delay to emulate.
     [[nodiscard]] bool any() const { return latency_ms > 0.0 || jitter_ms > 0.0; }
 };
 

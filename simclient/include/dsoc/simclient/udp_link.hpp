@@ -12,6 +12,7 @@
 
 #include "dsoc/protocol/datagram.hpp"
 #include "dsoc/protocol/messages.hpp"
+#include "dsoc/simclient/scenario.hpp"
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/udp.hpp>
@@ -41,8 +42,10 @@ public:
         /// Something the server sent that a correct server never sends (a protocol error).
         std::function<void(const std::string&)> on_error;
     };
-    /// Emulated loss: each datagram either way is dropped with probability `loss`.
-    UdpLink(boost::asio::io_context& io, Handlers handlers, double loss, std::uint64_t seed);
+    /// `faults`: emulated on each datagram either way (dropped, delivered twice, or held
+    /// back and delivered right after the next one).
+    UdpLink(boost::asio::io_context& io, Handlers handlers, const DatagramFaults& faults,
+            std::uint64_t seed);
 
     /// Opens a socket towards `server` and sends the request carrying `hello` (retried
     /// every 250 ms, the response likewise, until the accepted datagram arrives).
@@ -58,9 +61,9 @@ public:
     void close();
 
     [[nodiscard]] bool accepted() const { return session_ != 0; }
-    /// Datagrams dropped: not from the server, another session, replayed, malformed, or
-    /// by the emulated loss.
+    /// Datagrams dropped: not from the server, another session, replayed, malformed.
     [[nodiscard]] std::uint64_t dropped() const { return dropped_; }
+    /// Datagrams the emulated faults dropped, duplicated, reordered (both ways).
     [[nodiscard]] std::uint64_t emulated_losses() const { return emulated_losses_; }
     /// Snapshots given up with fragments missing.
     [[nodiscard]] std::uint64_t snapshots_incomplete() const { return assembler_.abandoned(); }
@@ -68,9 +71,11 @@ public:
 private:
     void receive_next();
     void on_datagram(std::size_t bytes);
+    void process(std::span<const std::uint8_t> datagram);
     void retry_handshake();
     void send(std::span<const std::uint8_t> datagram);
-    [[nodiscard]] bool lose();
+    void transmit(std::span<const std::uint8_t> datagram);
+    [[nodiscard]] bool happens(double probability);
 
     Handlers handlers_;
     /// The owner: each pending handler holds it alive, the link itself does not (no cycle).
@@ -89,7 +94,9 @@ private:
     protocol::ReplayWindow window_;
     protocol::SnapshotAssembler assembler_;
     std::deque<protocol::pb::ClientInput> recent_inputs_; ///< the newest first
-    double loss_;
+    DatagramFaults faults_;
+    std::vector<std::uint8_t> held_out_; ///< a sent datagram held back (reorder), or empty
+    std::vector<std::uint8_t> held_in_;  ///< a received datagram held back, or empty
     std::mt19937_64 rng_;
     std::uint64_t dropped_ = 0;
     std::uint64_t emulated_losses_ = 0;
