@@ -5,6 +5,8 @@
 
 #include <boost/asio/buffer.hpp>
 
+#include <algorithm>
+
 namespace dsoc::simclient {
 
 namespace asio = boost::asio;
@@ -75,15 +77,17 @@ void UdpLink::send_message(const pb::Envelope& message) {
 }
 
 void UdpLink::send_input(const pb::ClientInput& input, std::uint64_t ack) {
-    recent_inputs_.push_front(input);
-    if (recent_inputs_.size() > protocol::kMaxRedundantInputs) {
-        recent_inputs_.pop_back();
+    // The newest first, in place: the oldest message's memory takes the new input (an
+    // input every tick; no allocation once three are held).
+    if (recent_inputs_.size() < protocol::kMaxRedundantInputs) {
+        recent_inputs_.emplace_back();
     }
+    std::rotate(recent_inputs_.rbegin(), recent_inputs_.rbegin() + 1, recent_inputs_.rend());
+    recent_inputs_.front() = input;
     if (session_ == 0 || closed_) {
         return;
     }
-    const std::vector<pb::ClientInput> inputs(recent_inputs_.begin(), recent_inputs_.end());
-    if (protocol::write_input({DatagramKind::input, session_, next_sequence_}, ack, inputs,
+    if (protocol::write_input({DatagramKind::input, session_, next_sequence_}, ack, recent_inputs_,
                               datagram_)) {
         ++next_sequence_;
         send(datagram_);

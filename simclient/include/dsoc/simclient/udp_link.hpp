@@ -20,7 +20,6 @@
 
 #include <array>
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <memory>
 #include <random>
@@ -93,7 +92,7 @@ private:
     std::uint32_t next_sequence_ = 1;
     protocol::ReplayWindow window_;
     protocol::SnapshotAssembler assembler_;
-    std::deque<protocol::pb::ClientInput> recent_inputs_; ///< the newest first
+    std::vector<protocol::pb::ClientInput> recent_inputs_; ///< the newest first, at most 3
     DatagramFaults faults_;
     std::vector<std::uint8_t> held_out_; ///< a sent datagram held back (reorder), or empty
     std::vector<std::uint8_t> held_in_;  ///< a received datagram held back, or empty
