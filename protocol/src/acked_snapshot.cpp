@@ -72,18 +72,75 @@ void set_motion(FrameEntity& e, const QuantizedPose& from, std::uint64_t ticks,
     e.motion_ticks = static_cast<std::uint8_t>(t);
 }
 
+// --- frame ring ---
+
+DeltaFrame& FrameRing::start(std::uint64_t tick) {
+    if (!spare_.empty()) {
+        next_.entities.swap(spare_.back());
+        if (spare_.back().capacity() == 0) {
+            spare_.pop_back();
+        }
+    }
+    next_.tick = tick;
+    next_.entities.clear();
+    return next_;
+}
+
+void FrameRing::commit() {
+    Slot& s = slots_[next_.tick % kAckedHistory];
+    if (s.used) {
+        keep_spare(std::move(s.frame.entities), false); // last used kAckedHistory ticks ago
+    }
+    s.frame.tick = next_.tick;
+    s.frame.entities = std::move(next_.entities);
+    s.used = true;
+    next_.entities = {};
+}
+
+void FrameRing::forget_older_than(std::uint64_t tick) {
+    std::array<Slot*, kAckedHistory> old{};
+    std::size_t count = 0;
+    for (Slot& s : slots_) {
+        if (s.used && s.frame.tick < tick) {
+            old[count++] = &s;
+        }
+    }
+    // The newest last, so that it is the first reused.
+    std::sort(old.begin(), old.begin() + static_cast<std::ptrdiff_t>(count),
+              [](const Slot* a, const Slot* b) { return a->frame.tick < b->frame.tick; });
+    for (std::size_t k = 0; k < count; ++k) {
+        old[k]->used = false;
+        keep_spare(std::move(old[k]->frame.entities), true);
+        old[k]->frame.entities = {};
+    }
+}
+
+void FrameRing::keep_spare(std::vector<FrameEntity>&& memory, bool warm) {
+    memory.clear();
+    if (warm) {
+        spare_.push_back(std::move(memory));
+    } else {
+        spare_.insert(spare_.begin(), std::move(memory));
+    }
+    if (spare_.size() > kMaxSpare) {
+        spare_.erase(spare_.begin());
+    }
+}
+
 // --- encoder ---
 
 void AckedSnapshotEncoder::begin(std::uint64_t tick, std::optional<std::uint64_t> acked,
                                  pb::Snapshot& out) {
     out.Clear();
     out.set_server_tick(tick);
-    next_.tick = tick;
-    next_.entities.clear();
     base_ = nullptr;
-    if (acked && *acked < tick && tick - *acked < kAckedHistory) {
-        base_ = frames_.find(*acked);
+    if (acked && *acked < tick) {
+        // The caller's acknowledgements never go back: no later snapshot is coded against
+        // an older frame.
+        frames_.forget_older_than(*acked);
+        base_ = tick - *acked < kAckedHistory ? frames_.find(*acked) : nullptr;
     }
+    next_ = &frames_.start(tick);
     if (base_ != nullptr) {
         out.set_baseline_tick(base_->tick);
         ticks_since_base_ = tick - base_->tick;
@@ -92,6 +149,7 @@ void AckedSnapshotEncoder::begin(std::uint64_t tick, std::optional<std::uint64_t
     last_entry_id_ = 0;
     counts_ = {};
     counts_.coded_against_baseline = base_ != nullptr;
+    counts_.baseline_age = base_ != nullptr ? ticks_since_base_ : 0;
 }
 
 void AckedSnapshotEncoder::leave_baseline_below(std::uint32_t id, pb::Snapshot& out) {
@@ -128,7 +186,7 @@ void AckedSnapshotEncoder::add(std::uint32_t id, const QuantizedPose& pose, std:
     // Each entity is written once, in place: a frame is rewritten for every client every
     // tick, so its copies are most of the encoder's cost.
     if (!carried) {
-        FrameEntity& n = next_.entities.emplace_back();
+        FrameEntity& n = next_->entities.emplace_back();
         n.pose = pose;
         n.id = id;
         n.kind = kind;
@@ -139,14 +197,14 @@ void AckedSnapshotEncoder::add(std::uint32_t id, const QuantizedPose& pose, std:
         return;
     }
     const FrameEntity& b = base_->entities[base_at_++]; // in the ring, not in next_
-    FrameEntity& n = next_.entities.emplace_back(b);
+    FrameEntity& n = next_->entities.emplace_back(b);
     const std::uint32_t steps = settings_.angle_steps;
     const QuantizedPose predicted = predict(b, ticks_since_base_, steps);
     const std::int64_t rx = static_cast<std::int64_t>(pose.x) - predicted.x;
     const std::int64_t ry = static_cast<std::int64_t>(pose.y) - predicted.y;
     const std::int64_t rz = static_cast<std::int64_t>(pose.z) - predicted.z;
     const std::int64_t rpitch = static_cast<std::int64_t>(pose.pitch) - b.pose.pitch;
-    const bool due = (next_.tick + id) % update_interval(tier) == 0;
+    const bool due = (next_->tick + id) % update_interval(tier) == 0;
     const bool fits = fits_int32(rx) && fits_int32(ry) && fits_int32(rz) && fits_int32(rpitch);
     if (tier != b.tier || (due && !fits)) {
         const std::array<std::int32_t, 6> values{tier,   pose.x,   pose.y,
@@ -189,7 +247,8 @@ AckedSnapshotCounts AckedSnapshotEncoder::finish(pb::Snapshot& out) {
         ++counts_.leaves;
     }
     base_ = nullptr; // its slot may be the one the new frame takes
-    frames_.store(next_);
+    next_ = nullptr;
+    frames_.commit();
     return counts_;
 }
 
@@ -321,14 +380,13 @@ std::vector<SnapshotProblem> AckedSnapshotDecoder::apply(const pb::Snapshot& s) 
     // The baseline's entities in id order, each dropped (a leave), carried (through its
     // entry, if any), with the entering ones between them; every enter, leave and entry
     // must meet exactly what the baseline says.
-    next_.tick = tick;
-    next_.entities.clear();
+    DeltaFrame& next = frames_.start(tick);
     int enter_at = 0;
     int leave_at = 0;
     std::size_t entry_at = 0;
     const auto take_enters_below = [&](std::uint64_t id) {
         for (; enter_at < enters.size() && enters[enter_at].id() < id; ++enter_at) {
-            next_.entities.push_back(entered(enters[enter_at]));
+            next.entities.push_back(entered(enters[enter_at]));
         }
     };
     for (const FrameEntity& b : base->entities) {
@@ -355,9 +413,9 @@ std::vector<SnapshotProblem> AckedSnapshotDecoder::apply(const pb::Snapshot& s) 
             continue;
         }
         entry_at += entry != nullptr ? 1 : 0;
-        // In place (next_ is rebuilt from scratch by every apply(), so a rejected
+        // In place (the next frame is rebuilt from scratch by every apply(), so a rejected
         // snapshot leaves nothing behind that matters).
-        FrameEntity& n = next_.entities.emplace_back();
+        FrameEntity& n = next.entities.emplace_back();
         if (auto problem = carry(b, entry, s, tick, ticks, settings_.angle_steps, n)) {
             problems.push_back(std::move(*problem));
             return problems;
@@ -376,8 +434,13 @@ std::vector<SnapshotProblem> AckedSnapshotDecoder::apply(const pb::Snapshot& s) 
     if (!problems.empty()) {
         return problems;
     }
-    frames_.store(next_);
+    frames_.commit();
     newest_tick_ = tick;
+    if (s.has_baseline_tick()) {
+        // A server's baselines never go back (docs/protocol.md): every snapshot still to
+        // apply is coded against this one's baseline or a newer frame, or against nothing.
+        frames_.forget_older_than(s.baseline_tick());
+    }
     return problems;
 }
 

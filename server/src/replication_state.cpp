@@ -146,8 +146,8 @@ void ReplicationState::build_acked_snapshot(const interest::GameWorld& world,
             add_audit(e, snapshot);
         }
     }
-    const protocol::AckedSnapshotCounts counts = encoder.finish(snapshot);
-    last_updates_ = counts.enters + counts.entries;
+    last_acked_ = encoder.finish(snapshot);
+    last_updates_ = last_acked_.enters + last_acked_.entries;
 }
 
 } // namespace dsoc::server

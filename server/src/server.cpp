@@ -325,6 +325,12 @@ void Server::send_snapshots() {
         stats_.entity_updates_sent += client.replication.last_updates();
         stats_.heard_entities_sent += client.heard;
         ++stats_.snapshots_sent;
+        if (client.replication.acked()) {
+            const protocol::AckedSnapshotCounts& coded = client.replication.last_acked();
+            ++(coded.coded_against_baseline ? stats_.acked_snapshots_against_baseline
+                                            : stats_.acked_snapshots_whole);
+            stats_.acked_baseline_age_ticks += coded.baseline_age;
+        }
         if (client.session->writable_now()) {
             direct_writes_.push_back(&client);
         } else {

@@ -96,6 +96,16 @@ std::string Server::render_metrics() const {
     if (udp_) {
         out.counter("dsoc_udp_datagrams_received_total", "Datagrams received on the UDP port.",
                     d(udp_->datagrams_received()));
+        out.counter_family(
+            "dsoc_udp_snapshots_total",
+            "Snapshots sent to UDP clients: coded against the newest frame the client "
+            "acknowledged (baseline), or whole (none acknowledged, or too old: a late client).",
+            {{{{"coded", "against_baseline"}}, d(stats_.acked_snapshots_against_baseline)},
+             {{{"coded", "whole"}}, d(stats_.acked_snapshots_whole)}});
+        out.counter("dsoc_udp_baseline_age_ticks_total",
+                    "Ticks from the baseline to the snapshot, summed over the snapshots coded "
+                    "against one: divided by their count, how late acknowledgements arrive.",
+                    d(stats_.acked_baseline_age_ticks));
         out.counter("dsoc_udp_challenges_sent_total",
                     "UDP handshake challenges sent (one per request within its address's budget).",
                     d(udp_->challenges_sent()));

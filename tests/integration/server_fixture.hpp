@@ -41,6 +41,8 @@ public:
     [[nodiscard]] const server::ServerStats& stats() const { return server_.stats(); }
     /// After stop().
     [[nodiscard]] const server::UdpEndpoint* udp_endpoint() const { return server_.udp_endpoint(); }
+    /// After stop().
+    [[nodiscard]] std::string render_metrics() const { return server_.render_metrics(); }
 
 private:
     static server::ServerConfig prepare(server::ServerConfig c) {

@@ -176,6 +176,16 @@ TEST(UdpTransport, ClientsGetSnapshotsAuditsAndTheirOwnEntity) {
     EXPECT_LT(report.snapshot_interarrival_ms.p99, 100.0);
     EXPECT_EQ(server.stats().disconnects.at("client_quit"), 6u);
     EXPECT_GT(server.stats().snapshots_sent, 0u);
+    // Acknowledgements carried the run: after each client's first snapshot, every one
+    // was coded against a frame it acknowledged, a tick or two old on loopback.
+    const auto& stats = server.stats();
+    EXPECT_EQ(stats.acked_snapshots_against_baseline + stats.acked_snapshots_whole,
+              stats.snapshots_sent);
+    EXPECT_GT(stats.acked_snapshots_against_baseline, 10 * stats.acked_snapshots_whole);
+    EXPECT_LT(static_cast<double>(stats.acked_baseline_age_ticks),
+              4.0 * static_cast<double>(stats.acked_snapshots_against_baseline));
+    EXPECT_NE(server.render_metrics().find("dsoc_udp_snapshots_total{coded=\"whole\"}"),
+              std::string::npos);
     for (std::size_t r = 0; r < server::kUdpDropReasons; ++r) {
         // Each client says goodbye twice (nothing acknowledges it): the second one finds
         // its session closed.

@@ -256,6 +256,62 @@ TEST(AckedSnapshot, SteadyMotionCostsNoUpdateEntries) {
     EXPECT_NEAR(decoder.pose(0xfffffff0u)->x, -487.0f, 1e-3f);
 }
 
+TEST(AckedSnapshot, EachEndForgetsTheFramesNoSnapshotWillBeCodedAgainst) {
+    const QuantizationSettings settings;
+    // Two servers fed the same: one acknowledged as a server is, one that breaks the
+    // promise that baselines never go back.
+    AckedSnapshotEncoder server(settings);
+    AckedSnapshotEncoder unruly(settings);
+    AckedSnapshotDecoder client(settings);
+    std::vector<TruthEntity> interest{{3, {1.0f, 2.0f, 3.0f, 0.0f, 0.0f}},
+                                      {9, {50.0f, 0.0f, 0.0f, 0.0f, 0.0f}}};
+    pb::Snapshot s;
+    pb::Snapshot ignored;
+    for (std::uint64_t tick = 1; tick <= 3; ++tick) {
+        interest[0].pose.x += 2.0f;
+        encode(server, tick, std::nullopt, interest, s);
+        encode(unruly, tick, std::nullopt, interest, ignored);
+        ASSERT_TRUE(client.apply(through_wire(s)).empty());
+    }
+    interest[0].pose.x += 2.0f;
+    encode(server, 4, 2, interest, s); // the server forgets frame 1
+    encode(unruly, 4, std::nullopt, interest, ignored);
+    EXPECT_EQ(server.frame(1), nullptr);
+    EXPECT_NE(server.frame(2), nullptr);
+    ASSERT_TRUE(client.apply(through_wire(s)).empty()); // so does the client
+
+    interest[0].pose.x += 2.0f;
+    encode(unruly, 5, 1, interest, s);
+    ASSERT_EQ(s.baseline_tick(), 1u);
+    const auto problems = client.apply(through_wire(s));
+    ASSERT_EQ(problems.size(), 1u) << kinds(problems);
+    EXPECT_EQ(problems[0].kind, "baseline_missing");
+    encode(unruly, 6, 2, interest, s); // the baseline the client last saw: still held
+    EXPECT_TRUE(client.apply(through_wire(s)).empty());
+    EXPECT_EQ(client.newest()->entities, unruly.frame(6)->entities);
+}
+
+TEST(FrameRing, AFrameIsBuiltInTheMemoryForgottenMostRecently) {
+    FrameRing ring;
+    const FrameEntity* memory[4] = {};
+    for (std::uint64_t tick = 1; tick <= 4; ++tick) {
+        DeltaFrame& f = ring.start(tick);
+        f.entities.resize(100 * tick); // each its own buffer
+        memory[tick - 1] = f.entities.data();
+        ring.commit();
+    }
+    ring.forget_older_than(3); // frames 1 and 2: 2 is the newer, so the warmer
+    EXPECT_EQ(ring.find(2), nullptr);
+    EXPECT_NE(ring.find(3), nullptr);
+    DeltaFrame& next = ring.start(5);
+    EXPECT_TRUE(next.entities.empty());
+    EXPECT_EQ(next.entities.data(), memory[1]);
+    ring.commit();
+    EXPECT_EQ(ring.start(6).entities.data(), memory[0]);
+    EXPECT_EQ(ring.find(5)->tick, 5u);
+    EXPECT_EQ(ring.find(3)->entities.data(), memory[2]); // held frames keep theirs
+}
+
 TEST(AckedSnapshot, AnAcknowledgementOlderThanTheHistoryGetsAFullSnapshot) {
     const QuantizationSettings settings;
     AckedSnapshotEncoder encoder(settings);

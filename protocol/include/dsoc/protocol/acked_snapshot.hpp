@@ -33,6 +33,9 @@ struct AckedSnapshotCounts {
     /// entry or predicted exactly (the updates a sender without prediction would write).
     std::uint32_t moved = 0;
     bool coded_against_baseline = false;
+    /// Ticks from the baseline to the snapshot (how late the acknowledgement was); 0
+    /// when coded against nothing.
+    std::uint64_t baseline_age = 0;
 };
 
 class AckedSnapshotEncoder {
@@ -43,7 +46,10 @@ public:
     /// Clears `out` and starts the snapshot of `tick` (greater than every earlier one's),
     /// coded against the frame of `acked` (the newest tick the client acknowledged) when
     /// this encoder still holds it and it is less than kAckedHistory ticks older; against
-    /// nothing otherwise (every entity enters).
+    /// nothing otherwise (every entity enters). `acked` never goes back from one call to
+    /// the next (an older acknowledgement arriving late is not newest): the frames older
+    /// than it are forgotten, and so a snapshot's baseline is never older than an earlier
+    /// one's, as docs/protocol.md promises the client.
     void begin(std::uint64_t tick, std::optional<std::uint64_t> acked, pb::Snapshot& out);
     /// One entity the client is to know, in increasing id order: `pose` quantized on
     /// `tier` (< kTiers; quantize(pose, settings(), tier)), `half_extents` in world units.
@@ -55,7 +61,7 @@ public:
     AckedSnapshotCounts finish(pb::Snapshot& out);
 
     /// The frame of `tick` as the client holds it once it applies that snapshot, while
-    /// this encoder keeps it.
+    /// this encoder keeps it (not once a newer tick is acknowledged).
     [[nodiscard]] const DeltaFrame* frame(std::uint64_t tick) const { return frames_.find(tick); }
     [[nodiscard]] const QuantizationSettings& settings() const { return settings_; }
 
@@ -66,7 +72,7 @@ private:
 
     QuantizationSettings settings_;
     FrameRing frames_;
-    DeltaFrame next_;
+    DeltaFrame* next_ = nullptr; ///< in frames_, between begin() and finish()
     const DeltaFrame* base_ = nullptr;
     std::size_t base_at_ = 0; ///< the next baseline entity not yet met
     std::uint64_t ticks_since_base_ = 0;
@@ -85,6 +91,8 @@ public:
     /// newest (stale_snapshot: a duplicate or a late one), coded against a frame this
     /// decoder does not hold (baseline_missing) or inconsistent in any way (the kinds of
     /// SnapshotDecoder::apply) is rejected whole and changes nothing; the problems say why.
+    /// An applied snapshot's baseline is the oldest frame kept: a server never codes
+    /// against an older one after it (docs/protocol.md).
     std::vector<SnapshotProblem> apply(const pb::Snapshot& snapshot);
 
     /// The newest frame applied (what the client acknowledges), or nullptr before any.
@@ -106,7 +114,6 @@ public:
 private:
     QuantizationSettings settings_;
     FrameRing frames_;
-    DeltaFrame next_;
     std::optional<std::uint64_t> newest_tick_;
     std::vector<UpdateEntry> entries_; ///< scratch of apply()
 };

@@ -84,30 +84,46 @@ inline void clear_motion(FrameEntity& e) {
 void set_motion(FrameEntity& e, const QuantizedPose& from, std::uint64_t ticks,
                 std::uint32_t angle_steps);
 
-/// The last kAckedHistory frames of one connection end, each in the slot of its tick
-/// modulo the capacity; a slot's memory is kept when a newer frame takes it.
+/// The frames one connection end holds, at most kAckedHistory, each in the slot of its
+/// tick modulo the capacity, and the memory of the frames it no longer needs.
+///
+/// A frame is built in the memory forgotten most recently: with acknowledgements
+/// arriving, that is the frame just older than the baseline, read a tick or two ago and
+/// still in cache, where a slot's own old memory was last used kAckedHistory ticks ago
+/// (500 clients' frames do not fit in cache, and writing a frame into cold memory was most
+/// of the codec's cost).
 class FrameRing {
 public:
-    /// The frame of `tick`, or nullptr when it was never stored or has been replaced.
+    /// The frame of `tick`, or nullptr when it was never stored, has been replaced or
+    /// forgotten.
     [[nodiscard]] const DeltaFrame* find(std::uint64_t tick) const {
         const Slot& s = slots_[tick % kAckedHistory];
         return s.used && s.frame.tick == tick ? &s.frame : nullptr;
     }
-    /// Stores `frame` (its tick newer than any stored) in its slot, replacing the frame
-    /// kAckedHistory or more ticks older; `frame` gets the slot's old memory.
-    void store(DeltaFrame& frame) {
-        Slot& s = slots_[frame.tick % kAckedHistory];
-        std::swap(s.frame, frame);
-        s.used = true;
-        frame.entities.clear();
-    }
+    /// The frame of `tick` (newer than every stored one) to fill: empty, in the memory
+    /// forgotten most recently. Valid until the next start(); commit() stores it.
+    DeltaFrame& start(std::uint64_t tick);
+    /// Stores the frame start() gave, in its slot, replacing the frame kAckedHistory or
+    /// more ticks older.
+    void commit();
+    /// Forgets every frame older than `tick`: an end that knows no snapshot will be coded
+    /// against them any more hands their memory to the next frames.
+    void forget_older_than(std::uint64_t tick);
 
 private:
+    /// Forgotten buffers kept for reuse beyond those in the slots (more are freed, the
+    /// coldest first): enough for the frames acknowledgements a few ticks late keep.
+    static constexpr std::size_t kMaxSpare = 8;
+
     struct Slot {
         DeltaFrame frame;
         bool used = false;
     };
+    void keep_spare(std::vector<FrameEntity>&& memory, bool warm);
+
     std::array<Slot, kAckedHistory> slots_{};
+    DeltaFrame next_;
+    std::vector<std::vector<FrameEntity>> spare_; ///< coldest first
 };
 
 } // namespace dsoc::protocol

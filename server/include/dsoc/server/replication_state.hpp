@@ -95,6 +95,8 @@ public:
 
     /// Enters and update entries the last snapshot built holds.
     [[nodiscard]] std::size_t last_updates() const { return last_updates_; }
+    /// What the last build_acked_snapshot() coded against.
+    [[nodiscard]] const protocol::AckedSnapshotCounts& last_acked() const { return last_acked_; }
     [[nodiscard]] std::size_t known_count() const { return known_.size(); }
     [[nodiscard]] const std::vector<std::uint32_t>& known() const { return known_; }
 
@@ -102,6 +104,7 @@ private:
     protocol::SnapshotEncoder encoder_;
     std::unique_ptr<protocol::AckedSnapshotEncoder> acked_encoder_; // when acked()
     std::size_t last_updates_ = 0;
+    protocol::AckedSnapshotCounts last_acked_;
     std::vector<std::uint32_t> known_; // increasing
     std::vector<std::uint32_t> next_known_;
 };

@@ -110,6 +110,12 @@ struct ServerStats {
     /// Entities in snapshots sent only because the client hears them (the heard tier),
     /// summed over the client-ticks that were sent.
     std::uint64_t heard_entities_sent = 0;
+    /// Acknowledged-delta snapshots sent (UDP clients), coded against an acknowledged
+    /// frame or whole (no acknowledgement, or one too old), and the sum of the former's
+    /// baseline ages in ticks: how late acknowledgements are.
+    std::uint64_t acked_snapshots_against_baseline = 0;
+    std::uint64_t acked_snapshots_whole = 0;
+    std::uint64_t acked_baseline_age_ticks = 0;
 };
 
 class Server final : private ConnectionHost {
