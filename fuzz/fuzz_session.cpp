@@ -94,7 +94,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
             const std::size_t n = std::min(piece, rest.size());
             session->receive(rest.first(n));
             rest = rest.subspan(n);
-            if (session->offer_snapshot(Session::Clock::now())) {
+            if (session->offer_snapshot(Session::Clock::now(), 1)) {
                 pb::Envelope snapshot;
                 snapshot.mutable_snapshot()->set_server_tick(1);
                 session->send_snapshot(snapshot);

@@ -3,6 +3,7 @@
 #include "snapshot_rules.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <limits>
 
 namespace dsoc::protocol {
@@ -27,7 +28,12 @@ bool same_position(const QuantizedPose& a, const QuantizedPose& b) {
 
 } // namespace
 
-QuantizedPose predict(const FrameEntity& base, std::uint64_t ticks, std::uint32_t angle_steps) {
+namespace {
+
+// Inlined into the encoder's and the decoder's loops, which run them for every entity of
+// every snapshot; the public predict() and set_motion() are the same code.
+[[gnu::always_inline]] inline QuantizedPose predicted(const FrameEntity& base, std::uint64_t ticks,
+                                                      std::uint32_t angle_steps) {
     const auto t = static_cast<std::int64_t>(ticks);
     // In halves, so that the fall's t (t + motion_ticks) / 2 is exact before the one
     // rounding: with the velocity the mean over the motion_ticks before the frame, a
@@ -47,8 +53,8 @@ QuantizedPose predict(const FrameEntity& base, std::uint64_t ticks, std::uint32_
     return p;
 }
 
-void set_motion(FrameEntity& e, const QuantizedPose& from, std::uint64_t ticks,
-                std::uint32_t angle_steps) {
+[[gnu::always_inline]] inline void measure_motion(FrameEntity& e, const QuantizedPose& from,
+                                                  std::uint64_t ticks, std::uint32_t angle_steps) {
     const auto t = static_cast<std::int64_t>(ticks);
     // Acknowledged every tick (t = 1, motion_ticks = 1) is the common case: its divisions
     // by 1 and 2 are exact, so it skips them (the same results, without a division by a
@@ -70,6 +76,17 @@ void set_motion(FrameEntity& e, const QuantizedPose& from, std::uint64_t ticks,
     e.turn_rate =
         per_tick(wrap_angle_delta(static_cast<std::int64_t>(e.pose.yaw) - from.yaw, angle_steps));
     e.motion_ticks = static_cast<std::uint8_t>(t);
+}
+
+} // namespace
+
+QuantizedPose predict(const FrameEntity& base, std::uint64_t ticks, std::uint32_t angle_steps) {
+    return predicted(base, ticks, angle_steps);
+}
+
+void set_motion(FrameEntity& e, const QuantizedPose& from, std::uint64_t ticks,
+                std::uint32_t angle_steps) {
+    measure_motion(e, from, ticks, angle_steps);
 }
 
 // --- frame ring ---
@@ -180,29 +197,43 @@ void AckedSnapshotEncoder::write_entry(std::uint32_t id, std::uint32_t fields,
 void AckedSnapshotEncoder::add(std::uint32_t id, const QuantizedPose& pose, std::uint8_t tier,
                                std::uint32_t kind, const std::array<float, 3>& half_extents,
                                pb::Snapshot& out) {
-    leave_baseline_below(id, out);
-    const bool carried =
-        base_ != nullptr && base_at_ < base_->entities.size() && base_->entities[base_at_].id == id;
-    // Each entity is written once, in place: a frame is rewritten for every client every
-    // tick, so its copies are most of the encoder's cost.
-    if (!carried) {
-        FrameEntity& n = next_->entities.emplace_back();
-        n.pose = pose;
-        n.id = id;
-        n.kind = kind;
-        n.half_extents = write_enter(id, pose, tier, half_extents, kind, settings_, out);
-        n.tier = tier;
-        n.enter_tier = tier;
-        ++counts_.enters;
-        return;
+    if (!carry(id, pose, tier, out)) {
+        enter(id, pose, tier, kind, half_extents, out);
     }
+}
+
+void AckedSnapshotEncoder::enter(std::uint32_t id, const QuantizedPose& pose, std::uint8_t tier,
+                                 std::uint32_t kind, const std::array<float, 3>& half_extents,
+                                 pb::Snapshot& out) {
+    leave_baseline_below(id, out);
+    assert(base_ == nullptr || base_at_ == base_->entities.size() ||
+           base_->entities[base_at_].id != id);
+    FrameEntity& n = next_->entities.emplace_back();
+    n.pose = pose;
+    n.id = id;
+    n.kind = kind;
+    n.half_extents = write_enter(id, pose, tier, half_extents, kind, settings_, out);
+    n.tier = tier;
+    n.enter_tier = tier;
+    ++counts_.enters;
+}
+
+bool AckedSnapshotEncoder::carry(std::uint32_t id, const QuantizedPose& pose, std::uint8_t tier,
+                                 pb::Snapshot& out) {
+    leave_baseline_below(id, out);
+    if (base_ == nullptr || base_at_ == base_->entities.size() ||
+        base_->entities[base_at_].id != id) {
+        return false;
+    }
+    // Each entity is written once, in place: a frame is rewritten for every client every
+    // tick, so its copies are a large part of the encoder's cost.
     const FrameEntity& b = base_->entities[base_at_++]; // in the ring, not in next_
     FrameEntity& n = next_->entities.emplace_back(b);
     const std::uint32_t steps = settings_.angle_steps;
-    const QuantizedPose predicted = predict(b, ticks_since_base_, steps);
-    const std::int64_t rx = static_cast<std::int64_t>(pose.x) - predicted.x;
-    const std::int64_t ry = static_cast<std::int64_t>(pose.y) - predicted.y;
-    const std::int64_t rz = static_cast<std::int64_t>(pose.z) - predicted.z;
+    const QuantizedPose expected = predicted(b, ticks_since_base_, steps);
+    const std::int64_t rx = static_cast<std::int64_t>(pose.x) - expected.x;
+    const std::int64_t ry = static_cast<std::int64_t>(pose.y) - expected.y;
+    const std::int64_t rz = static_cast<std::int64_t>(pose.z) - expected.z;
     const std::int64_t rpitch = static_cast<std::int64_t>(pose.pitch) - b.pose.pitch;
     const bool due = (next_->tick + id) % update_interval(tier) == 0;
     const bool fits = fits_int32(rx) && fits_int32(ry) && fits_int32(rz) && fits_int32(rpitch);
@@ -214,8 +245,8 @@ void AckedSnapshotEncoder::add(std::uint32_t id, const QuantizedPose& pose, std:
         n.tier = tier;
         clear_motion(n);
     } else if (!due) {
-        n.pose = predicted; // both ends carry it at the prediction
-        set_motion(n, b.pose, ticks_since_base_, steps);
+        n.pose = expected; // both ends carry it at the prediction
+        measure_motion(n, b.pose, ticks_since_base_, steps);
     } else {
         std::array<std::int32_t, 5> values{};
         std::size_t count = 0;
@@ -230,15 +261,16 @@ void AckedSnapshotEncoder::add(std::uint32_t id, const QuantizedPose& pose, std:
         field(kFieldY, ry);
         field(kFieldZ, rz);
         field(kFieldYaw,
-              wrap_angle_delta(static_cast<std::int64_t>(pose.yaw) - predicted.yaw, steps));
+              wrap_angle_delta(static_cast<std::int64_t>(pose.yaw) - expected.yaw, steps));
         field(kFieldPitch, rpitch);
         if (fields != 0) {
             write_entry(id, fields, values.data(), count, out);
         }
         n.pose = pose;
-        set_motion(n, b.pose, ticks_since_base_, steps);
+        measure_motion(n, b.pose, ticks_since_base_, steps);
     }
     counts_.moved += same_position(n.pose, b.pose) ? 0 : 1;
+    return true;
 }
 
 AckedSnapshotCounts AckedSnapshotEncoder::finish(pb::Snapshot& out) {
@@ -262,10 +294,10 @@ std::optional<SnapshotProblem> carry(const FrameEntity& b, const UpdateEntry* e,
                                      const pb::Snapshot& s, std::uint64_t tick, std::uint64_t ticks,
                                      std::uint32_t steps, FrameEntity& n) {
     n = b;
-    const QuantizedPose predicted = predict(b, ticks, steps);
+    const QuantizedPose expected = predicted(b, ticks, steps);
     if (e == nullptr) {
-        n.pose = predicted;
-        set_motion(n, b.pose, ticks, steps);
+        n.pose = expected;
+        measure_motion(n, b.pose, ticks, steps);
         return std::nullopt;
     }
     const std::int32_t* values = s.update_values().data() + e->at;
@@ -300,16 +332,16 @@ std::optional<SnapshotProblem> carry(const FrameEntity& b, const UpdateEntry* e,
         to = static_cast<std::int32_t>(
             std::clamp<std::int64_t>(sum, -kMaxQuantizedCoordinate, kMaxQuantizedCoordinate));
     };
-    add(kFieldX, predicted.x, n.pose.x);
-    add(kFieldY, predicted.y, n.pose.y);
-    add(kFieldZ, predicted.z, n.pose.z);
-    n.pose.yaw = (e->fields & kFieldYaw) != 0 ? add_angle_steps(predicted.yaw, values[k++], steps)
-                                              : predicted.yaw;
+    add(kFieldX, expected.x, n.pose.x);
+    add(kFieldY, expected.y, n.pose.y);
+    add(kFieldZ, expected.z, n.pose.z);
+    n.pose.yaw = (e->fields & kFieldYaw) != 0 ? add_angle_steps(expected.yaw, values[k++], steps)
+                                              : expected.yaw;
     add(kFieldPitch, b.pose.pitch, n.pose.pitch);
     if (!in_range) {
         return SnapshotProblem{"malformed_update", where() + ": a value leaves the range"};
     }
-    set_motion(n, b.pose, ticks, steps);
+    measure_motion(n, b.pose, ticks, steps);
     return std::nullopt;
 }
 

@@ -138,9 +138,11 @@ void ReplicationState::build_acked_snapshot(const interest::GameWorld& world,
         const protocol::QuantizedPose pose =
             poses != nullptr ? poses->at(next_entity, wanted.tier)
                              : protocol::quantize(pose_of(e), encoder.settings(), wanted.tier);
-        const glm::vec3 half = world.box_of(e).half_extents();
-        encoder.add(wanted.id, pose, wanted.tier, static_cast<std::uint32_t>(e.kind),
-                    {half.x, half.y, half.z}, snapshot);
+        if (!encoder.carry(wanted.id, pose, wanted.tier, snapshot)) {
+            const glm::vec3 half = world.box_of(e).half_extents();
+            encoder.enter(wanted.id, pose, wanted.tier, static_cast<std::uint32_t>(e.kind),
+                          {half.x, half.y, half.z}, snapshot);
+        }
         known_.push_back(wanted.id);
         if (audit && wanted.tier == 0) {
             add_audit(e, snapshot);

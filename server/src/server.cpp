@@ -267,7 +267,7 @@ void Server::prepare_client_ticks() {
         }
         // false: its previous snapshot is still unsent; this one is dropped (latest
         // wins). May disconnect the client as too slow.
-        const bool build = session.offer_snapshot(now);
+        const bool build = session.offer_snapshot(now, tick_);
         if (!session.active()) {
             continue;
         }

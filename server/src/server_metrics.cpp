@@ -82,7 +82,9 @@ std::string Server::render_metrics() const {
                 "the rest waited in the client's send queue.",
                 d(stats_.snapshot_writes_queued));
     out.counter("dsoc_snapshots_dropped_total",
-                "Snapshots not built because the client's previous one was still unsent.",
+                "Snapshots not built because the client's previous one was still unsent (TCP), or "
+                "the client had fallen behind: its newest acknowledgement over half a second of "
+                "ticks old (UDP; it gets one snapshot in 4 until it catches up).",
                 d(snapshots_dropped));
     out.counter("dsoc_inputs_dropped_total", "Client messages over the per-second cap.",
                 d(inputs_dropped));

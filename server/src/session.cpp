@@ -190,7 +190,7 @@ void Session::send(const pb::Envelope& message) {
     enqueue(std::move(frame), false);
 }
 
-bool Session::offer_snapshot(Clock::time_point now) {
+bool Session::offer_snapshot(Clock::time_point now, std::uint64_t /*tick*/) {
     if (state_ != State::active) {
         return false;
     }

@@ -1,9 +1,12 @@
 #include "dsoc/server/udp_connection.hpp"
 
 #include "dsoc/protocol/codec.hpp"
+#include "dsoc/protocol/delta_frame.hpp"
 #include "dsoc/server/udp_endpoint.hpp"
 
 #include <spdlog/spdlog.h>
+
+#include <algorithm>
 
 #include <sys/socket.h>
 
@@ -43,7 +46,10 @@ UdpConnection::UdpConnection(UdpEndpoint& endpoint, std::uint32_t client_id, std
                              std::uint64_t nonce, const boost::asio::ip::udp::endpoint& peer,
                              const ServerConfig& config, ConnectionHost& host)
     : Connection(client_id, config.max_inputs_per_second, host), endpoint_(endpoint),
-      config_(config), session_(session), nonce_(nonce), peer_(peer), last_heard_(Clock::now()) {
+      config_(config), session_(session), nonce_(nonce), peer_(peer),
+      unacked_window_(std::clamp<std::uint64_t>(
+          (static_cast<std::uint64_t>(config.tick_rate) + 1) / 2, 8, protocol::kAckedHistory - 4)),
+      last_heard_(Clock::now()) {
     remote_ = "udp:" + peer.address().to_string() + ":" + std::to_string(peer.port());
 }
 
@@ -84,8 +90,19 @@ void UdpConnection::resend_accepted() {
     }
 }
 
-bool UdpConnection::offer_snapshot(Clock::time_point) {
-    return active();
+bool UdpConnection::offer_snapshot(Clock::time_point, std::uint64_t tick) {
+    if (!active()) {
+        return false;
+    }
+    first_offer_tick_ = first_offer_tick_ == 0 ? tick : first_offer_tick_;
+    const std::uint64_t since = acked_.value_or(first_offer_tick_);
+    const bool behind = tick > since && tick - since > unacked_window_;
+    if (behind && tick - last_offer_tick_ < kBehindInterval) {
+        ++snapshots_dropped_;
+        return false;
+    }
+    last_offer_tick_ = tick;
+    return true;
 }
 
 void UdpConnection::send_snapshot_frame(std::vector<std::uint8_t>& frame) {

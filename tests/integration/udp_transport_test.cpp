@@ -307,6 +307,66 @@ TEST(UdpTransport, ASilentClientIsTimedOutWithAReason) {
     EXPECT_EQ(server.stats().disconnects.at("timed_out"), 1u);
 }
 
+TEST(UdpTransport, AClientThatFallsBehindGetsFewerSnapshotsUntilItAcknowledges) {
+    auto c = udp_config();
+    testing::RunningServer server(c);
+    RawUdp raw(server.port());
+    const std::uint64_t session = raw.handshake(85);
+    ASSERT_NE(session, 0u);
+    // Collects the ticks of the snapshots that arrive for `duration`, each tick once;
+    // acknowledges the newest when `ack` (as every input of an honest client does).
+    std::uint32_t sequence = 1;
+    const auto listen = [&](std::chrono::milliseconds duration, bool ack) {
+        std::vector<std::uint64_t> ticks;
+        const auto until = std::chrono::steady_clock::now() + duration;
+        while (std::chrono::steady_clock::now() < until) {
+            const auto d = raw.receive_kind(DatagramKind::snapshot, std::chrono::milliseconds(50));
+            protocol::DatagramHeader h;
+            std::span<const std::uint8_t> body;
+            protocol::SnapshotFragment f;
+            if (d && protocol::read_datagram(*d, h, body) == protocol::DatagramError::none &&
+                protocol::read_snapshot_body(body, f) == protocol::DatagramError::none &&
+                f.count == 1 && (ticks.empty() || f.tick > ticks.back())) {
+                ticks.push_back(f.tick);
+            }
+            if (ack && !ticks.empty()) {
+                pb::ClientInput input;
+                input.set_tick(sequence);
+                std::vector<std::uint8_t> out;
+                EXPECT_TRUE(protocol::write_input({DatagramKind::input, session, sequence++},
+                                                  ticks.back(), std::span(&input, 1), out));
+                raw.send(out);
+            }
+        }
+        return ticks;
+    };
+    // The client acknowledges nothing for 2 s (60 ticks at 30 Hz): after the window,
+    // one snapshot in kBehindInterval ticks.
+    const std::vector<std::uint64_t> silent = listen(std::chrono::milliseconds(2000), false);
+    ASSERT_GE(silent.size(), 2u);
+    const std::uint64_t window = (static_cast<std::uint64_t>(c.tick_rate) + 1) / 2;
+    std::uint64_t after_window = 0;
+    for (std::size_t i = 1; i < silent.size(); ++i) {
+        if (silent[i] > silent.front() + window + 1) {
+            EXPECT_GE(silent[i] - silent[i - 1], server::UdpConnection::kBehindInterval)
+                << "tick " << silent[i];
+            ++after_window;
+        }
+    }
+    EXPECT_GE(after_window, 5u);
+    EXPECT_LT(silent.size(), 35u); // not the 60 of full rate
+    // Once it acknowledges, every tick again.
+    const std::vector<std::uint64_t> acking = listen(std::chrono::milliseconds(1000), true);
+    ASSERT_GE(acking.size(), 10u);
+    std::size_t consecutive = 0;
+    for (std::size_t i = 1; i < acking.size(); ++i) {
+        consecutive += acking[i] == acking[i - 1] + 1 ? 1 : 0;
+    }
+    EXPECT_GT(consecutive, acking.size() / 2);
+    server.stop();
+    EXPECT_GT(server.stats().snapshots_dropped, 20u);
+}
+
 TEST(UdpTransport, ALostAcceptedIsSentAgainAndAResponseAfterTheCloseOpensNothing) {
     testing::RunningServer server(udp_config());
     RawUdp raw(server.port());

@@ -57,6 +57,14 @@ public:
     /// of update_interval(t); on the others it is carried at its prediction.
     void add(std::uint32_t id, const QuantizedPose& pose, std::uint8_t tier, std::uint32_t kind,
              const std::array<float, 3>& half_extents, pb::Snapshot& out);
+    /// add() in two steps, for a caller whose kind and size of an entity cost a lookup
+    /// that only an enter needs: carry() adds the entity when the baseline holds it and
+    /// returns true; otherwise it writes nothing for it and returns false, and enter()
+    /// (same id, pose and tier) must follow before the next entity.
+    [[nodiscard]] bool carry(std::uint32_t id, const QuantizedPose& pose, std::uint8_t tier,
+                             pb::Snapshot& out);
+    void enter(std::uint32_t id, const QuantizedPose& pose, std::uint8_t tier, std::uint32_t kind,
+               const std::array<float, 3>& half_extents, pb::Snapshot& out);
     /// Ends the snapshot (the baseline's entities not added leave) and keeps its frame.
     AckedSnapshotCounts finish(pb::Snapshot& out);
 

@@ -53,10 +53,10 @@ public:
     /// are dropped.
     virtual void send(const protocol::pb::Envelope& message) = 0;
 
-    /// Asks whether this client can take a snapshot now. False drops this tick's
-    /// snapshot for it (latest wins); may disconnect a client that has not taken one
-    /// for too long.
-    [[nodiscard]] virtual bool offer_snapshot(Clock::time_point now) = 0;
+    /// Asks whether this client can take the snapshot of `tick` now. False drops it
+    /// (latest wins; counted in snapshots_dropped()); may disconnect a client that has not
+    /// taken one for too long.
+    [[nodiscard]] virtual bool offer_snapshot(Clock::time_point now, std::uint64_t tick) = 0;
 
     /// Queues a snapshot frame (ClientTick::frame, in this transport's form); call only
     /// after offer_snapshot() returned true. Takes the bytes of `frame` and leaves in it

@@ -52,7 +52,7 @@ public:
     /// snapshot for it (latest wins: the next one is built from newer state, as a
     /// delta against what was really sent); once a snapshot has waited longer than
     /// slow_client_timeout_ms the client is disconnected with too_slow.
-    [[nodiscard]] bool offer_snapshot(Clock::time_point now) override;
+    [[nodiscard]] bool offer_snapshot(Clock::time_point now, std::uint64_t tick) override;
 
     /// Queues a snapshot; call only after offer_snapshot() returned true.
     void send_snapshot(const protocol::pb::Envelope& message);
