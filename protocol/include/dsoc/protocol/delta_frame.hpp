@@ -112,8 +112,12 @@ public:
 
 private:
     /// Forgotten buffers kept for reuse beyond those in the slots (more are freed, the
-    /// coldest first): enough for the frames acknowledgements a few ticks late keep.
-    static constexpr std::size_t kMaxSpare = 8;
+    /// coldest first). With acknowledgements arriving every tick one frame is forgotten
+    /// and one started per tick, so two suffice; the burst of frames a late client's
+    /// catch-up forgets at once goes back to the allocator, where every connection can
+    /// reuse it (kept per connection, each one's worst moment stayed allocated: a soak's
+    /// RSS crept up with every client that once fell behind).
+    static constexpr std::size_t kMaxSpare = 2;
 
     struct Slot {
         DeltaFrame frame;
