@@ -47,7 +47,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         AckedSnapshotEncoder encoder(settings); // three plausible frames
         pb::Snapshot s;
         for (std::uint64_t tick = 1; tick <= 3; ++tick) {
-            encoder.begin(tick, tick == 1 ? std::nullopt : std::optional(tick - 1), s);
+            // Ticks 2 and 3 both against tick 1: the decoder then keeps all three (it
+            // forgets only the frames older than the newest snapshot's baseline).
+            encoder.begin(tick, tick == 1 ? std::nullopt : std::optional<std::uint64_t>(1), s);
             for (std::uint32_t id = 1; id <= 4; ++id) {
                 const auto tier = static_cast<std::uint8_t>(id % kTiers);
                 const Pose pose{100.0f * static_cast<float>(id * tick), -50.0f, 24.0f,

@@ -133,6 +133,9 @@ void FrameRing::forget_older_than(std::uint64_t tick) {
 }
 
 void FrameRing::keep_spare(std::vector<FrameEntity>&& memory, bool warm) {
+    if (memory.capacity() == 0) {
+        return; // nothing to reuse; must not push a buffer that has memory out
+    }
     memory.clear();
     if (warm) {
         spare_.push_back(std::move(memory));

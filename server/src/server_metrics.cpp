@@ -84,7 +84,7 @@ std::string Server::render_metrics() const {
     out.counter("dsoc_snapshots_dropped_total",
                 "Snapshots not built because the client's previous one was still unsent (TCP), or "
                 "the client had fallen behind: its newest acknowledgement over half a second of "
-                "ticks old (UDP; it gets one snapshot in 4 until it catches up).",
+                "ticks old, 8 to 27 (UDP; it gets one snapshot in 4 until it catches up).",
                 d(snapshots_dropped));
     out.counter("dsoc_inputs_dropped_total", "Client messages over the per-second cap.",
                 d(inputs_dropped));
@@ -100,7 +100,8 @@ std::string Server::render_metrics() const {
                     d(udp_->datagrams_received()));
         out.counter_family(
             "dsoc_udp_snapshots_total",
-            "Snapshots sent to UDP clients: coded against the newest frame the client "
+            "Snapshots built for UDP clients and handed to the socket (a datagram the kernel "
+            "refuses still counts): coded against the newest frame the client "
             "acknowledged (baseline), or whole (none acknowledged, or too old: a late client).",
             {{{{"coded", "against_baseline"}}, d(stats_.acked_snapshots_against_baseline)},
              {{{"coded", "whole"}}, d(stats_.acked_snapshots_whole)}});

@@ -47,8 +47,9 @@ UdpConnection::UdpConnection(UdpEndpoint& endpoint, std::uint32_t client_id, std
                              const ServerConfig& config, ConnectionHost& host)
     : Connection(client_id, config.max_inputs_per_second, host), endpoint_(endpoint),
       config_(config), session_(session), nonce_(nonce), peer_(peer),
-      unacked_window_(std::clamp<std::uint64_t>(
-          (static_cast<std::uint64_t>(config.tick_rate) + 1) / 2, 8, protocol::kAckedHistory - 4)),
+      unacked_window_(
+          std::clamp<std::uint64_t>((static_cast<std::uint64_t>(config.tick_rate) + 1) / 2, 8,
+                                    protocol::kAckedHistory - 1 - kBehindInterval)),
       last_heard_(Clock::now()) {
     remote_ = "udp:" + peer.address().to_string() + ":" + std::to_string(peer.port());
 }

@@ -48,8 +48,9 @@ public:
     void send(const protocol::pb::Envelope& message) override;
     /// True while active, except for a client that has fallen behind: nothing ever waits
     /// in a queue, but a client whose newest acknowledgement is more than
-    /// unacked_window() ticks old (or that has acknowledged nothing that long since its
-    /// first snapshot) gets one snapshot every kBehindInterval ticks until it catches up.
+    /// unacked_window() ticks old (or that has acknowledged nothing that long since the
+    /// first snapshot offered to it) gets one snapshot every kBehindInterval ticks until
+    /// it catches up.
     /// It was reading (or the network carrying) snapshots slower than they were sent, and
     /// each one sent at full rate would be coded against an ever older baseline, larger
     /// and dearer at both ends, until the baseline left the history and every snapshot
@@ -94,8 +95,9 @@ public:
     static constexpr std::uint32_t kLastSequence = 0xffff0000u;
     /// How old the newest acknowledgement may be before offer_snapshot() reduces the rate:
     /// half a second of ticks (round trips of real players stay well within it), at least
-    /// 8, and far enough inside the acked history (protocol::kAckedHistory) that the
-    /// baseline is still held. [Units: ticks]
+    /// 8 and at most kAckedHistory - 1 - kBehindInterval (27), so that the first snapshot
+    /// sent at the reduced rate is still coded against the acknowledged frame (above 54
+    /// Hz the cap makes the window shorter than half a second). [Units: ticks]
     [[nodiscard]] std::uint64_t unacked_window() const { return unacked_window_; }
     /// A client behind gets a snapshot every this many ticks. [Units: ticks]
     static constexpr std::uint64_t kBehindInterval = 4;
