@@ -47,10 +47,7 @@ UdpConnection::UdpConnection(UdpEndpoint& endpoint, std::uint32_t client_id, std
                              const ServerConfig& config, ConnectionHost& host)
     : Connection(client_id, config.max_inputs_per_second, host), endpoint_(endpoint),
       config_(config), session_(session), nonce_(nonce), peer_(peer),
-      unacked_window_(
-          std::clamp<std::uint64_t>((static_cast<std::uint64_t>(config.tick_rate) + 1) / 2, 8,
-                                    protocol::kAckedHistory - 1 - kBehindInterval)),
-      last_heard_(Clock::now()) {
+      unacked_window_(unacked_window_at(config.tick_rate)), last_heard_(Clock::now()) {
     remote_ = "udp:" + peer.address().to_string() + ":" + std::to_string(peer.port());
 }
 
@@ -89,6 +86,11 @@ void UdpConnection::resend_accepted() {
     if (!accepted_.empty()) {
         send_datagram(accepted_);
     }
+}
+
+std::uint64_t UdpConnection::unacked_window_at(int tick_rate) {
+    return std::clamp<std::uint64_t>((static_cast<std::uint64_t>(tick_rate) + 1) / 2, 8,
+                                     protocol::kAckedHistory - 1 - kBehindInterval);
 }
 
 bool UdpConnection::offer_snapshot(Clock::time_point, std::uint64_t tick) {

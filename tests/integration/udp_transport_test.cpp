@@ -344,7 +344,8 @@ TEST(UdpTransport, AClientThatFallsBehindGetsFewerSnapshotsUntilItAcknowledges) 
     // one snapshot in kBehindInterval ticks.
     const std::vector<std::uint64_t> silent = listen(std::chrono::milliseconds(2000), false);
     ASSERT_GE(silent.size(), 2u);
-    const std::uint64_t window = (static_cast<std::uint64_t>(c.tick_rate) + 1) / 2;
+    const std::uint64_t window = server::UdpConnection::unacked_window_at(c.tick_rate);
+    ASSERT_EQ(window, 15u); // half a second at 30 Hz
     std::uint64_t after_window = 0;
     for (std::size_t i = 1; i < silent.size(); ++i) {
         if (silent[i] > silent.front() + window + 1) {

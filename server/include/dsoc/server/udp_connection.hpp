@@ -99,6 +99,8 @@ public:
     /// sent at the reduced rate is still coded against the acknowledged frame (above 54
     /// Hz the cap makes the window shorter than half a second). [Units: ticks]
     [[nodiscard]] std::uint64_t unacked_window() const { return unacked_window_; }
+    /// unacked_window() at `tick_rate` (Hz).
+    [[nodiscard]] static std::uint64_t unacked_window_at(int tick_rate);
     /// A client behind gets a snapshot every this many ticks. [Units: ticks]
     static constexpr std::uint64_t kBehindInterval = 4;
 
