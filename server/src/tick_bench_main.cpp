@@ -7,9 +7,13 @@
 // viewer's own entity, the compact snapshot and its frame - and, apart, the client's
 // decoding of that frame.
 //
-// Phases are timed with the thread's CPU clock (CLOCK_THREAD_CPUTIME_ID) on one
-// thread, so other processes on the machine inflate them little; `perf stat -e
-// instructions:u` around the program gives a count that does not depend on load.
+// Phases are timed on one thread with the monotonic clock (a vDSO read of tens of
+// nanoseconds: the phases per client-tick are a few microseconds, and the thread's CPU
+// clock, a system call here, cost more than a microsecond per read). The thread's CPU
+// clock is read once per tick beside it: the report says what share of the phases'
+// time the thread was on a CPU, below 100% when other processes preempted it and the
+// phases carry that. `perf stat -e instructions:u` around the program gives a count
+// that does not depend on load.
 // The output is deterministic for a seed except the times (entity updates and
 // bytes are a checksum of the run).
 
@@ -43,23 +47,25 @@ namespace {
 
 using namespace dsoc;
 
-double thread_cpu_ms() {
+double clock_ms(clockid_t clock) {
     timespec ts{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    clock_gettime(clock, &ts);
     return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
 }
+double phase_clock_ms() { return clock_ms(CLOCK_MONOTONIC); }
+double thread_cpu_ms() { return clock_ms(CLOCK_THREAD_CPUTIME_ID); }
 
-/// What one read of the clock costs [Units: ms], the least mean of a few runs of
+/// What one read of the phase clock costs [Units: ms], the least mean of a few runs of
 /// back-to-back reads: each phase's figure per client-tick carries one read (the bench
 /// reads the clock between phases), so ratios of two phases subtract it.
 double clock_read_ms() {
     double least = 1e9;
     for (int run = 0; run < 5; ++run) {
         constexpr int reads = 2000;
-        const double start = thread_cpu_ms();
+        const double start = phase_clock_ms();
         double last = start;
         for (int i = 0; i < reads; ++i) {
-            last = thread_cpu_ms();
+            last = phase_clock_ms();
         }
         least = std::min(least, (last - start) / reads);
     }
@@ -152,6 +158,7 @@ int main(int argc, char** argv) {
     std::mt19937_64 rng(config.seed);
     const float dt = 1.0f / static_cast<float>(config.tick_rate);
     Phases total;
+    double on_cpu = 0.0; // the thread's CPU time over the measured ticks [ms]
     std::uint64_t updates = 0;
     std::uint64_t bytes = 0;
     std::uint64_t decode_problems = 0;
@@ -162,9 +169,10 @@ int main(int argc, char** argv) {
         const auto tick = static_cast<std::uint64_t>(t);
         const bool measured = t > warm_up;
         Phases p;
-        double at = thread_cpu_ms();
+        const double cpu_at_start = thread_cpu_ms();
+        double at = phase_clock_ms();
         const auto lap = [&](double& phase) {
-            const double now = thread_cpu_ms();
+            const double now = phase_clock_ms();
             phase += now - at;
             at = now;
         };
@@ -256,6 +264,7 @@ int main(int argc, char** argv) {
         }
         if (measured) {
             total += p;
+            on_cpu += thread_cpu_ms() - cpu_at_start;
         }
     }
     const double n = ticks;
@@ -270,6 +279,9 @@ int main(int argc, char** argv) {
                udp ? "acknowledged deltas in datagrams (--udp)" : "compact, TCP frames");
     fmt::print("  server CPU per tick  {:8.2f} ms (one thread; budget {:.1f} ms per core)\n",
                server_ms, 1000.0 / config.tick_rate);
+    const double all_phases_ms = server_ms * n + total.decode;
+    fmt::print("  on a CPU             {:.1f}% of the phases' time (below 100: preempted)\n",
+               100.0 * on_cpu / all_phases_ms);
     const auto row = [&](const char* name, double ms) {
         fmt::print("    {:<18} {:8.2f} ms  {:5.1f}%  {:6.2f} us per client-tick\n", name, ms / n,
                    100.0 * ms / n / server_ms, 1000.0 * ms / client_tick);
