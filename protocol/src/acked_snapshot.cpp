@@ -150,9 +150,13 @@ void FrameRing::keep_spare(std::vector<FrameEntity>&& memory, bool warm) {
 // --- encoder ---
 
 void AckedSnapshotEncoder::begin(std::uint64_t tick, std::optional<std::uint64_t> acked,
-                                 pb::Snapshot& out) {
+                                 pb::Snapshot& out, UpdateColumns* columns) {
     out.Clear();
     out.set_server_tick(tick);
+    columns_ = columns;
+    if (columns_ != nullptr) {
+        columns_->clear();
+    }
     base_ = nullptr;
     if (acked && *acked < tick) {
         // The caller's acknowledgements never go back: no later snapshot is coded against
@@ -186,12 +190,17 @@ void AckedSnapshotEncoder::leave_baseline_below(std::uint32_t id, pb::Snapshot& 
 void AckedSnapshotEncoder::write_entry(std::uint32_t id, std::uint32_t fields,
                                        const std::int32_t* values, std::size_t count,
                                        pb::Snapshot& out) {
-    out.add_update_head(update_head(counts_.entries == 0 ? id : id - last_entry_id_, fields));
-    if (mask_apart(fields)) {
-        out.add_update_fields(fields);
-    }
-    for (std::size_t k = 0; k < count; ++k) {
-        out.add_update_values(values[k]);
+    const std::uint32_t id_step = counts_.entries == 0 ? id : id - last_entry_id_;
+    if (columns_ != nullptr) {
+        columns_->add(id_step, fields, std::span<const std::int32_t>(values, count));
+    } else {
+        out.add_update_head(update_head(id_step, fields));
+        if (mask_apart(fields)) {
+            out.add_update_fields(fields);
+        }
+        for (std::size_t k = 0; k < count; ++k) {
+            out.add_update_values(values[k]);
+        }
     }
     last_entry_id_ = id;
     ++counts_.entries;

@@ -92,32 +92,43 @@ std::size_t update_column_bytes(const pb::Snapshot& s) {
            packed_field_bytes(pb::Snapshot::kUpdateValuesFieldNumber, values);
 }
 
-std::size_t encode_snapshot_frame(pb::Envelope& envelope, const UpdateColumns& columns,
-                                  std::vector<std::uint8_t>& out) {
+std::size_t append_snapshot_envelope(pb::Envelope& envelope, const UpdateColumns& columns,
+                                     std::vector<std::uint8_t>& out) {
     assert(envelope.has_snapshot());
     pb::Snapshot& snapshot = *envelope.mutable_snapshot();
     assert(snapshot.update_head_size() == 0 && snapshot.update_fields_size() == 0 &&
            snapshot.update_values_size() == 0);
-    static_assert(pb::Snapshot::kAuditFieldNumber > pb::Snapshot::kUpdateValuesFieldNumber,
-                  "the audit poses follow the update columns on the wire");
-    // Protobuf writes fields in number order: the audit poses (8) come after the
-    // columns (5-7), so they wait in `tail` (only on the ticks a client audits).
+    static_assert(pb::Snapshot::kAuditFieldNumber > pb::Snapshot::kUpdateValuesFieldNumber &&
+                      pb::Snapshot::kBaselineTickFieldNumber > pb::Snapshot::kAuditFieldNumber,
+                  "the audit poses, then the baseline tick, follow the update columns");
+    // Protobuf writes fields in number order: the audit poses (8) and the baseline tick
+    // (9) come after the columns (5-7), so they are held aside while the fields before
+    // them are written: the poses in `tail` (only on the ticks a client audits), the
+    // tick written by hand.
     std::optional<pb::Snapshot> tail;
     if (snapshot.audit_size() > 0) {
         tail.emplace().mutable_audit()->Swap(snapshot.mutable_audit());
     }
+    const bool has_baseline = snapshot.has_baseline_tick();
+    const std::uint64_t baseline = snapshot.baseline_tick();
+    snapshot.clear_baseline_tick();
+    using google::protobuf::internal::WireFormatLite;
+    const std::size_t baseline_bytes =
+        has_baseline ? WireFormatLite::TagSize(pb::Snapshot::kBaselineTickFieldNumber,
+                                               WireFormatLite::TYPE_UINT64) +
+                           CodedOutputStream::VarintSize64(baseline)
+                     : 0;
     const std::size_t head_bytes = snapshot.ByteSizeLong();
     const std::size_t tail_bytes = tail ? tail->ByteSizeLong() : 0;
-    const std::size_t body = head_bytes + columns.wire_bytes() + tail_bytes;
+    const std::size_t body = head_bytes + columns.wire_bytes() + tail_bytes + baseline_bytes;
     const std::uint32_t tag = length_delimited_tag(pb::Envelope::kSnapshotFieldNumber);
     const std::size_t payload = CodedOutputStream::VarintSize32(tag) +
                                 CodedOutputStream::VarintSize32(static_cast<std::uint32_t>(body)) +
                                 body;
     const std::size_t start = out.size();
-    out.resize(start + kFrameHeaderBytes + payload);
+    out.resize(start + payload);
     std::uint8_t* p = out.data() + start;
-    write_frame_header(p, static_cast<std::uint32_t>(payload));
-    p = CodedOutputStream::WriteVarint32ToArray(tag, p + kFrameHeaderBytes);
+    p = CodedOutputStream::WriteVarint32ToArray(tag, p);
     p = CodedOutputStream::WriteVarint32ToArray(static_cast<std::uint32_t>(body), p);
     p = snapshot.SerializeWithCachedSizesToArray(p);
     p = columns.write(p);
@@ -125,8 +136,21 @@ std::size_t encode_snapshot_frame(pb::Envelope& envelope, const UpdateColumns& c
         p = tail->SerializeWithCachedSizesToArray(p);
         snapshot.mutable_audit()->Swap(tail->mutable_audit());
     }
+    if (has_baseline) {
+        p = WireFormatLite::WriteUInt64ToArray(pb::Snapshot::kBaselineTickFieldNumber, baseline, p);
+        snapshot.set_baseline_tick(baseline);
+    }
     assert(p == out.data() + out.size());
     (void)p;
+    return payload;
+}
+
+std::size_t encode_snapshot_frame(pb::Envelope& envelope, const UpdateColumns& columns,
+                                  std::vector<std::uint8_t>& out) {
+    const std::size_t start = out.size();
+    out.resize(start + kFrameHeaderBytes);
+    const std::size_t payload = append_snapshot_envelope(envelope, columns, out);
+    write_frame_header(out.data() + start, static_cast<std::uint32_t>(payload));
     return kFrameHeaderBytes + payload;
 }
 

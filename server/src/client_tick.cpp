@@ -46,10 +46,12 @@ void run_one(const interest::GameWorld& world, interest::InterestPolicy& policy,
         }
     }
     if (job.build && job.replication->acked()) {
+        protocol::UpdateColumns* columns = job.frame != nullptr ? job.columns : nullptr;
         job.replication->build_acked_snapshot(world, interest, tick, job.acked_tick, job.audit,
-                                              *job.envelope->mutable_snapshot(), job.poses);
+                                              *job.envelope->mutable_snapshot(), job.poses,
+                                              columns);
         if (job.frame != nullptr) {
-            snapshot_frame(tick, *job.envelope, *job.frame);
+            snapshot_frame(tick, *job.envelope, columns, *job.frame);
         }
     } else if (job.build) {
         protocol::UpdateColumns* columns = job.frame != nullptr ? job.columns : nullptr;

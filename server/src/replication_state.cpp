@@ -113,15 +113,13 @@ void ReplicationState::build_snapshot(const interest::GameWorld& world,
                     (columns != nullptr ? columns->count() : snapshot.update_head_size());
 }
 
-void ReplicationState::build_acked_snapshot(const interest::GameWorld& world,
-                                            std::span<const interest::Interest> interest,
-                                            std::uint64_t tick,
-                                            std::optional<std::uint64_t> acked_tick, bool audit,
-                                            protocol::pb::Snapshot& snapshot,
-                                            const SharedPoses* poses) {
+void ReplicationState::build_acked_snapshot(
+    const interest::GameWorld& world, std::span<const interest::Interest> interest,
+    std::uint64_t tick, std::optional<std::uint64_t> acked_tick, bool audit,
+    protocol::pb::Snapshot& snapshot, const SharedPoses* poses, protocol::UpdateColumns* columns) {
     assert(acked_encoder_ != nullptr);
     protocol::AckedSnapshotEncoder& encoder = *acked_encoder_;
-    encoder.begin(tick, acked_tick, snapshot);
+    encoder.begin(tick, acked_tick, snapshot, columns);
     known_.clear();
     const std::vector<interest::Entity>& entities = world.entities();
     const std::uint32_t* ids = poses != nullptr ? poses->ids().data() : nullptr;

@@ -52,8 +52,12 @@ double clock_ms(clockid_t clock) {
     clock_gettime(clock, &ts);
     return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
 }
-double phase_clock_ms() { return clock_ms(CLOCK_MONOTONIC); }
-double thread_cpu_ms() { return clock_ms(CLOCK_THREAD_CPUTIME_ID); }
+double phase_clock_ms() {
+    return clock_ms(CLOCK_MONOTONIC);
+}
+double thread_cpu_ms() {
+    return clock_ms(CLOCK_THREAD_CPUTIME_ID);
+}
 
 /// What one read of the phase clock costs [Units: ms], the least mean of a few runs of
 /// back-to-back reads: each phase's figure per client-tick carries one read (the bench
@@ -217,12 +221,12 @@ int main(int argc, char** argv) {
             lap(p.hearing);
             server::add_own_entity(c->interest, c->entity_id);
             if (udp) {
-                c->replication.build_acked_snapshot(world, c->interest, tick,
-                                                    c->acked_decoder.newest_tick(), false,
-                                                    *c->envelope.mutable_snapshot(), &poses);
+                c->replication.build_acked_snapshot(
+                    world, c->interest, tick, c->acked_decoder.newest_tick(), false,
+                    *c->envelope.mutable_snapshot(), &poses, &c->columns);
                 lap(p.snapshot);
                 // As the server: the frame on the pool, its datagrams in write_now().
-                server::snapshot_frame(tick, c->envelope, c->frame);
+                server::snapshot_frame(tick, c->envelope, &c->columns, c->frame);
                 datagrams.clear();
                 const std::size_t count = protocol::write_snapshot_datagrams(
                     1, 1, tick, std::span(c->frame).subspan(8), datagrams);

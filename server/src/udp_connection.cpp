@@ -31,11 +31,15 @@ std::uint64_t get_u64(const std::uint8_t* in) {
 
 } // namespace
 
-void snapshot_frame(std::uint64_t tick, const pb::Envelope& envelope,
-                    std::vector<std::uint8_t>& frame) {
+void snapshot_frame(std::uint64_t tick, pb::Envelope& envelope,
+                    const protocol::UpdateColumns* columns, std::vector<std::uint8_t>& frame) {
     frame.clear();
     for (std::size_t i = 0; i < kTickBytes; ++i) {
         frame.push_back(static_cast<std::uint8_t>(tick >> (8 * i)));
+    }
+    if (columns != nullptr) {
+        protocol::append_snapshot_envelope(envelope, *columns, frame);
+        return;
     }
     const std::size_t size = envelope.ByteSizeLong();
     frame.resize(kTickBytes + size);

@@ -1,8 +1,9 @@
-// The update columns written in wire form (UpdateColumns, encode_snapshot_frame) against
-// their obviously correct twin: the same entries as protobuf repeated fields, framed by
-// encode_frame(). Random connections, tick after tick: the frames must be byte for byte
-// the same.
+// The update columns written in wire form (UpdateColumns, encode_snapshot_frame,
+// append_snapshot_envelope) against their obviously correct twin: the same entries as
+// protobuf repeated fields, serialized by protobuf. Random connections, tick after tick,
+// for the compact and the acknowledged-delta encoders: the bytes must be the same.
 
+#include "dsoc/protocol/acked_snapshot.hpp"
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/compact_snapshot.hpp"
 #include "dsoc/protocol/update_columns.hpp"
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -116,6 +118,92 @@ TEST(UpdateColumns, FramesAreByteForByteThoseOfTheRepeatedFields) {
     EXPECT_GT(updates, 10000u);
     EXPECT_GT(audited, 1000u);
     EXPECT_GT(empty_columns, 0u);
+}
+
+TEST(UpdateColumns, AckedSnapshotsAreByteForByteThoseOfTheRepeatedFields) {
+    std::mt19937 rng(20261128);
+    std::uniform_real_distribution<float> step(-40.0f, 40.0f);
+    std::uniform_real_distribution<float> turn(-30.0f, 30.0f);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::uniform_int_distribution<int> tier_of(0, static_cast<int>(kTiers) - 1);
+    std::size_t entries = 0;
+    std::size_t against_baseline = 0;
+    std::size_t whole = 0;
+    std::size_t audited = 0;
+    for (int connection = 0; connection < 12; ++connection) {
+        const QuantizationSettings settings;
+        AckedSnapshotEncoder twin(settings); // into the repeated fields
+        AckedSnapshotEncoder fast(settings); // into the columns
+        UpdateColumns columns;
+        pb::Envelope twin_envelope;
+        pb::Envelope fast_envelope;
+        std::map<std::uint32_t, std::pair<Pose, std::uint8_t>> world; // id -> pose, tier
+        std::optional<std::uint64_t> acked;
+        const float moving = unit(rng);
+        for (std::uint64_t tick = 1; tick <= 150; ++tick) {
+            // The client acknowledges a recent tick most of the time, now and then none
+            // for a while (whole snapshots once the baseline is too old).
+            if (unit(rng) < 0.7f && tick > 1) {
+                const std::uint64_t back = 1 + rng() % 4;
+                acked = std::max(acked.value_or(0), tick > back ? tick - back : 1);
+            }
+            twin.begin(tick, acked, *twin_envelope.mutable_snapshot());
+            fast.begin(tick, acked, *fast_envelope.mutable_snapshot(), &columns);
+            pb::Snapshot& a = *twin_envelope.mutable_snapshot();
+            pb::Snapshot& b = *fast_envelope.mutable_snapshot();
+            while (world.size() < 40 || unit(rng) < 0.2f) {
+                const std::uint32_t id =
+                    unit(rng) < 0.1f ? 0x80000000u + rng() % 1000u : 1u + rng() % 5000u;
+                world[id] = {{step(rng) * 50.0f, step(rng) * 50.0f, step(rng) * 5.0f,
+                              turn(rng) * 6.0f, turn(rng) * 3.0f},
+                             static_cast<std::uint8_t>(tier_of(rng))};
+            }
+            const bool audit = unit(rng) < 0.15f;
+            for (auto& [id, entity] : world) {
+                auto& [pose, tier] = entity;
+                if (unit(rng) < moving) {
+                    pose.x += step(rng) * 0.2f;
+                    pose.y += step(rng) * 0.2f;
+                    pose.z += unit(rng) < 0.2f ? step(rng) : 0.0f;
+                    pose.yaw_deg = std::fmod(pose.yaw_deg + turn(rng) + 540.0f, 360.0f) - 180.0f;
+                }
+                if (unit(rng) < 0.02f) {
+                    tier = static_cast<std::uint8_t>(tier_of(rng)); // a rebase
+                }
+                if (unit(rng) < 0.1f) {
+                    continue; // not wanted this tick: leaves, or stays unknown
+                }
+                const QuantizedPose q = quantize(pose, settings, tier);
+                twin.add(id, q, tier, 1, kHalf, a);
+                fast.add(id, q, tier, 1, kHalf, b);
+                if (audit) {
+                    add_audit(id, pose, a);
+                    add_audit(id, pose, b);
+                }
+            }
+            const AckedSnapshotCounts twin_counts = twin.finish(a);
+            const AckedSnapshotCounts fast_counts = fast.finish(b);
+            ASSERT_EQ(fast_counts.entries, twin_counts.entries);
+            ASSERT_EQ(b.update_head_size(), 0);
+            ASSERT_EQ(columns.count(), static_cast<std::size_t>(a.update_head_size()));
+            entries += twin_counts.entries;
+            against_baseline += twin_counts.coded_against_baseline ? 1 : 0;
+            whole += twin_counts.coded_against_baseline ? 0 : 1;
+            audited += static_cast<std::size_t>(b.audit_size());
+            const std::string before = fast_envelope.SerializeAsString();
+            std::vector<std::uint8_t> fast_bytes{0xab}; // appended after what is there
+            const std::string twin_bytes = twin_envelope.SerializeAsString();
+            ASSERT_EQ(append_snapshot_envelope(fast_envelope, columns, fast_bytes),
+                      twin_bytes.size());
+            ASSERT_EQ(std::string(fast_bytes.begin() + 1, fast_bytes.end()), twin_bytes)
+                << "connection " << connection << " tick " << tick;
+            ASSERT_EQ(fast_envelope.SerializeAsString(), before) << "the envelope was changed";
+        }
+    }
+    EXPECT_GT(entries, 10000u);
+    EXPECT_GT(against_baseline, 1000u);
+    EXPECT_GT(whole, 12u);
+    EXPECT_GT(audited, 1000u);
 }
 
 TEST(UpdateColumns, ClearKeepsNothingOfTheLastSnapshot) {

@@ -16,6 +16,7 @@
 #include "dsoc/protocol/delta_frame.hpp"
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/protocol/quantization.hpp"
+#include "dsoc/protocol/update_columns.hpp"
 
 #include <array>
 #include <cstdint>
@@ -50,7 +51,10 @@ public:
     /// the next (an older acknowledgement arriving late is not newest): the frames older
     /// than it are forgotten, and so a snapshot's baseline is never older than an earlier
     /// one's, as docs/protocol.md promises the client.
-    void begin(std::uint64_t tick, std::optional<std::uint64_t> acked, pb::Snapshot& out);
+    /// `columns` (optional; cleared here) takes the update entries in wire form instead of
+    /// `out`'s repeated fields (append_snapshot_envelope() writes the two together).
+    void begin(std::uint64_t tick, std::optional<std::uint64_t> acked, pb::Snapshot& out,
+               UpdateColumns* columns = nullptr);
     /// One entity the client is to know, in increasing id order: `pose` quantized on
     /// `tier` (< kTiers; quantize(pose, settings(), tier)), `half_extents` in world units.
     /// On a tier t > 0 an entity is updated only on ticks where (tick + id) is a multiple
@@ -82,7 +86,8 @@ private:
     FrameRing frames_;
     DeltaFrame* next_ = nullptr; ///< in frames_, between begin() and finish()
     const DeltaFrame* base_ = nullptr;
-    std::size_t base_at_ = 0; ///< the next baseline entity not yet met
+    UpdateColumns* columns_ = nullptr; ///< this snapshot's, or null: into its repeated fields
+    std::size_t base_at_ = 0;          ///< the next baseline entity not yet met
     std::uint64_t ticks_since_base_ = 0;
     std::uint32_t last_entry_id_ = 0;
     AckedSnapshotCounts counts_;

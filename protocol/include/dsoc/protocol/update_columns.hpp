@@ -129,12 +129,17 @@ private:
 /// UpdateColumns::wire_bytes() of the same entries.
 [[nodiscard]] std::size_t update_column_bytes(const pb::Snapshot& snapshot);
 
-/// Appends one frame (framing.hpp) holding `envelope`, whose body is a snapshot with
-/// no update entries of its own, with `columns` as that snapshot's update columns;
-/// the bytes are those encode_frame() appends for the snapshot holding the same
-/// entries as repeated fields. `envelope` is unchanged when this returns (its audit
-/// poses are moved aside while the fields before them are written). Returns the
-/// number of bytes appended (header included).
+/// Appends the bytes of `envelope`, whose body is a snapshot with no update entries of
+/// its own, with `columns` as that snapshot's update columns: the bytes protobuf
+/// serializes for the envelope whose snapshot holds the same entries as repeated
+/// fields. `envelope` is unchanged when this returns (its audit poses are moved aside
+/// while the fields before them are written). Returns the number of bytes appended.
+std::size_t append_snapshot_envelope(pb::Envelope& envelope, const UpdateColumns& columns,
+                                     std::vector<std::uint8_t>& out);
+
+/// Appends one frame (framing.hpp) holding append_snapshot_envelope()'s bytes: those
+/// encode_frame() appends for the snapshot holding the same entries as repeated fields.
+/// Returns the number of bytes appended (header included).
 std::size_t encode_snapshot_frame(pb::Envelope& envelope, const UpdateColumns& columns,
                                   std::vector<std::uint8_t>& out);
 

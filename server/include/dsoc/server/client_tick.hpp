@@ -39,8 +39,9 @@ struct ClientTick {
     /// When replication->acked(): the newest snapshot tick the client acknowledged.
     std::optional<std::uint64_t> acked_tick;
     /// Optional, with `frame`: the snapshot's update entries are written here in wire
-    /// form and framed by protocol::encode_snapshot_frame() (the same bytes, without a
-    /// second pass over them); `envelope`'s snapshot then holds no update entries.
+    /// form and framed with them (protocol::encode_snapshot_frame(), or snapshot_frame()
+    /// when acked: the same bytes, without a second pass over them); `envelope`'s
+    /// snapshot then holds no update entries.
     protocol::UpdateColumns* columns = nullptr;
     /// Optional: this tick's poses quantized once for all clients (same bytes).
     const SharedPoses* poses = nullptr;

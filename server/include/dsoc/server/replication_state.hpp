@@ -86,12 +86,14 @@ public:
     /// the client acknowledged) when the encoder still holds it, else against nothing.
     /// Entities on tier t > 0 are updated on the same staggered ticks as build_snapshot()'s
     /// and carried at their prediction on the others. `audit`: the exact pose of every
-    /// tier-0 entity (those are updated every tick). `poses`: as build_snapshot()'s.
-    /// Only when acked().
+    /// tier-0 entity (those are updated every tick). `poses`, `columns`: as
+    /// build_snapshot()'s (frame with snapshot_frame() given the same columns). Only when
+    /// acked().
     void build_acked_snapshot(const interest::GameWorld& world,
                               std::span<const interest::Interest> interest, std::uint64_t tick,
                               std::optional<std::uint64_t> acked_tick, bool audit,
-                              protocol::pb::Snapshot& snapshot, const SharedPoses* poses = nullptr);
+                              protocol::pb::Snapshot& snapshot, const SharedPoses* poses = nullptr,
+                              protocol::UpdateColumns* columns = nullptr);
 
     /// Enters and update entries the last snapshot built holds.
     [[nodiscard]] std::size_t last_updates() const { return last_updates_; }

@@ -14,6 +14,7 @@
 // waits (it sends on the endpoint's socket, which the kernel lets several threads use).
 
 #include "dsoc/protocol/datagram.hpp"
+#include "dsoc/protocol/update_columns.hpp"
 #include "dsoc/server/connection.hpp"
 #include "dsoc/server/server_config.hpp"
 
@@ -138,8 +139,9 @@ private:
 };
 
 /// The frame the server's job builds for a UDP client: the snapshot's tick (u64
-/// little-endian), then the serialized envelope (clears `frame` first).
-void snapshot_frame(std::uint64_t tick, const protocol::pb::Envelope& envelope,
-                    std::vector<std::uint8_t>& frame);
+/// little-endian), then the serialized envelope (clears `frame` first). `columns`: the
+/// snapshot's update entries when they were built in wire form (null: in `envelope`).
+void snapshot_frame(std::uint64_t tick, protocol::pb::Envelope& envelope,
+                    const protocol::UpdateColumns* columns, std::vector<std::uint8_t>& frame);
 
 } // namespace dsoc::server
