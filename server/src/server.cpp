@@ -488,6 +488,8 @@ void Server::on_closed(Connection& session) {
     stats_.bytes_received += session.bytes_received();
     ++stats_.disconnects[protocol::disconnect_reason_name(session.close_reason())];
     stats_.snapshots_dropped += session.snapshots_dropped();
+    stats_.snapshots_paced.lagging += session.snapshots_paced().lagging;
+    stats_.snapshots_paced.behind += session.snapshots_paced().behind;
     stats_.inputs_dropped += session.inputs_dropped();
     stats_.inputs_clamped += session.inputs_clamped();
     stats_.peak_queued_bytes = std::max(stats_.peak_queued_bytes, session.peak_queued_bytes());

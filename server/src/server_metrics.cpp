@@ -9,6 +9,7 @@ std::string Server::render_metrics() const {
     std::uint64_t bytes_sent = stats_.bytes_sent;
     std::uint64_t bytes_received = stats_.bytes_received;
     std::uint64_t snapshots_dropped = stats_.snapshots_dropped;
+    SnapshotPaceCounts paced = stats_.snapshots_paced;
     std::uint64_t inputs_dropped = stats_.inputs_dropped;
     std::uint64_t inputs_clamped = stats_.inputs_clamped;
     std::size_t queued = 0;
@@ -16,6 +17,8 @@ std::string Server::render_metrics() const {
         bytes_sent += session->bytes_sent();
         bytes_received += session->bytes_received();
         snapshots_dropped += session->snapshots_dropped();
+        paced.lagging += session->snapshots_paced().lagging;
+        paced.behind += session->snapshots_paced().behind;
         inputs_dropped += session->inputs_dropped();
         inputs_clamped += session->inputs_clamped();
         queued += session->queued_bytes();
@@ -83,8 +86,7 @@ std::string Server::render_metrics() const {
                 d(stats_.snapshot_writes_queued));
     out.counter("dsoc_snapshots_dropped_total",
                 "Snapshots not built because the client's previous one was still unsent (TCP), or "
-                "the client had fallen behind: its newest acknowledgement over half a second of "
-                "ticks old, 8 to 27 (UDP; it gets one snapshot in 4 until it catches up).",
+                "its pace skipped them (UDP: dsoc_udp_snapshots_paced_total).",
                 d(snapshots_dropped));
     out.counter("dsoc_inputs_dropped_total", "Client messages over the per-second cap.",
                 d(inputs_dropped));
@@ -105,6 +107,12 @@ std::string Server::render_metrics() const {
             "acknowledged (baseline), or whole (none acknowledged, or too old: a late client).",
             {{{{"coded", "against_baseline"}}, d(stats_.acked_snapshots_against_baseline)},
              {{{"coded", "whole"}}, d(stats_.acked_snapshots_whole)}});
+        out.counter_family(
+            "dsoc_udp_snapshots_paced_total",
+            "Snapshots not built for UDP clients whose acknowledgements aged (SnapshotPacer): "
+            "lagging, over 3 ticks older than the least age the client showed lately (a "
+            "snapshot every 2nd tick), or behind, over half a second of ticks old (every 4th).",
+            {{{{"pace", "lagging"}}, d(paced.lagging)}, {{{"pace", "behind"}}, d(paced.behind)}});
         out.counter("dsoc_udp_baseline_age_ticks_total",
                     "Ticks from the baseline to the snapshot, summed over the snapshots coded "
                     "against one: divided by their count, how late acknowledgements arrive.",

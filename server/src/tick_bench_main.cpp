@@ -119,6 +119,7 @@ int main(int argc, char** argv) {
     int ticks = 90;
     int warm_up = 30;
     bool udp = false;
+    int ack_delay = 0;
     CLI::App app{"dsoc-tick-bench: CPU per server tick for N players, by phase, no sockets"};
     cli::set_up(app, "dsoc-tick-bench");
     server::add_world_options(app, config);
@@ -136,6 +137,12 @@ int main(int argc, char** argv) {
                    "Snapshots as over UDP: acknowledged deltas, each client acknowledging every "
                    "snapshot before the next tick (a LAN), split into datagrams (true/false)")
         ->capture_default_str();
+    app.add_option("--ack-delay", ack_delay,
+                   "With --udp: each client's acknowledgement is of the snapshot this many ticks "
+                   "older than the newest it decoded, as a round trip makes it (snapshots are "
+                   "then coded against older baselines)")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 16));
     if (const auto stop = cli::parse(app, argc, argv)) {
         return *stop;
     }
@@ -221,9 +228,13 @@ int main(int argc, char** argv) {
             lap(p.hearing);
             server::add_own_entity(c->interest, c->entity_id);
             if (udp) {
-                c->replication.build_acked_snapshot(
-                    world, c->interest, tick, c->acked_decoder.newest_tick(), false,
-                    *c->envelope.mutable_snapshot(), &poses, &c->columns);
+                std::optional<std::uint64_t> acked = c->acked_decoder.newest_tick();
+                acked = acked && *acked > static_cast<std::uint64_t>(ack_delay)
+                            ? std::optional(*acked - static_cast<std::uint64_t>(ack_delay))
+                            : acked;
+                c->replication.build_acked_snapshot(world, c->interest, tick, acked, false,
+                                                    *c->envelope.mutable_snapshot(), &poses,
+                                                    &c->columns);
                 lap(p.snapshot);
                 // As the server: the frame on the pool, its datagrams in write_now().
                 server::snapshot_frame(tick, c->envelope, &c->columns, c->frame);

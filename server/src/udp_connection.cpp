@@ -50,8 +50,8 @@ UdpConnection::UdpConnection(UdpEndpoint& endpoint, std::uint32_t client_id, std
                              std::uint64_t nonce, const boost::asio::ip::udp::endpoint& peer,
                              const ServerConfig& config, ConnectionHost& host)
     : Connection(client_id, config.max_inputs_per_second, host), endpoint_(endpoint),
-      config_(config), session_(session), nonce_(nonce), peer_(peer),
-      unacked_window_(unacked_window_at(config.tick_rate)), last_heard_(Clock::now()) {
+      config_(config), session_(session), nonce_(nonce), peer_(peer), pacer_(config.tick_rate),
+      last_heard_(Clock::now()) {
     remote_ = "udp:" + peer.address().to_string() + ":" + std::to_string(peer.port());
 }
 
@@ -92,23 +92,14 @@ void UdpConnection::resend_accepted() {
     }
 }
 
-std::uint64_t UdpConnection::unacked_window_at(int tick_rate) {
-    return std::clamp<std::uint64_t>((static_cast<std::uint64_t>(tick_rate) + 1) / 2, 8,
-                                     protocol::kAckedHistory - 1 - kBehindInterval);
-}
-
 bool UdpConnection::offer_snapshot(Clock::time_point, std::uint64_t tick) {
     if (!active()) {
         return false;
     }
-    first_offer_tick_ = first_offer_tick_ == 0 ? tick : first_offer_tick_;
-    const std::uint64_t since = acked_.value_or(first_offer_tick_);
-    const bool behind = tick > since && tick - since > unacked_window_;
-    if (behind && tick - last_offer_tick_ < kBehindInterval) {
+    if (!pacer_.offer(tick, acked_)) {
         ++snapshots_dropped_;
         return false;
     }
-    last_offer_tick_ = tick;
     return true;
 }
 

@@ -10,6 +10,7 @@
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/connect_token.hpp"
 #include "dsoc/protocol/datagram.hpp"
+#include "dsoc/server/snapshot_pacer.hpp"
 #include "dsoc/simclient/load_run.hpp"
 
 #include <boost/asio/ip/udp.hpp>
@@ -344,12 +345,12 @@ TEST(UdpTransport, AClientThatFallsBehindGetsFewerSnapshotsUntilItAcknowledges) 
     // one snapshot in kBehindInterval ticks.
     const std::vector<std::uint64_t> silent = listen(std::chrono::milliseconds(2000), false);
     ASSERT_GE(silent.size(), 2u);
-    const std::uint64_t window = server::UdpConnection::unacked_window_at(c.tick_rate);
+    const std::uint64_t window = server::SnapshotPacer::unacked_window_at(c.tick_rate);
     ASSERT_EQ(window, 15u); // half a second at 30 Hz
     std::uint64_t after_window = 0;
     for (std::size_t i = 1; i < silent.size(); ++i) {
         if (silent[i] > silent.front() + window + 1) {
-            EXPECT_GE(silent[i] - silent[i - 1], server::UdpConnection::kBehindInterval)
+            EXPECT_GE(silent[i] - silent[i - 1], server::SnapshotPacer::kBehindInterval)
                 << "tick " << silent[i];
             ++after_window;
         }

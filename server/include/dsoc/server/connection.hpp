@@ -38,6 +38,12 @@ public:
 
 enum class Transport : std::uint8_t { tcp, udp };
 
+/// Snapshots a client's pace skipped, by pace (SnapshotPacer).
+struct SnapshotPaceCounts {
+    std::uint64_t lagging = 0;
+    std::uint64_t behind = 0;
+};
+
 class Connection : public std::enable_shared_from_this<Connection> {
 public:
     using Clock = std::chrono::steady_clock;
@@ -99,6 +105,8 @@ public:
     /// Largest queued_bytes() seen over the connection's life.
     [[nodiscard]] std::size_t peak_queued_bytes() const { return peak_queued_bytes_; }
     [[nodiscard]] std::uint64_t snapshots_dropped() const { return snapshots_dropped_; }
+    /// Of snapshots_dropped(), those a UDP client's pace skipped (SnapshotPacer).
+    [[nodiscard]] virtual SnapshotPaceCounts snapshots_paced() const { return {}; }
     [[nodiscard]] std::uint64_t inputs_dropped() const { return limiter_.dropped(); }
     [[nodiscard]] std::uint64_t inputs_clamped() const { return inputs_clamped_; }
     /// The client id its connect token proved (0 on insecure servers).

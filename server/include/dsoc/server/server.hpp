@@ -80,6 +80,7 @@ struct ServerStats {
     std::map<std::string, std::uint64_t> disconnects; ///< by reason name
     // Of closed connections (render_metrics() adds the live ones).
     std::uint64_t snapshots_dropped = 0; ///< not built: the client's previous one was unsent
+    SnapshotPaceCounts snapshots_paced;  ///< of those, skipped by UDP clients' pace
     std::uint64_t inputs_dropped = 0;    ///< client messages over max_inputs_per_second
     std::uint64_t inputs_clamped = 0;    ///< inputs with an out-of-range field clamped
     std::size_t peak_queued_bytes = 0;   ///< largest send queue of any client

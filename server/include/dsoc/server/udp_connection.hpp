@@ -17,6 +17,7 @@
 #include "dsoc/protocol/update_columns.hpp"
 #include "dsoc/server/connection.hpp"
 #include "dsoc/server/server_config.hpp"
+#include "dsoc/server/snapshot_pacer.hpp"
 
 #include <boost/asio/ip/udp.hpp>
 
@@ -47,17 +48,8 @@ public:
     /// Awaiting the hello: the reply goes out as the `accepted` datagram (kept, and sent
     /// again for a duplicate response); afterwards as a `message` datagram.
     void send(const protocol::pb::Envelope& message) override;
-    /// True while active, except for a client that has fallen behind: nothing ever waits
-    /// in a queue, but a client whose newest acknowledgement is more than
-    /// unacked_window() ticks old (or that has acknowledged nothing that long since the
-    /// first snapshot offered to it) gets one snapshot every kBehindInterval ticks until
-    /// it catches up.
-    /// It was reading (or the network carrying) snapshots slower than they were sent, and
-    /// each one sent at full rate would be coded against an ever older baseline, larger
-    /// and dearer at both ends, until the baseline left the history and every snapshot
-    /// went whole: a load that feeds itself (a load generator sharing the server's cores
-    /// showed it). The reduced rate bounds that work, and the snapshots still sent keep
-    /// the acknowledgements moving when the earlier ones were lost.
+    /// True while active and the client's pace (SnapshotPacer, from the age of its newest
+    /// acknowledgement) lets it have this tick's snapshot; nothing ever waits in a queue.
     [[nodiscard]] bool offer_snapshot(Clock::time_point now, std::uint64_t tick) override;
     void send_snapshot_frame(std::vector<std::uint8_t>& frame) override;
     /// A snapshot frame is snapshot_frame()'s form: the tick, then the serialized envelope.
@@ -94,16 +86,10 @@ public:
     /// Before this many datagrams a session is ended (reconnect): sequence numbers never
     /// wrap. A session at 60 Hz sending 8 datagrams a tick lasts over 90 days.
     static constexpr std::uint32_t kLastSequence = 0xffff0000u;
-    /// How old the newest acknowledgement may be before offer_snapshot() reduces the rate:
-    /// half a second of ticks (round trips of real players stay well within it), at least
-    /// 8 and at most kAckedHistory - 1 - kBehindInterval (27), so that the first snapshot
-    /// sent at the reduced rate is still coded against the acknowledged frame (above 54
-    /// Hz the cap makes the window shorter than half a second). [Units: ticks]
-    [[nodiscard]] std::uint64_t unacked_window() const { return unacked_window_; }
-    /// unacked_window() at `tick_rate` (Hz).
-    [[nodiscard]] static std::uint64_t unacked_window_at(int tick_rate);
-    /// A client behind gets a snapshot every this many ticks. [Units: ticks]
-    static constexpr std::uint64_t kBehindInterval = 4;
+    [[nodiscard]] SnapshotPaceCounts snapshots_paced() const override {
+        return {pacer_.skipped_lagging(), pacer_.skipped_behind()};
+    }
+    [[nodiscard]] const SnapshotPacer& pacer() const { return pacer_; }
 
 private:
     [[nodiscard]] bool handle_message(std::span<const std::uint8_t> body);
@@ -120,9 +106,7 @@ private:
     protocol::ReplayWindow window_;
     std::uint32_t next_sequence_ = 1;
     std::optional<std::uint64_t> acked_;
-    std::uint64_t unacked_window_;
-    std::uint64_t first_offer_tick_ = 0; ///< 0: none offered yet
-    std::uint64_t last_offer_tick_ = 0;
+    SnapshotPacer pacer_;
     std::uint64_t newest_snapshot_tick_ = 0; ///< the newest snapshot the kernel took whole
     /// Bit i: every datagram of the snapshot of newest_snapshot_tick_ - i went to the
     /// kernel (only those may be acknowledged).
