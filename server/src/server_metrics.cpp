@@ -1,6 +1,9 @@
 // Server::render_metrics: the server's state as Prometheus metrics.
 
 #include "dsoc/server/server.hpp"
+#include "dsoc/server/snapshot_pacer.hpp"
+
+#include <fmt/format.h>
 
 namespace dsoc::server {
 
@@ -14,6 +17,9 @@ std::string Server::render_metrics() const {
     std::uint64_t inputs_clamped = stats_.inputs_clamped;
     std::size_t queued = 0;
     for (const auto& [id, session] : sessions_) {
+        if (session->state() == Connection::State::closed) {
+            continue; // in stats_ already (on_closed), until apply_leaves() erases it
+        }
         bytes_sent += session->bytes_sent();
         bytes_received += session->bytes_received();
         snapshots_dropped += session->snapshots_dropped();
@@ -85,8 +91,9 @@ std::string Server::render_metrics() const {
                 "the rest waited in the client's send queue.",
                 d(stats_.snapshot_writes_queued));
     out.counter("dsoc_snapshots_dropped_total",
-                "Snapshots not built because the client's previous one was still unsent (TCP), or "
-                "its pace skipped them (UDP: dsoc_udp_snapshots_paced_total).",
+                "Snapshots not sent: not built because the client's previous one was still "
+                "unsent (TCP) or its pace skipped them (UDP: dsoc_udp_snapshots_paced_total), "
+                "or built but not taken whole by the kernel (UDP).",
                 d(snapshots_dropped));
     out.counter("dsoc_inputs_dropped_total", "Client messages over the per-second cap.",
                 d(inputs_dropped));
@@ -109,9 +116,13 @@ std::string Server::render_metrics() const {
              {{{"coded", "whole"}}, d(stats_.acked_snapshots_whole)}});
         out.counter_family(
             "dsoc_udp_snapshots_paced_total",
-            "Snapshots not built for UDP clients whose acknowledgements aged (SnapshotPacer): "
-            "lagging, over 3 ticks older than the least age the client showed lately (a "
-            "snapshot every 2nd tick), or behind, over half a second of ticks old (every 4th).",
+            fmt::format("Snapshots not built for UDP clients whose acknowledgements aged "
+                        "(SnapshotPacer): lagging, over {} ticks older than the least age the "
+                        "client showed lately (a snapshot every {} ticks), or behind, over the "
+                        "unacked window of half a second of ticks, {} to {} (every {}).",
+                        SnapshotPacer::kLagMargin, SnapshotPacer::kLaggingInterval,
+                        SnapshotPacer::unacked_window_at(1), SnapshotPacer::unacked_window_at(1000),
+                        SnapshotPacer::kBehindInterval),
             {{{{"pace", "lagging"}}, d(paced.lagging)}, {{{"pace", "behind"}}, d(paced.behind)}});
         out.counter("dsoc_udp_baseline_age_ticks_total",
                     "Ticks from the baseline to the snapshot, summed over the snapshots coded "

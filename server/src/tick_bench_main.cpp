@@ -228,10 +228,12 @@ int main(int argc, char** argv) {
             lap(p.hearing);
             server::add_own_entity(c->interest, c->entity_id);
             if (udp) {
-                std::optional<std::uint64_t> acked = c->acked_decoder.newest_tick();
-                acked = acked && *acked > static_cast<std::uint64_t>(ack_delay)
-                            ? std::optional(*acked - static_cast<std::uint64_t>(ack_delay))
-                            : acked;
+                // Nothing acknowledged until the delay has passed (acknowledgements never go
+                // back: an undelayed one first would be newer than the delayed ones after).
+                const std::optional<std::uint64_t> newest = c->acked_decoder.newest_tick();
+                const auto delay = static_cast<std::uint64_t>(ack_delay);
+                const std::optional<std::uint64_t> acked =
+                    newest && *newest > delay ? std::optional(*newest - delay) : std::nullopt;
                 c->replication.build_acked_snapshot(world, c->interest, tick, acked, false,
                                                     *c->envelope.mutable_snapshot(), &poses,
                                                     &c->columns);

@@ -97,21 +97,52 @@ TEST(SnapshotPacer, AClientThatAcknowledgesNothingGetsEveryFourthTickPastTheWind
     }
     EXPECT_GT(past_window, 15u);
     EXPECT_GT(c.pacer.skipped_behind(), 50u);
-    // Silent from the first tick, too: the first offer stands for an acknowledgement.
-    Client fresh;
-    const auto never = fresh.run(1, 100, std::nullopt);
-    EXPECT_LT(never.size(), 40u);
-    EXPECT_EQ(fresh.pacer.pace(), Pace::behind);
+    // Silent from its first tick (here 1000): the age counts from that tick, and without
+    // an acknowledgement the client is never lagging, only behind once past the window.
+    SnapshotPacer fresh(30);
+    std::vector<std::uint64_t> sent;
+    for (std::uint64_t tick = 1000; tick < 1100; ++tick) {
+        if (fresh.offer(tick, std::nullopt)) {
+            sent.push_back(tick);
+        }
+    }
+    std::vector<std::uint64_t> expected;
+    for (std::uint64_t tick = 1000; tick <= 1000 + window; ++tick) {
+        expected.push_back(tick); // within the window: every tick
+    }
+    for (std::uint64_t tick = expected.back() + SnapshotPacer::kBehindInterval; tick < 1100;
+         tick += SnapshotPacer::kBehindInterval) {
+        expected.push_back(tick);
+    }
+    EXPECT_EQ(sent, expected);
+    EXPECT_EQ(fresh.skipped_lagging(), 0u);
+}
+
+TEST(SnapshotPacer, TheUsualAgeSpansTwoWindowsSoARollOverForgetsNothingRecent) {
+    // Acknowledged a tick after sending until the middle of the second window, then 8
+    // ticks late on: after the roll-over into the third window, whose ages are all late,
+    // the least age of the window before still counts, so the client is still lagging.
+    Client c;
+    const std::uint64_t window = c.pacer.base_window();
+    ASSERT_EQ(window, 300u); // 10 s at 30 Hz
+    ASSERT_EQ(c.run(1, window + window / 2, 1).size(), window + window / 2);
+    (void)c.run(window + window / 2 + 1, 2 * window + 20, 8);
+    EXPECT_EQ(c.pacer.pace(), Pace::lagging);
 }
 
 TEST(SnapshotPacer, ARoundTripThatGrewForGoodBecomesTheUsualOne) {
     Client c;
+    const std::uint64_t window = c.pacer.base_window();
     ASSERT_EQ(c.run(1, 200, 1).size(), 200u);
-    // The route got longer: 8 ticks from now on. Lagging at first; within two windows
-    // of the least age the new round trip is the usual one and every tick goes again.
-    (void)c.run(201, 200 + 2 * SnapshotPacer::kBaseWindow + 8, 8);
-    const auto later = c.run(201 + 2 * SnapshotPacer::kBaseWindow + 8,
-                             260 + 2 * SnapshotPacer::kBaseWindow + 8, 8);
+    // The route got longer: 8 ticks from now on. Lagging at first, for at least a
+    // window (a lag of seconds is not taken for the usual age); within two windows of the
+    // least age the new round trip is the usual one and every tick goes again.
+    const auto first = c.run(201, 200 + window, 8);
+    EXPECT_EQ(c.pacer.pace(), Pace::lagging);
+    EXPECT_LT(first.size(), window * 3 / 4);
+    EXPECT_GT(c.pacer.skipped_lagging(), window / 4);
+    (void)c.run(201 + window, 200 + 2 * window + 8, 8);
+    const auto later = c.run(201 + 2 * window + 8, 260 + 2 * window + 8, 8);
     EXPECT_EQ(c.pacer.pace(), Pace::full);
     EXPECT_EQ(later.size(), 60u);
 }

@@ -9,14 +9,20 @@
 // the baseline left the history and every snapshot went whole: a load that feeds itself
 // (a load generator sharing the server's cores showed it). So the pace steps down:
 // - full: every tick;
-// - lagging, the acknowledgement more than kLagMargin ticks older than the least age
-//   this client's acknowledgements have shown over the last kBaseWindow to
-//   2 kBaseWindow ticks (its round trip at rest, so a player far away is not slowed for
-//   the distance): every kLaggingInterval-th tick, which halves the work and still
-//   keeps snapshots two ticks apart;
-// - behind, older than the unacked window (half a second of ticks): every
-//   kBehindInterval-th tick; the snapshots still sent keep acknowledgements moving when
-//   the earlier ones were lost.
+// - lagging, the acknowledgement more than kLagMargin ticks older than the least age this
+//   client's acknowledgements showed over the last base_window() to 2 base_window()
+//   ticks, 10 to 20 s (its usual round trip, so a player far away is not slowed for the
+//   distance): every kLaggingInterval-th tick, which halves the work and still keeps
+//   snapshots two ticks apart. Only acknowledged ages count, so a client that has
+//   acknowledged nothing yet is never lagging, only behind. The window is long enough
+//   that a lag lasting seconds does not become the usual age (with a window of a few
+//   seconds, the server's own overload did, and the client went back to full rate while
+//   it still lagged), and short enough that a round trip that grew for good is the
+//   usual one within 20 s;
+// - behind, the acknowledgement (or, before any, the first snapshot offered) older than
+//   the unacked window (half a second of ticks, 8 to 27): every kBehindInterval-th tick;
+//   the snapshots still sent keep acknowledgements moving when the earlier ones were
+//   lost.
 // Each pace holds until the age falls back under its threshold.
 //
 // Threading: none; one per connection, used on the server's tick thread.
@@ -34,8 +40,8 @@ public:
     explicit SnapshotPacer(int tick_rate);
 
     /// Whether the client gets the snapshot of `tick` (greater than the last call's);
-    /// `acked`: its newest acknowledged tick, if any (the first tick offered stands for it
-    /// until there is one).
+    /// `acked`: its newest acknowledged tick, if any (earlier than `tick`: only snapshots
+    /// sent are acknowledged).
     [[nodiscard]] bool offer(std::uint64_t tick, std::optional<std::uint64_t> acked);
     /// The pace of the last offer().
     [[nodiscard]] Pace pace() const { return pace_; }
@@ -58,16 +64,18 @@ public:
     /// client is lagging: more than a jitter of a tick or two, or a lost input whose
     /// acknowledgement the next one repeats. [Units: ticks]
     static constexpr std::uint64_t kLagMargin = 3;
-    /// Over how many ticks the least age is taken (two buckets of this length; a client
-    /// whose round trip grew for good is at full rate again within two of them).
-    /// [Units: ticks]
-    static constexpr std::uint64_t kBaseWindow = 64;
+    /// Over how many ticks the least age is taken: two buckets of this length, each
+    /// kBaseWindowSeconds of ticks (at least 64). [Units: ticks]
+    [[nodiscard]] std::uint64_t base_window() const { return base_window_; }
+    static constexpr int kBaseWindowSeconds = 10;
 
 private:
     std::uint64_t unacked_window_;
     std::uint64_t first_tick_ = 0; ///< 0: nothing offered yet
+    std::uint64_t last_offered_ = 0;
     std::uint64_t last_sent_ = 0;
-    // The least age seen in the current bucket of kBaseWindow ticks and in the one before.
+    std::uint64_t base_window_;
+    // The least age seen in the current bucket of base_window_ ticks and in the one before.
     std::uint64_t bucket_start_ = 0;
     std::uint64_t least_now_ = UINT64_MAX;
     std::uint64_t least_before_ = UINT64_MAX;

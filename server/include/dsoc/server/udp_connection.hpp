@@ -89,7 +89,6 @@ public:
     [[nodiscard]] SnapshotPaceCounts snapshots_paced() const override {
         return {pacer_.skipped_lagging(), pacer_.skipped_behind()};
     }
-    [[nodiscard]] const SnapshotPacer& pacer() const { return pacer_; }
 
 private:
     [[nodiscard]] bool handle_message(std::span<const std::uint8_t> body);
