@@ -32,51 +32,77 @@ void add_audit(std::uint32_t id, const Pose& p, pb::Snapshot& s) {
     a.set_pitch(p.pitch_deg);
 }
 
+/// The random draws of the twin tests: steps and turns of moving entities, shares, tiers.
+/// (The draws of a new entity are in the order the first test made them: its figures stay.)
+struct Dice {
+    explicit Dice(std::uint32_t seed) : rng(seed) {}
+    float step() { return step_(rng); }
+    float turn() { return turn_(rng); }
+    float unit() { return unit_(rng); }
+    int tier() { return tier_(rng); }
+    /// An entity joining the world: its id (some past 2^31) and where it is.
+    std::uint32_t new_id() {
+        return unit() < 0.1f ? 0x80000000u + rng() % 1000u : 1u + rng() % 5000u;
+    }
+    Pose new_pose() {
+        return {step() * 50.0f, step() * 50.0f, step() * 5.0f, turn() * 6.0f, turn() * 3.0f};
+    }
+
+    std::mt19937 rng;
+
+private:
+    std::uniform_real_distribution<float> step_{-40.0f, 40.0f};
+    std::uniform_real_distribution<float> turn_{-30.0f, 30.0f};
+    std::uniform_real_distribution<float> unit_{0.0f, 1.0f};
+    std::uniform_int_distribution<int> tier_{0, static_cast<int>(kTiers) - 1};
+};
+
+/// One encoder writing into the snapshot's repeated fields (the twin), one into columns.
+template <typename Encoder>
+struct Twins {
+    explicit Twins(const QuantizationSettings& settings) : twin(settings), fast(settings) {}
+    Encoder twin;
+    Encoder fast;
+    UpdateColumns columns;
+    pb::Envelope twin_envelope;
+    pb::Envelope fast_envelope;
+};
+
 TEST(UpdateColumns, FramesAreByteForByteThoseOfTheRepeatedFields) {
-    std::mt19937 rng(20261127);
-    std::uniform_real_distribution<float> step(-40.0f, 40.0f);
-    std::uniform_real_distribution<float> turn(-30.0f, 30.0f);
-    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-    std::uniform_int_distribution<int> tier_of(0, static_cast<int>(kTiers) - 1);
+    Dice dice(20261127);
     std::size_t updates = 0;
     std::size_t audited = 0;
     std::size_t empty_columns = 0;
     for (int connection = 0; connection < 12; ++connection) {
-        const QuantizationSettings settings;
-        SnapshotEncoder twin(settings); // into the repeated fields
-        SnapshotEncoder fast(settings); // into the columns
-        UpdateColumns columns;
-        pb::Envelope twin_envelope;
-        pb::Envelope fast_envelope;
+        Twins<SnapshotEncoder> t{QuantizationSettings{}};
+        auto& [twin, fast, columns, twin_envelope, fast_envelope] = t;
         std::map<std::uint32_t, Pose> world; // id -> pose; ids up to large values
         std::map<std::uint32_t, std::uint8_t> known;
-        const float moving = unit(rng); // how many entities move each tick
+        const float moving = dice.unit(); // how many entities move each tick
         for (std::uint64_t tick = 1; tick <= 150; ++tick) {
             twin.begin(tick, *twin_envelope.mutable_snapshot());
             fast.begin(tick, *fast_envelope.mutable_snapshot(), &columns);
             pb::Snapshot& a = *twin_envelope.mutable_snapshot();
             pb::Snapshot& b = *fast_envelope.mutable_snapshot();
             // Entities join the world now and then, some with ids past 2^31.
-            while (world.size() < 40 || unit(rng) < 0.2f) {
-                const std::uint32_t id =
-                    unit(rng) < 0.1f ? 0x80000000u + rng() % 1000u : 1u + rng() % 5000u;
-                world[id] = {step(rng) * 50.0f, step(rng) * 50.0f, step(rng) * 5.0f,
-                             turn(rng) * 6.0f, turn(rng) * 3.0f};
+            while (world.size() < 40 || dice.unit() < 0.2f) {
+                const std::uint32_t id = dice.new_id();
+                world[id] = dice.new_pose();
             }
-            const bool audit = unit(rng) < 0.15f;
+            const bool audit = dice.unit() < 0.15f;
             for (auto& [id, pose] : world) {
-                if (unit(rng) < moving) {
-                    pose.x += step(rng);
-                    pose.y += step(rng);
-                    pose.z += unit(rng) < 0.2f ? step(rng) : 0.0f;
-                    pose.yaw_deg = std::fmod(pose.yaw_deg + turn(rng) + 540.0f, 360.0f) - 180.0f;
-                    pose.pitch_deg = std::clamp(pose.pitch_deg + turn(rng) * 0.1f, -89.0f, 89.0f);
+                if (dice.unit() < moving) {
+                    pose.x += dice.step();
+                    pose.y += dice.step();
+                    pose.z += dice.unit() < 0.2f ? dice.step() : 0.0f;
+                    pose.yaw_deg = std::fmod(pose.yaw_deg + dice.turn() + 540.0f, 360.0f) - 180.0f;
+                    pose.pitch_deg = std::clamp(pose.pitch_deg + dice.turn() * 0.1f, -89.0f, 89.0f);
                 }
                 const auto it = known.find(id);
-                const bool wanted = unit(rng) < 0.85f;
+                const bool wanted = dice.unit() < 0.85f;
                 if (it == known.end()) {
                     if (wanted) {
-                        const auto tier = static_cast<std::uint8_t>(tier_of(rng));
+                        const auto tier = static_cast<std::uint8_t>(dice.tier());
                         twin.enter(id, pose, kHalf, 1, tier, a);
                         fast.enter(id, pose, kHalf, 1, tier, b);
                         known[id] = tier;
@@ -87,8 +113,8 @@ TEST(UpdateColumns, FramesAreByteForByteThoseOfTheRepeatedFields) {
                     known.erase(it);
                     continue;
                 } else {
-                    if (unit(rng) < 0.05f) {
-                        it->second = static_cast<std::uint8_t>(tier_of(rng)); // a rebase
+                    if (dice.unit() < 0.05f) {
+                        it->second = static_cast<std::uint8_t>(dice.tier()); // a rebase
                     }
                     const std::uint32_t written = twin.update(id, pose, it->second, a);
                     ASSERT_EQ(fast.update(id, pose, it->second, b), written) << id;
@@ -121,56 +147,47 @@ TEST(UpdateColumns, FramesAreByteForByteThoseOfTheRepeatedFields) {
 }
 
 TEST(UpdateColumns, AckedSnapshotsAreByteForByteThoseOfTheRepeatedFields) {
-    std::mt19937 rng(20261128);
-    std::uniform_real_distribution<float> step(-40.0f, 40.0f);
-    std::uniform_real_distribution<float> turn(-30.0f, 30.0f);
-    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-    std::uniform_int_distribution<int> tier_of(0, static_cast<int>(kTiers) - 1);
+    Dice dice(20261128);
     std::size_t entries = 0;
     std::size_t against_baseline = 0;
     std::size_t whole = 0;
     std::size_t audited = 0;
     for (int connection = 0; connection < 12; ++connection) {
         const QuantizationSettings settings;
-        AckedSnapshotEncoder twin(settings); // into the repeated fields
-        AckedSnapshotEncoder fast(settings); // into the columns
-        UpdateColumns columns;
-        pb::Envelope twin_envelope;
-        pb::Envelope fast_envelope;
+        Twins<AckedSnapshotEncoder> t{settings};
+        auto& [twin, fast, columns, twin_envelope, fast_envelope] = t;
         std::map<std::uint32_t, std::pair<Pose, std::uint8_t>> world; // id -> pose, tier
         std::optional<std::uint64_t> acked;
-        const float moving = unit(rng);
+        const float moving = dice.unit();
         for (std::uint64_t tick = 1; tick <= 150; ++tick) {
             // The client acknowledges a recent tick most of the time, now and then none
             // for a while (whole snapshots once the baseline is too old).
-            if (unit(rng) < 0.7f && tick > 1) {
-                const std::uint64_t back = 1 + rng() % 4;
+            if (dice.unit() < 0.7f && tick > 1) {
+                const std::uint64_t back = 1 + dice.rng() % 4;
                 acked = std::max(acked.value_or(0), tick > back ? tick - back : 1);
             }
             twin.begin(tick, acked, *twin_envelope.mutable_snapshot());
             fast.begin(tick, acked, *fast_envelope.mutable_snapshot(), &columns);
             pb::Snapshot& a = *twin_envelope.mutable_snapshot();
             pb::Snapshot& b = *fast_envelope.mutable_snapshot();
-            while (world.size() < 40 || unit(rng) < 0.2f) {
-                const std::uint32_t id =
-                    unit(rng) < 0.1f ? 0x80000000u + rng() % 1000u : 1u + rng() % 5000u;
-                world[id] = {{step(rng) * 50.0f, step(rng) * 50.0f, step(rng) * 5.0f,
-                              turn(rng) * 6.0f, turn(rng) * 3.0f},
-                             static_cast<std::uint8_t>(tier_of(rng))};
+            while (world.size() < 40 || dice.unit() < 0.2f) {
+                const std::uint32_t id = dice.new_id();
+                const Pose pose = dice.new_pose();
+                world[id] = {pose, static_cast<std::uint8_t>(dice.tier())};
             }
-            const bool audit = unit(rng) < 0.15f;
+            const bool audit = dice.unit() < 0.15f;
             for (auto& [id, entity] : world) {
                 auto& [pose, tier] = entity;
-                if (unit(rng) < moving) {
-                    pose.x += step(rng) * 0.2f;
-                    pose.y += step(rng) * 0.2f;
-                    pose.z += unit(rng) < 0.2f ? step(rng) : 0.0f;
-                    pose.yaw_deg = std::fmod(pose.yaw_deg + turn(rng) + 540.0f, 360.0f) - 180.0f;
+                if (dice.unit() < moving) {
+                    pose.x += dice.step() * 0.2f;
+                    pose.y += dice.step() * 0.2f;
+                    pose.z += dice.unit() < 0.2f ? dice.step() : 0.0f;
+                    pose.yaw_deg = std::fmod(pose.yaw_deg + dice.turn() + 540.0f, 360.0f) - 180.0f;
                 }
-                if (unit(rng) < 0.02f) {
-                    tier = static_cast<std::uint8_t>(tier_of(rng)); // a rebase
+                if (dice.unit() < 0.02f) {
+                    tier = static_cast<std::uint8_t>(dice.tier()); // a rebase
                 }
-                if (unit(rng) < 0.1f) {
+                if (dice.unit() < 0.1f) {
                     continue; // not wanted this tick: leaves, or stays unknown
                 }
                 const QuantizedPose q = quantize(pose, settings, tier);
@@ -202,6 +219,13 @@ TEST(UpdateColumns, AckedSnapshotsAreByteForByteThoseOfTheRepeatedFields) {
     }
     EXPECT_GT(entries, 10000u);
     EXPECT_GT(against_baseline, 1000u);
+    // append_snapshot_envelope() writes the fields after the columns by hand: the audit
+    // poses and the baseline tick are all there are.
+    int highest = 0;
+    for (int f = 0; f < pb::Snapshot::descriptor()->field_count(); ++f) {
+        highest = std::max(highest, pb::Snapshot::descriptor()->field(f)->number());
+    }
+    EXPECT_EQ(highest, pb::Snapshot::kBaselineTickFieldNumber);
     EXPECT_GT(whole, 12u);
     EXPECT_GT(audited, 1000u);
 }

@@ -132,8 +132,9 @@ private:
 /// Appends the bytes of `envelope`, whose body is a snapshot with no update entries of
 /// its own, with `columns` as that snapshot's update columns: the bytes protobuf
 /// serializes for the envelope whose snapshot holds the same entries as repeated
-/// fields. `envelope` is unchanged when this returns (its audit poses are moved aside
-/// while the fields before them are written). Returns the number of bytes appended.
+/// fields. `envelope` is unchanged when this returns (its audit poses and baseline tick,
+/// the fields numbered after the columns, are taken out while the fields before them are
+/// written, then put back). Returns the number of bytes appended.
 std::size_t append_snapshot_envelope(pb::Envelope& envelope, const UpdateColumns& columns,
                                      std::vector<std::uint8_t>& out);
 
