@@ -241,24 +241,28 @@ bool AckedSnapshotEncoder::carry(std::uint32_t id, const QuantizedPose& pose, st
     // tick, so its copies are a large part of the encoder's cost.
     const FrameEntity& b = base_->entities[base_at_++]; // in the ring, not in next_
     FrameEntity& n = next_->entities.emplace_back(b);
+    // Ticks since b's pose was set: the prediction's span, the due rule's start.
+    const std::uint64_t t = ticks_since_base_ + b.held_ticks;
+    const bool due = due_since(id, b.tier, next_->tick - t, next_->tick);
+    if (tier == b.tier && !due) {
+        n.held_ticks = static_cast<std::uint8_t>(t); // held as it is: both ends copy it
+        return true;
+    }
+    n.held_ticks = 0;
     const std::uint32_t steps = settings_.angle_steps;
-    const QuantizedPose expected = predicted(b, ticks_since_base_, steps);
+    const QuantizedPose expected = predicted(b, t, steps);
     const std::int64_t rx = static_cast<std::int64_t>(pose.x) - expected.x;
     const std::int64_t ry = static_cast<std::int64_t>(pose.y) - expected.y;
     const std::int64_t rz = static_cast<std::int64_t>(pose.z) - expected.z;
     const std::int64_t rpitch = static_cast<std::int64_t>(pose.pitch) - b.pose.pitch;
-    const bool due = (next_->tick + id) % update_interval(tier) == 0;
     const bool fits = fits_int32(rx) && fits_int32(ry) && fits_int32(rz) && fits_int32(rpitch);
-    if (tier != b.tier || (due && !fits)) {
+    if (tier != b.tier || !fits) {
         const std::array<std::int32_t, 6> values{tier,   pose.x,   pose.y,
                                                  pose.z, pose.yaw, pose.pitch};
         write_entry(id, kFieldRebase, values.data(), values.size(), out);
         n.pose = pose;
         n.tier = tier;
         clear_motion(n);
-    } else if (!due) {
-        n.pose = expected; // both ends carry it at the prediction
-        measure_motion(n, b.pose, ticks_since_base_, steps);
     } else {
         std::array<std::int32_t, 5> values{};
         std::size_t count = 0;
@@ -279,7 +283,7 @@ bool AckedSnapshotEncoder::carry(std::uint32_t id, const QuantizedPose& pose, st
             write_entry(id, fields, values.data(), count, out);
         }
         n.pose = pose;
-        measure_motion(n, b.pose, ticks_since_base_, steps);
+        measure_motion(n, b.pose, t, steps);
     }
     counts_.moved += same_position(n.pose, b.pose) ? 0 : 1;
     return true;
@@ -300,34 +304,43 @@ AckedSnapshotCounts AckedSnapshotEncoder::finish(pb::Snapshot& out) {
 
 namespace {
 
-/// `b` carried to the new frame through its update entry `e` (nullptr: none), `ticks`
-/// after its frame; a problem when the entry does not fit the entity.
+/// `b` carried to the new frame of `tick` through its update entry `e` (nullptr: none),
+/// `ticks` after its frame; a problem when the entry does not fit the entity.
 std::optional<SnapshotProblem> carry(const FrameEntity& b, const UpdateEntry* e,
                                      const pb::Snapshot& s, std::uint64_t tick, std::uint64_t ticks,
                                      std::uint32_t steps, FrameEntity& n) {
     n = b;
-    const QuantizedPose expected = predicted(b, ticks, steps);
-    if (e == nullptr) {
-        n.pose = expected;
-        measure_motion(n, b.pose, ticks, steps);
-        return std::nullopt;
-    }
-    const std::int32_t* values = s.update_values().data() + e->at;
+    const std::uint64_t t = ticks + b.held_ticks; // since b's pose was set
+    const bool due = due_since(b.id, b.tier, tick - t, tick);
     const auto where = [&] { return "the update entry of " + entity_name(b.id); };
-    if (e->fields == kFieldRebase) {
+    if (e != nullptr && e->fields == kFieldRebase) {
+        const std::int32_t* values = s.update_values().data() + e->at;
         if (auto problem = rebase_problem(values, steps, where())) {
             return problem;
         }
         n.tier = static_cast<std::uint8_t>(values[0]);
         n.pose = {values[1], values[2], values[3], values[4], values[5]};
+        n.held_ticks = 0;
         clear_motion(n);
         return std::nullopt;
     }
-    if ((tick + b.id) % update_interval(b.tier) != 0) {
-        return SnapshotProblem{"malformed_update", where() + ": tier " + std::to_string(b.tier) +
-                                                       " is not due at tick " +
-                                                       std::to_string(tick)};
+    if (!due) {
+        if (e != nullptr) {
+            return SnapshotProblem{"malformed_update",
+                                   where() + ": tier " + std::to_string(b.tier) +
+                                       " is not due at tick " + std::to_string(tick)};
+        }
+        n.held_ticks = static_cast<std::uint8_t>(t);
+        return std::nullopt;
     }
+    n.held_ticks = 0;
+    const QuantizedPose expected = predicted(b, t, steps);
+    if (e == nullptr) {
+        n.pose = expected;
+        measure_motion(n, b.pose, t, steps);
+        return std::nullopt;
+    }
+    const std::int32_t* values = s.update_values().data() + e->at;
     if (b.tier == kHeardTier && (e->fields & (kFieldYaw | kFieldPitch)) != 0) {
         return SnapshotProblem{"angles_on_heard_tier",
                                where() + ": view angles for a heard-only entity"};
@@ -353,7 +366,7 @@ std::optional<SnapshotProblem> carry(const FrameEntity& b, const UpdateEntry* e,
     if (!in_range) {
         return SnapshotProblem{"malformed_update", where() + ": a value leaves the range"};
     }
-    measure_motion(n, b.pose, ticks, steps);
+    measure_motion(n, b.pose, t, steps);
     return std::nullopt;
 }
 
@@ -504,7 +517,9 @@ std::optional<Pose> AckedSnapshotDecoder::pose(std::uint32_t id) const {
     if (e == nullptr) {
         return std::nullopt;
     }
-    return dequantize(e->pose, settings_.quantum(e->tier), settings_.angle_steps);
+    const QuantizedPose now =
+        e->held_ticks == 0 ? e->pose : predicted(*e, e->held_ticks, settings_.angle_steps);
+    return dequantize(now, settings_.quantum(e->tier), settings_.angle_steps);
 }
 
 std::vector<SnapshotProblem> AckedSnapshotDecoder::check_audit(const pb::Snapshot& snapshot,

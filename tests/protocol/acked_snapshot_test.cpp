@@ -84,7 +84,7 @@ TEST(AckedPrediction, AnEntityMovingSteadilyIsPredictedExactly) {
 // The contract under loss, delay, duplication and reordering: every snapshot the client
 // applies leaves it holding exactly the server's frame of that tick (the interest set of
 // that tick, no stale entity, no lost leave), and every entity due on that tick exactly at
-// its quantized pose.
+// its quantized pose; no entity is held longer than its tier's interval.
 TEST(AckedSnapshot, TheClientHoldsTheServersFrameWhateverIsLost) {
     for (const std::uint32_t seed : {1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u}) {
         SCOPED_TRACE("seed " + std::to_string(seed));
@@ -191,7 +191,12 @@ TEST(AckedSnapshot, TheClientHoldsTheServersFrameWhateverIsLost) {
                     const FrameEntity& got = held->entities[k];
                     ASSERT_EQ(got.id, truth[k].id);
                     ASSERT_EQ(got.tier, truth[k].tier);
+                    // Due on its tick of the interval at the latest, then exact.
+                    ASSERT_LT(got.held_ticks, update_interval(got.tier));
                     if ((s.server_tick() + got.id) % update_interval(got.tier) == 0) {
+                        ASSERT_EQ(got.held_ticks, 0u) << entity_name(got.id);
+                    }
+                    if (got.held_ticks == 0) {
                         ASSERT_EQ(got.pose, on_tier(truth[k], settings)) << entity_name(got.id);
                     }
                 }
@@ -205,6 +210,55 @@ TEST(AckedSnapshot, TheClientHoldsTheServersFrameWhateverIsLost) {
         EXPECT_GT(against_baseline, 300); // deltas, not full snapshots, carried the run
         EXPECT_GE(full, 2);               // the first one and after the outage at least
         EXPECT_GT(stale, 0);              // duplicates and late ones came and changed nothing
+    }
+}
+
+// A client the server paces (snapshots every 2nd, 3rd or 4th tick) still has every
+// coarse-tier entity due within its interval: with a rule of due ticks alone, an entity
+// whose ticks the pace never meets would never be updated.
+TEST(AckedSnapshot, APacedClientGetsEveryCoarseEntityWithinItsInterval) {
+    const QuantizationSettings settings;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> step(-6.0f, 6.0f);
+    for (const std::uint64_t pace : {2u, 3u, 4u}) {
+        SCOPED_TRACE("every " + std::to_string(pace) + " ticks");
+        AckedSnapshotEncoder encoder(settings);
+        AckedSnapshotDecoder decoder(settings);
+        std::vector<TruthEntity> interest;
+        for (std::uint32_t id = 1; id <= 12; ++id) { // every residue on every coarse tier
+            interest.push_back({id,
+                                {100.0f * id, 0.0f, 0.0f, 0.0f, 0.0f},
+                                {},
+                                static_cast<std::uint8_t>(1 + (id - 1) / 4)});
+        }
+        std::optional<std::uint64_t> acked;
+        int exact = 0;
+        for (std::uint64_t tick = 1; tick <= 200; ++tick) {
+            for (TruthEntity& e : interest) { // a random walk: never predicted exactly
+                e.pose.x += step(rng) * 20.0f;
+                e.pose.y += step(rng) * 20.0f;
+            }
+            if (tick % pace != 0) {
+                continue; // paced: nothing sent this tick
+            }
+            pb::Snapshot s;
+            encode(encoder, tick, acked, interest, s);
+            ASSERT_TRUE(decoder.apply(through_wire(s)).empty());
+            acked = tick;
+            for (std::size_t k = 0; k < interest.size(); ++k) {
+                const FrameEntity& got = decoder.newest()->entities[k];
+                const std::uint64_t interval = update_interval(got.tier);
+                ASSERT_LT(got.held_ticks, interval) << entity_name(got.id);
+                if (pace >= interval) { // every span of `pace` ticks meets its due tick
+                    ASSERT_EQ(got.held_ticks, 0u) << entity_name(got.id);
+                }
+                if (got.held_ticks == 0) {
+                    ASSERT_EQ(got.pose, on_tier(interest[k], settings)) << entity_name(got.id);
+                    ++exact;
+                }
+            }
+        }
+        EXPECT_GT(exact, static_cast<int>(200 / pace * 12 / 2));
     }
 }
 

@@ -57,8 +57,9 @@ public:
                UpdateColumns* columns = nullptr);
     /// One entity the client is to know, in increasing id order: `pose` quantized on
     /// `tier` (< kTiers; quantize(pose, settings(), tier)), `half_extents` in world units.
-    /// On a tier t > 0 an entity is updated only on ticks where (tick + id) is a multiple
-    /// of update_interval(t); on the others it is carried at its prediction.
+    /// On a tier t > 0 an entity is updated only when due (due_since(): a multiple of
+    /// update_interval(t), less its id, passed since its pose was last set); on the other
+    /// ticks the frame holds it as it was (FrameEntity::held_ticks).
     void add(std::uint32_t id, const QuantizedPose& pose, std::uint8_t tier, std::uint32_t kind,
              const std::array<float, 3>& half_extents, pb::Snapshot& out);
     /// add() in two steps, for a caller whose kind and size of an entity cost a lookup
@@ -113,7 +114,8 @@ public:
         return newest_tick_ ? frames_.find(*newest_tick_) : nullptr;
     }
     [[nodiscard]] std::optional<std::uint64_t> newest_tick() const { return newest_tick_; }
-    /// The newest frame's pose of `id`, or nothing when the entity is not known.
+    /// Where the newest frame expects `id` at its tick (a held entity's pose moved on by
+    /// its prediction), or nothing when the entity is not known.
     [[nodiscard]] std::optional<Pose> pose(std::uint32_t id) const;
     /// The newest frame's entity `id`, or nullptr.
     [[nodiscard]] const FrameEntity* find(std::uint32_t id) const;

@@ -48,8 +48,30 @@ struct FrameEntity {
     std::uint8_t tier = 0;                       ///< < kTiers
     std::uint8_t enter_tier = 0;
     std::uint8_t motion_ticks = 0; ///< over how many ticks `velocity` was measured; 0: none
+    /// Ticks from when `pose` and the motion were set (an enter, a rebase, a tick the
+    /// entity was due) to this frame's tick: a coarse-tier entity is held, not moved on,
+    /// between the ticks it is due. < update_interval(tier), so at most kMaxHeldTicks.
+    std::uint8_t held_ticks = 0;
     friend bool operator==(const FrameEntity&, const FrameEntity&) = default;
 };
+
+/// The most ticks a frame entity is held: update_interval() of the coarsest tier, less 1.
+inline constexpr std::uint64_t kMaxHeldTicks = update_interval(kHeardTier) - 1;
+/// The most ticks a prediction spans: a baseline kAckedHistory - 1 ticks old whose entity
+/// was held kMaxHeldTicks. [Units: ticks]
+inline constexpr std::uint64_t kMaxPredictedTicks = kAckedHistory - 1 + kMaxHeldTicks;
+
+/// Whether entity `id` on `tier` (< kTiers) is due at `tick`, its pose last set at
+/// `set_tick` (< tick): whether a tick in (set_tick, tick] is a multiple of
+/// update_interval(tier) after adding `id`. An entity sent every tick is due on every
+/// update_interval()-th tick, staggered by its id; one sent more rarely (a client the
+/// server paces) on the first snapshot after such a tick, so no entity waits longer than
+/// its interval whatever ticks a client is sent.
+[[nodiscard]] constexpr bool due_since(std::uint32_t id, std::uint8_t tier, std::uint64_t set_tick,
+                                       std::uint64_t tick) {
+    const unsigned shift = update_interval_shift(tier);
+    return ((tick + id) >> shift) != ((set_tick + id) >> shift);
+}
 
 /// Every entity the client knew after the snapshot of `tick`, in increasing id order.
 struct DeltaFrame {
@@ -62,7 +84,8 @@ struct DeltaFrame {
     return a >= 0 ? (a + b / 2) / b : -((-a + b / 2) / b);
 }
 
-/// Where `base` is expected `ticks` (1..kAckedHistory) after its frame: its position
+/// Where `base` is expected `ticks` (1..kMaxPredictedTicks) after its pose was set (its
+/// frame's tick - base.held_ticks): its position
 /// moved on by its velocity, z also by its fall rate (each coordinate within
 /// +-kMaxQuantizedCoordinate), its yaw turned on by its turn rate (wrapped into
 /// [0, angle_steps)), its pitch as it was.
@@ -80,7 +103,7 @@ inline void clear_motion(FrameEntity& e) {
 
 /// Sets `e`'s velocity, fall rate (against its velocity before), turn rate and
 /// motion_ticks to how its pose went from `from` to e.pose in `ticks`
-/// (1..kAckedHistory) ticks.
+/// (1..kMaxPredictedTicks) ticks.
 void set_motion(FrameEntity& e, const QuantizedPose& from, std::uint64_t ticks,
                 std::uint32_t angle_steps);
 

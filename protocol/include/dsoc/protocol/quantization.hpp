@@ -22,10 +22,14 @@ inline constexpr std::uint8_t kHeardTier = 3;
 /// Every tier: the three of sight, then the heard tier.
 inline constexpr std::size_t kTiers = 4;
 
+/// log2 of update_interval(`tier`).
+[[nodiscard]] constexpr unsigned update_interval_shift(std::uint8_t tier) {
+    return tier < 2 ? tier : 2;
+}
 /// How often an entity on `tier` (< kTiers) is updated: every 1st, 2nd, 4th, 4th tick.
 /// [Units: ticks]
 [[nodiscard]] constexpr std::uint64_t update_interval(std::uint8_t tier) {
-    return std::uint64_t{1} << (tier < 2 ? tier : 2);
+    return std::uint64_t{1} << update_interval_shift(tier);
 }
 /// Largest |position / quantum| that travels; larger values are clamped (a world
 /// that large is a server bug, the clamp only keeps the arithmetic defined).
