@@ -434,6 +434,18 @@ void SimClient::apply_acked_snapshot(const pb::Snapshot& s) {
     }
     stats_.known_samples.add(static_cast<double>(known()));
     stats_.heard_samples.add(static_cast<double>(heard));
+    send_input_on_snapshot();
+}
+
+void SimClient::send_input_on_snapshot() {
+    const auto now = Clock::now();
+    const auto tick = std::chrono::nanoseconds(1'000'000'000LL / tick_rate_);
+    if (state_ != State::active || next_input_at_ - now > tick / 2) {
+        return; // an input left less than half a tick ago: the next one keeps the clock
+    }
+    next_input_at_ = now;
+    send_input();
+    schedule_input(); // re-arms the clock a tick from now
 }
 
 std::size_t SimClient::known() const {

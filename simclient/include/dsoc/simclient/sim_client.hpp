@@ -102,6 +102,14 @@ private:
     void apply_snapshot(const protocol::pb::Snapshot& snapshot);
     void schedule_input();
     void send_input();
+    /// Over UDP the input, and with it the acknowledgement, leaves as soon as a snapshot
+    /// is applied, as a game client's does when its frame runs on the snapshot it just
+    /// got (at 60 frames a second or more, within a few milliseconds); the input clock
+    /// then runs a tick from there and sends only when no snapshot came. On a clock of
+    /// its own phase the acknowledgement would wait up to a tick, and every snapshot
+    /// coded against a baseline a tick older costs both ends more (docs/simclient.md).
+    /// At most one input per half tick: one just sent by the clock is not repeated.
+    void send_input_on_snapshot();
     void send(const protocol::pb::Envelope& message, bool goodbye = false);
     void queue_frame(std::span<const std::uint8_t> frame, bool goodbye);
     void write_next();
