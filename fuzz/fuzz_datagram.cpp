@@ -3,8 +3,10 @@
 // at the end of the input), fed in order to read_datagram and then, by kind, to the
 // body readers, one SnapshotAssembler and one ReplayWindow. Whatever the bytes, nothing
 // may crash, overflow or read past a body, and:
-// - read_datagram's error is the first rule of the header the bytes break, and a header
-//   it reads writes back (begin_datagram) to the same 18 bytes;
+// - a header read_datagram reads writes back (begin_datagram) to the same 18 bytes and
+//   names one of the kinds (which error a broken header gets, in the spec's order, is
+//   for tests/protocol/datagram_test.cpp: a copy of the parser's rules here would only
+//   ever agree with the parser);
 // - a hello (request, response), accepted, message or input body that reads writes back,
 //   through the writers, to a datagram that reads the same; an input body is exactly
 //   its ack, count and sized inputs;
@@ -47,26 +49,6 @@ bool same(View a, View b) {
 
 bool same(View a, const std::string& b) {
     return same(a, View(reinterpret_cast<const std::uint8_t*>(b.data()), b.size()));
-}
-
-/// The header rules in the order the spec gives them.
-DatagramError expected_header_error(View datagram) {
-    if (datagram.size() > kMaxDatagramBytes) {
-        return DatagramError::oversized;
-    }
-    if (datagram.size() < kDatagramHeaderBytes) {
-        return DatagramError::truncated;
-    }
-    if (!std::equal(kDatagramProtocolId.begin(), kDatagramProtocolId.end(), datagram.begin())) {
-        return DatagramError::not_dsoc;
-    }
-    if (datagram[4] != kDatagramVersion) {
-        return DatagramError::wrong_version;
-    }
-    if (datagram[5] < 1 || datagram[5] > 7) {
-        return DatagramError::unknown_kind;
-    }
-    return DatagramError::none;
 }
 
 /// Reads a datagram we wrote ourselves: it must read, with `header`.
@@ -299,9 +281,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
         DatagramHeader header;
         View body;
-        const DatagramError error = read_datagram(datagram, header, body);
-        require(error == expected_header_error(datagram));
-        if (error != DatagramError::none) {
+        if (read_datagram(datagram, header, body) != DatagramError::none) {
             continue;
         }
         begin_datagram(header, header_bytes);
@@ -348,6 +328,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         case DatagramKind::snapshot:
             check_snapshot(header, body, assembler, model);
             break;
+        default:
+            require(false); // a kind DatagramKind does not name
         }
     }
     return 0;

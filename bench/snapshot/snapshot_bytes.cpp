@@ -22,6 +22,7 @@
 // Deterministic: the same scenario and seed give the same bytes.
 
 #include "dsoc/cli/program.hpp"
+#include "dsoc/cli/setting_option.hpp"
 #include "dsoc/eval/acked_replication.hpp"
 #include "dsoc/eval/parallel.hpp"
 #include "dsoc/eval/policies.hpp"
@@ -84,21 +85,19 @@ int main(int argc, char** argv) {
     eval::LinkModel link;
     CLI::App app{"dsoc-snapshot-bytes: compact snapshot size per policy on an eval scenario"};
     dsoc::cli::set_up(app, "dsoc-snapshot-bytes");
-    app.add_option("--scenario", scenario_name, "Scenario name")->capture_default_str();
-    app.add_option("--scenarios", scenarios_path, "Scenarios file")->capture_default_str();
-    app.add_option("--policies", policy_names, "Policies to run")->capture_default_str();
-    app.add_option("--seconds", seconds, "Simulated time (overrides the scenario's) [s]")
-        ->capture_default_str();
-    app.add_option("--threads", threads, "Threads over clients (results do not depend on it)")
-        ->capture_default_str();
-    app.add_option("--link-delay", link.one_way_ticks,
-                   "acked: ticks a datagram takes one way (the round trip is twice this)")
-        ->check(CLI::Range(0, static_cast<int>(protocol::kAckedHistory) / 2))
-        ->capture_default_str();
-    app.add_option("--loss", link.loss, "acked: share of datagrams lost, each way")
-        ->check(CLI::Range(0.0, 1.0))
-        ->capture_default_str();
-    app.add_option("--seed", link.seed, "acked: seed of the losses")->capture_default_str();
+    dsoc::cli::add_setting(app, "--scenario", scenario_name, "Scenario name");
+    dsoc::cli::add_setting(app, "--scenarios", scenarios_path, "Scenarios file");
+    dsoc::cli::add_setting(app, "--policies", policy_names, "Policies to run");
+    dsoc::cli::add_setting(app, "--seconds", seconds,
+                           "Simulated time (overrides the scenario's) [s]");
+    dsoc::cli::add_setting(app, "--threads", threads,
+                           "Threads over clients (results do not depend on it)");
+    dsoc::cli::add_setting(app, "--link-delay", link.one_way_ticks,
+                           "acked: ticks a datagram takes one way (the round trip is twice this)")
+        ->check(CLI::Range(0, static_cast<int>(protocol::kAckedHistory) / 2));
+    dsoc::cli::add_setting(app, "--loss", link.loss, "acked: share of datagrams lost, each way")
+        ->check(CLI::Range(0.0, 1.0));
+    dsoc::cli::add_setting(app, "--seed", link.seed, "acked: seed of the losses");
     if (const auto stop = dsoc::cli::parse(app, argc, argv)) {
         return *stop;
     }

@@ -15,6 +15,7 @@
 // Deterministic for a seed; one line per map, or one JSON object per line (--json).
 
 #include "dsoc/cli/program.hpp"
+#include "dsoc/cli/setting_option.hpp"
 #include "dsoc/interest/game_world.hpp"
 #include "dsoc/maps/air_paths.hpp"
 #include "dsoc/maps/map_source.hpp"
@@ -83,22 +84,19 @@ int main(int argc, char** argv) {
     dsoc::cli::set_up(app, "dsoc-sound-paths");
     app.add_option("maps", map_specs,
                    "Maps (names, files or gen: specs; default: every map found)");
-    app.add_option("--voxel", finest_voxel,
-                   "Edge of the air's voxels [world units], grown by a quarter at a time on a "
-                   "map that needs more than --max-voxels")
-        ->capture_default_str()
+    dsoc::cli::add_setting(
+        app, "--voxel", finest_voxel,
+        "Edge of the air's voxels [world units], grown by a quarter at a time on a "
+        "map that needs more than --max-voxels")
         ->check(CLI::Range(4.0f, 256.0f));
-    app.add_option("--max-voxels", max_voxels, "Most voxels of a map's air grid")
-        ->capture_default_str()
+    dsoc::cli::add_setting(app, "--max-voxels", max_voxels, "Most voxels of a map's air grid")
         ->check(CLI::Range(1e5, 1e8));
-    app.add_option("--bots", bots, "Wandering bots whose eyes are sampled")
-        ->capture_default_str()
+    dsoc::cli::add_setting(app, "--bots", bots, "Wandering bots whose eyes are sampled")
         ->check(CLI::Range(1, 1000));
-    app.add_option("--listeners", listeners, "Sampled places a path search starts from")
-        ->capture_default_str()
+    dsoc::cli::add_setting(app, "--listeners", listeners,
+                           "Sampled places a path search starts from")
         ->check(CLI::Range(1, 100000));
-    app.add_option("--seed", seed, "Seed of the bots and of the listeners' draw")
-        ->capture_default_str();
+    dsoc::cli::add_setting(app, "--seed", seed, "Seed of the bots and of the listeners' draw");
     app.add_flag("--json", json, "One JSON object per map and line");
     if (const auto stop = cli::parse(app, argc, argv)) {
         return *stop;

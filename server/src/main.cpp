@@ -9,6 +9,7 @@
 
 #include "dsoc/cli/build_info.hpp"
 #include "dsoc/cli/program.hpp"
+#include "dsoc/cli/setting_option.hpp"
 #include "dsoc/maps/map_checks.hpp"
 #include "dsoc/maps/map_source.hpp"
 #include "dsoc/protocol/connect_token.hpp"
@@ -71,111 +72,89 @@ void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
                  "Check the settings, the token key file and the map as a start would, "
                  "without serving; exit 0 when the server would start, 2 (naming every "
                  "problem) when not");
-    app.add_option("--bind", config.bind_address, "Address to listen on")->capture_default_str();
-    app.add_option("--port", config.port,
-                   "TCP port (and UDP's, with --udp true); 0 picks a free one")
-        ->capture_default_str();
+    dsoc::cli::add_setting(app, "--bind", config.bind_address, "Address to listen on");
+    dsoc::cli::add_setting(app, "--port", config.port,
+                           "TCP port (and UDP's, with --udp true); 0 picks a free one");
     dsoc::server::add_world_options(app, config);
     dsoc::server::add_policy_options(app, config);
-    app.add_option("--tbv-strategy", config.tbv_strategy, "dsoc TBVs: adaptive | explicit | fuzzy")
-        ->capture_default_str();
+    dsoc::cli::add_setting(app, "--tbv-strategy", config.tbv_strategy,
+                           "dsoc TBVs: adaptive | explicit | fuzzy");
     dsoc::cli::add_choice_option(app, "--culler", config.culler,
                                  "Occlusion culler stages: shaft | pyramid | both");
-    app.add_option("--culling-budget", config.culling_budget,
-                   "Share of the tick period for culling; clients after it get the cheapest "
-                   "conservative answer (0 = off)")
-        ->capture_default_str();
-    app.add_option("--pvs-stage", config.pvs_stage,
-                   "Reject with the map's PVS before the culler (true/false)")
-        ->capture_default_str();
-    app.add_option("--region-margin", config.region_reuse_margin,
-                   "dsoc: reuse a client's culler region within this margin [units]")
-        ->capture_default_str();
-    app.add_option("--latency-allowance-ms", config.latency_allowance_ms,
-                   "Client movement the server covers: RTT + interpolation delay [ms]")
-        ->capture_default_str();
+    dsoc::cli::add_setting(
+        app, "--culling-budget", config.culling_budget,
+        "Share of the tick period for culling; clients after it get the cheapest "
+        "conservative answer (0 = off)");
+    dsoc::cli::add_setting(app, "--pvs-stage", config.pvs_stage,
+                           "Reject with the map's PVS before the culler (true/false)");
+    dsoc::cli::add_setting(app, "--region-margin", config.region_reuse_margin,
+                           "dsoc: reuse a client's culler region within this margin [units]");
+    dsoc::cli::add_setting(app, "--latency-allowance-ms", config.latency_allowance_ms,
+                           "Client movement the server covers: RTT + interpolation delay [ms]");
     app.add_option("--trace", config.trace_file, "Write a replication trace (JSON Lines) here");
-    app.add_option("--trace-every", config.trace_every, "Record every k-th tick in the trace")
-        ->capture_default_str();
-    app.add_option("--distance-radius", config.distance_radius,
-                   "Radius of the distance policy [units]")
-        ->capture_default_str();
-    app.add_option("--threads", config.threads,
-                   "Worker threads for the per-client tick work, beside the I/O thread; 0: one "
-                   "per core")
-        ->capture_default_str();
-    app.add_option("--position-quantum-near", config.position_quantum_near,
-                   "Snapshot position precision, entities updated every tick [units]")
-        ->capture_default_str();
-    app.add_option("--position-quantum-mid", config.position_quantum_mid,
-                   "Snapshot position precision, entities updated every 2nd tick [units]")
-        ->capture_default_str();
-    app.add_option("--position-quantum-far", config.position_quantum_far,
-                   "Snapshot position precision, entities updated every 4th tick [units]")
-        ->capture_default_str();
-    app.add_option("--angle-steps", config.angle_steps, "Snapshot angle steps per full turn")
-        ->capture_default_str();
-    app.add_option("--heard-quantum", config.heard_quantum,
-                   "Position precision of entities a client hears but does not see [units]")
-        ->capture_default_str();
-    app.add_option("--network-lod", config.network_lod,
-                   "Coarser, rarer updates for distant entities (dsoc/occlusion) (true/false)")
-        ->capture_default_str();
-    app.add_option("--max-clients", config.max_clients, "Connected clients at most")
-        ->capture_default_str();
-    app.add_option("--max-frame-bytes", config.max_frame_bytes,
-                   "Largest frame a client may send [bytes]")
-        ->capture_default_str();
-    app.add_option("--max-send-queue-bytes", config.max_send_queue_bytes,
-                   "Unsent bytes per client before it is dropped as too slow")
-        ->capture_default_str();
-    app.add_option("--handshake-timeout-ms", config.handshake_timeout_ms,
-                   "Close connections that send no hello within this time [ms]")
-        ->capture_default_str();
-    app.add_option("--udp", config.udp,
-                   "Also serve clients over UDP on the same port number (true/false)")
-        ->capture_default_str();
-    app.add_option("--udp-timeout-ms", config.udp_timeout_ms,
-                   "Disconnect a UDP client from which nothing arrived this long [ms]")
-        ->capture_default_str();
-    app.add_option("--udp-handshake-rate", config.udp_handshake_rate,
-                   "UDP handshake datagrams one source address may send per second [1/s]")
-        ->capture_default_str();
-    app.add_option("--max-speed", config.max_speed, "Speed bound of every entity [units/s]")
-        ->capture_default_str();
-    app.add_option("--duration", config.duration_s,
-                   "Stop after this many seconds (0: run until signalled)")
-        ->capture_default_str();
-    app.add_option("--slow-client-timeout-ms", config.slow_client_timeout_ms,
-                   "Disconnect a client whose snapshot stays unsent this long [ms]")
-        ->capture_default_str();
-    app.add_option("--socket-send-buffer-bytes", config.socket_send_buffer_bytes,
-                   "SO_SNDBUF of client sockets; 0 keeps the OS default [bytes]")
-        ->capture_default_str();
-    app.add_option("--io-gather-us", config.io_gather_us,
-                   "After each wakeup the I/O thread lets socket events gather this long, "
-                   "reading many clients' inputs in one wakeup; timers and pings may be "
-                   "late by as much (0: wake for each) [us]")
-        ->capture_default_str();
-    app.add_option("--max-inputs-per-second", config.max_inputs_per_second,
-                   "Messages a client may send per second; more are dropped, twice that "
-                   "disconnects")
-        ->capture_default_str();
+    dsoc::cli::add_setting(app, "--trace-every", config.trace_every,
+                           "Record every k-th tick in the trace");
+    dsoc::cli::add_setting(app, "--distance-radius", config.distance_radius,
+                           "Radius of the distance policy [units]");
+    dsoc::cli::add_setting(
+        app, "--threads", config.threads,
+        "Worker threads for the per-client tick work, beside the I/O thread; 0: one "
+        "per core");
+    dsoc::cli::add_setting(app, "--position-quantum-near", config.position_quantum_near,
+                           "Snapshot position precision, entities updated every tick [units]");
+    dsoc::cli::add_setting(app, "--position-quantum-mid", config.position_quantum_mid,
+                           "Snapshot position precision, entities updated every 2nd tick [units]");
+    dsoc::cli::add_setting(app, "--position-quantum-far", config.position_quantum_far,
+                           "Snapshot position precision, entities updated every 4th tick [units]");
+    dsoc::cli::add_setting(app, "--angle-steps", config.angle_steps,
+                           "Snapshot angle steps per full turn");
+    dsoc::cli::add_setting(
+        app, "--heard-quantum", config.heard_quantum,
+        "Position precision of entities a client hears but does not see [units]");
+    dsoc::cli::add_setting(
+        app, "--network-lod", config.network_lod,
+        "Coarser, rarer updates for distant entities (dsoc/occlusion) (true/false)");
+    dsoc::cli::add_setting(app, "--max-clients", config.max_clients, "Connected clients at most");
+    dsoc::cli::add_setting(app, "--max-frame-bytes", config.max_frame_bytes,
+                           "Largest frame a client may send [bytes]");
+    dsoc::cli::add_setting(app, "--max-send-queue-bytes", config.max_send_queue_bytes,
+                           "Unsent bytes per client before it is dropped as too slow");
+    dsoc::cli::add_setting(app, "--handshake-timeout-ms", config.handshake_timeout_ms,
+                           "Close connections that send no hello within this time [ms]");
+    dsoc::cli::add_setting(app, "--udp", config.udp,
+                           "Also serve clients over UDP on the same port number (true/false)");
+    dsoc::cli::add_setting(app, "--udp-timeout-ms", config.udp_timeout_ms,
+                           "Disconnect a UDP client from which nothing arrived this long [ms]");
+    dsoc::cli::add_setting(app, "--udp-handshake-rate", config.udp_handshake_rate,
+                           "UDP handshake datagrams one source address may send per second [1/s]");
+    dsoc::cli::add_setting(app, "--max-speed", config.max_speed,
+                           "Speed bound of every entity [units/s]");
+    dsoc::cli::add_setting(app, "--duration", config.duration_s,
+                           "Stop after this many seconds (0: run until signalled)");
+    dsoc::cli::add_setting(app, "--slow-client-timeout-ms", config.slow_client_timeout_ms,
+                           "Disconnect a client whose snapshot stays unsent this long [ms]");
+    dsoc::cli::add_setting(app, "--socket-send-buffer-bytes", config.socket_send_buffer_bytes,
+                           "SO_SNDBUF of client sockets; 0 keeps the OS default [bytes]");
+    dsoc::cli::add_setting(app, "--io-gather-us", config.io_gather_us,
+                           "After each wakeup the I/O thread lets socket events gather this long, "
+                           "reading many clients' inputs in one wakeup; timers and pings may be "
+                           "late by as much (0: wake for each) [us]");
+    dsoc::cli::add_setting(app, "--max-inputs-per-second", config.max_inputs_per_second,
+                           "Messages a client may send per second; more are dropped, twice that "
+                           "disconnects");
     app.add_flag("--insecure", config.insecure,
                  "Accept clients without connect tokens (local tests and demos only)");
     app.add_option("--token-key-file", config.token_key_file,
                    "Connect-token key file (64 hex digits; dsoc-token keygen makes one)");
-    app.add_option("--metrics-port", config.metrics_port,
-                   "Serve Prometheus /metrics on this port (-1 off, 0 any free port)")
-        ->capture_default_str();
-    app.add_option("--metrics-bind", config.metrics_bind_address, "Address of the metrics endpoint")
-        ->capture_default_str();
-    app.add_option("--log-level", config.log_level, "trace|debug|info|warn|error|critical|off")
-        ->capture_default_str();
-    app.add_option("--log-format", config.log_format,
-                   "Log on stderr as text, or as json (one object a line: time, level, "
-                   "logger, msg)")
-        ->capture_default_str();
+    dsoc::cli::add_setting(app, "--metrics-port", config.metrics_port,
+                           "Serve Prometheus /metrics on this port (-1 off, 0 any free port)");
+    dsoc::cli::add_setting(app, "--metrics-bind", config.metrics_bind_address,
+                           "Address of the metrics endpoint");
+    dsoc::cli::add_setting(app, "--log-level", config.log_level,
+                           "trace|debug|info|warn|error|critical|off");
+    dsoc::cli::add_setting(app, "--log-format", config.log_format,
+                           "Log on stderr as text, or as json (one object a line: time, level, "
+                           "logger, msg)");
     app.add_option("--dsoc", options.dsoc,
                    "A dsoc/occlusion culler setting, KEY=VALUE with KEY a field of "
                    "visibility::DSOCConfig (the [dsoc] table; --print-config lists them); "

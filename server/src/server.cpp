@@ -482,16 +482,20 @@ void Server::on_input(Connection& session, const pb::ClientInput& input) {
     }
 }
 
+void Server::add_session_counts(const Connection& session, ServerStats& stats) {
+    stats.bytes_sent += session.bytes_sent();
+    stats.bytes_received += session.bytes_received();
+    stats.snapshots_dropped += session.snapshots_dropped();
+    stats.snapshots_paced.lagging += session.snapshots_paced().lagging;
+    stats.snapshots_paced.behind += session.snapshots_paced().behind;
+    stats.inputs_dropped += session.inputs_dropped();
+    stats.inputs_clamped += session.inputs_clamped();
+}
+
 void Server::on_closed(Connection& session) {
     const std::uint32_t id = session.client_id();
-    stats_.bytes_sent += session.bytes_sent();
-    stats_.bytes_received += session.bytes_received();
+    add_session_counts(session, stats_);
     ++stats_.disconnects[protocol::disconnect_reason_name(session.close_reason())];
-    stats_.snapshots_dropped += session.snapshots_dropped();
-    stats_.snapshots_paced.lagging += session.snapshots_paced().lagging;
-    stats_.snapshots_paced.behind += session.snapshots_paced().behind;
-    stats_.inputs_dropped += session.inputs_dropped();
-    stats_.inputs_clamped += session.inputs_clamped();
     stats_.peak_queued_bytes = std::max(stats_.peak_queued_bytes, session.peak_queued_bytes());
     if (session.token_client_id() != 0) {
         const auto it = token_clients_.find(session.token_client_id());

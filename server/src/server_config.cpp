@@ -19,17 +19,22 @@ void check(std::vector<std::string>& problems, bool ok, const char* field, const
     }
 }
 
+/// An integer setting within [lo, hi]; else "<field>: must be lo..hi<unit>, got <value>".
+void check_range(std::vector<std::string>& problems, const char* field, std::int64_t value,
+                 std::int64_t lo, std::int64_t hi, const char* unit = "") {
+    check(problems, value >= lo && value <= hi, field,
+          "must be " + std::to_string(lo) + ".." + std::to_string(hi) + unit + ", got " +
+              std::to_string(value));
+}
+
 } // namespace
 
 std::vector<std::string> validate(const ServerConfig& c) {
     std::vector<std::string> p;
     check(p, !c.bind_address.empty(), "bind_address", "must not be empty");
-    check(p, c.tick_rate >= 1 && c.tick_rate <= 240, "tick_rate",
-          "must be 1..240 Hz, got " + std::to_string(c.tick_rate));
-    check(p, c.bots >= 0 && c.bots <= 100000, "bots",
-          "must be 0..100000, got " + std::to_string(c.bots));
-    check(p, c.teams >= 0 && c.teams <= 1000, "teams",
-          "must be 0..1000, got " + std::to_string(c.teams));
+    check_range(p, "tick_rate", c.tick_rate, 1, 240, " Hz");
+    check_range(p, "bots", c.bots, 0, 100000);
+    check_range(p, "teams", c.teams, 0, 1000);
     for (const auto& [name, range] :
          {std::pair{"footstep_range", c.footstep_range}, std::pair{"shot_range", c.shot_range}}) {
         check(p, std::isfinite(range) && range >= 0.0f && range <= 100000.0f, name,
@@ -55,29 +60,23 @@ std::vector<std::string> validate(const ServerConfig& c) {
           std::isfinite(c.region_reuse_margin) && c.region_reuse_margin >= 0.0f &&
               c.region_reuse_margin <= 512.0f,
           "region_reuse_margin", "must be 0..512 units");
-    check(p, c.latency_allowance_ms >= 0 && c.latency_allowance_ms <= 2000, "latency_allowance_ms",
-          "must be 0..2000 ms, got " + std::to_string(c.latency_allowance_ms));
+    check_range(p, "latency_allowance_ms", c.latency_allowance_ms, 0, 2000, " ms");
     check(p, c.trace_every >= 1, "trace_every", "must be >= 1");
     check(p, std::isfinite(c.distance_radius) && c.distance_radius > 0.0f, "distance_radius",
           "must be a finite number > 0");
-    check(p, c.max_clients >= 1 && c.max_clients <= 100000, "max_clients",
-          "must be 1..100000, got " + std::to_string(c.max_clients));
-    check(p, c.max_frame_bytes >= 64 && c.max_frame_bytes <= 16u * 1024u * 1024u, "max_frame_bytes",
-          "must be 64..16777216, got " + std::to_string(c.max_frame_bytes));
+    check_range(p, "max_clients", c.max_clients, 1, 100000);
+    check_range(p, "max_frame_bytes", c.max_frame_bytes, 64, 16 * 1024 * 1024);
     check(p, c.max_send_queue_bytes >= c.max_frame_bytes, "max_send_queue_bytes",
           "must be at least max_frame_bytes");
     check(p, c.handshake_timeout_ms > 0, "handshake_timeout_ms", "must be > 0");
-    check(p, c.udp_timeout_ms >= 500 && c.udp_timeout_ms <= 60000, "udp_timeout_ms",
-          "must be 500..60000 ms, got " + std::to_string(c.udp_timeout_ms));
-    check(p, c.udp_handshake_rate >= 1 && c.udp_handshake_rate <= 1000000, "udp_handshake_rate",
-          "must be 1..1000000 per second, got " + std::to_string(c.udp_handshake_rate));
+    check_range(p, "udp_timeout_ms", c.udp_timeout_ms, 500, 60000, " ms");
+    check_range(p, "udp_handshake_rate", c.udp_handshake_rate, 1, 1000000, " per second");
     check(p, c.threads >= 0 && c.threads <= 256, "threads",
           "must be 0 (one per core)..256, got " + std::to_string(c.threads));
     for (auto& problem : protocol::validate(quantization(c))) {
         p.push_back(std::move(problem));
     }
-    check(p, c.io_gather_us >= 0 && c.io_gather_us <= 20000, "io_gather_us",
-          "must be 0..20000 µs, got " + std::to_string(c.io_gather_us));
+    check_range(p, "io_gather_us", c.io_gather_us, 0, 20000, " µs");
     // Timers fire up to a gather late (io_loop.hpp): the tick's must stay well within
     // its period.
     check(p,
@@ -87,18 +86,14 @@ std::vector<std::string> validate(const ServerConfig& c) {
           "must be at most a quarter of the tick period (" +
               std::to_string(250'000 / std::max(1, c.tick_rate)) + " µs at " +
               std::to_string(c.tick_rate) + " Hz), got " + std::to_string(c.io_gather_us));
-    check(p, c.slow_client_timeout_ms >= 100 && c.slow_client_timeout_ms <= 60000,
-          "slow_client_timeout_ms",
-          "must be 100..60000 ms, got " + std::to_string(c.slow_client_timeout_ms));
+    check_range(p, "slow_client_timeout_ms", c.slow_client_timeout_ms, 100, 60000, " ms");
     check(p,
           c.socket_send_buffer_bytes == 0 ||
               (c.socket_send_buffer_bytes >= 4096 && c.socket_send_buffer_bytes <= 16 << 20),
           "socket_send_buffer_bytes",
           "must be 0 (OS default) or 4096..16777216, got " +
               std::to_string(c.socket_send_buffer_bytes));
-    check(p, c.max_inputs_per_second >= 1 && c.max_inputs_per_second <= 10000,
-          "max_inputs_per_second",
-          "must be 1..10000 per second, got " + std::to_string(c.max_inputs_per_second));
+    check_range(p, "max_inputs_per_second", c.max_inputs_per_second, 1, 10000, " per second");
     check(p, c.max_inputs_per_second >= c.tick_rate + 2, "max_inputs_per_second",
           "must be at least tick_rate + 2 (an honest client sends one input per tick and a "
           "ping a second), got " +

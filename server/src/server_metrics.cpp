@@ -8,25 +8,14 @@
 namespace dsoc::server {
 
 std::string Server::render_metrics() const {
-    // Closed connections are in stats_; live ones are added here.
-    std::uint64_t bytes_sent = stats_.bytes_sent;
-    std::uint64_t bytes_received = stats_.bytes_received;
-    std::uint64_t snapshots_dropped = stats_.snapshots_dropped;
-    SnapshotPaceCounts paced = stats_.snapshots_paced;
-    std::uint64_t inputs_dropped = stats_.inputs_dropped;
-    std::uint64_t inputs_clamped = stats_.inputs_clamped;
+    // Closed connections are counted in stats_, the live ones here.
+    ServerStats live;
     std::size_t queued = 0;
     for (const auto& [id, session] : sessions_) {
         if (session->state() == Connection::State::closed) {
             continue; // in stats_ already (on_closed), until apply_leaves() erases it
         }
-        bytes_sent += session->bytes_sent();
-        bytes_received += session->bytes_received();
-        snapshots_dropped += session->snapshots_dropped();
-        paced.lagging += session->snapshots_paced().lagging;
-        paced.behind += session->snapshots_paced().behind;
-        inputs_dropped += session->inputs_dropped();
-        inputs_clamped += session->inputs_clamped();
+        add_session_counts(*session, live);
         queued += session->queued_bytes();
     }
     const auto d = [](auto v) { return static_cast<double>(v); };
@@ -81,8 +70,9 @@ std::string Server::render_metrics() const {
     out.gauge("dsoc_send_queue_bytes", "Unsent bytes queued for all clients.", d(queued));
     out.counter("dsoc_clients_accepted_total", "Connections accepted.", d(stats_.clients_accepted));
     out.counter("dsoc_bytes_sent_total", "Bytes sent to clients, frame headers included.",
-                d(bytes_sent));
-    out.counter("dsoc_bytes_received_total", "Bytes received from clients.", d(bytes_received));
+                d(stats_.bytes_sent + live.bytes_sent));
+    out.counter("dsoc_bytes_received_total", "Bytes received from clients.",
+                d(stats_.bytes_received + live.bytes_received));
     out.counter("dsoc_snapshots_sent_total", "Snapshots sent.", d(stats_.snapshots_sent));
     out.counter("dsoc_entity_updates_sent_total", "Entity enters and updates sent.",
                 d(stats_.entity_updates_sent));
@@ -94,11 +84,11 @@ std::string Server::render_metrics() const {
                 "Snapshots not sent: not built because the client's previous one was still "
                 "unsent (TCP) or its pace skipped them (UDP: dsoc_udp_snapshots_paced_total), "
                 "or built but not taken whole by the kernel (UDP).",
-                d(snapshots_dropped));
+                d(stats_.snapshots_dropped + live.snapshots_dropped));
     out.counter("dsoc_inputs_dropped_total", "Client messages over the per-second cap.",
-                d(inputs_dropped));
+                d(stats_.inputs_dropped + live.inputs_dropped));
     out.counter("dsoc_inputs_clamped_total", "Inputs with an out-of-range field clamped.",
-                d(inputs_clamped));
+                d(stats_.inputs_clamped + live.inputs_clamped));
     std::vector<std::pair<MetricLabels, double>> disconnects;
     for (const auto& [reason, count] : stats_.disconnects) {
         disconnects.push_back({{{"reason", reason}}, d(count)});
@@ -123,7 +113,10 @@ std::string Server::render_metrics() const {
                         SnapshotPacer::kLagMargin, SnapshotPacer::kLaggingInterval,
                         SnapshotPacer::unacked_window_at(1), SnapshotPacer::unacked_window_at(1000),
                         SnapshotPacer::kBehindInterval),
-            {{{{"pace", "lagging"}}, d(paced.lagging)}, {{{"pace", "behind"}}, d(paced.behind)}});
+            {{{{"pace", "lagging"}},
+              d(stats_.snapshots_paced.lagging + live.snapshots_paced.lagging)},
+             {{{"pace", "behind"}},
+              d(stats_.snapshots_paced.behind + live.snapshots_paced.behind)}});
         out.counter("dsoc_udp_baseline_age_ticks_total",
                     "Ticks from the baseline to the snapshot, summed over the snapshots coded "
                     "against one: divided by their count, how late acknowledgements arrive.",

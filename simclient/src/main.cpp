@@ -1,6 +1,7 @@
 // dsoc-simclient: headless simulated clients; a load generator and protocol checker.
 
 #include "dsoc/cli/program.hpp"
+#include "dsoc/cli/setting_option.hpp"
 #include "dsoc/simclient/parallel_load_run.hpp"
 #include "dsoc/simclient/report_figures.hpp"
 #include "dsoc/simclient/scenario_file.hpp"
@@ -69,18 +70,15 @@ int main(int argc, char** argv) {
                  "for any reason, a protocol error, an unexpected server shutdown, a threshold "
                  "not met); 2 on a bad command line or scenario file."};
     dsoc::cli::set_up(app, kProgram);
-    app.add_option("--server", server, "Server address HOST:PORT")->capture_default_str();
-    auto* clients = app.add_option("--clients", config.clients, "Simulated clients")
-                        ->capture_default_str()
+    dsoc::cli::add_setting(app, "--server", server, "Server address HOST:PORT");
+    auto* clients = dsoc::cli::add_setting(app, "--clients", config.clients, "Simulated clients")
                         ->check(CLI::Range(1, 100000));
-    auto* duration =
-        app.add_option("--duration", config.duration_s, "Run time, ramp-up included [s]")
-            ->capture_default_str()
-            ->check(CLI::PositiveNumber);
-    auto* ramp_up =
-        app.add_option("--ramp-up", config.ramp_up_s, "Spread the connects over this time [s]")
-            ->capture_default_str()
-            ->check(CLI::NonNegativeNumber);
+    auto* duration = dsoc::cli::add_setting(app, "--duration", config.duration_s,
+                                            "Run time, ramp-up included [s]")
+                         ->check(CLI::PositiveNumber);
+    auto* ramp_up = dsoc::cli::add_setting(app, "--ramp-up", config.ramp_up_s,
+                                           "Spread the connects over this time [s]")
+                        ->check(CLI::NonNegativeNumber);
     app.add_option("--scenario", scenario_file,
                    "Scenario file (TOML): stages, groups of clients, thresholds "
                    "(docs/simclient.md)")
@@ -100,19 +98,19 @@ int main(int argc, char** argv) {
     app.add_option("--report", report_file, "Write the JSON report to this file");
     app.add_option("--timeseries", timeseries_file,
                    "Write one JSON line per second to this file (docs/simclient.md)");
-    app.add_option("--seed", config.seed, "Seed of the wandering inputs")->capture_default_str();
-    app.add_option("--audit-every", config.audit_every_ticks,
-                   "Check the decoded replica against the server's exact poses every N ticks "
-                   "(0: never)")
-        ->capture_default_str();
+    dsoc::cli::add_setting(app, "--seed", config.seed, "Seed of the wandering inputs");
+    dsoc::cli::add_setting(
+        app, "--audit-every", config.audit_every_ticks,
+        "Check the decoded replica against the server's exact poses every N ticks "
+        "(0: never)");
     app.add_option("--connect-timeout", config.connect_timeout_s,
                    "Resolve, connect and get the server's hello within this time [s] (default "
                    "5, or the scenario's connect_timeout)")
         ->check(CLI::PositiveNumber);
-    app.add_option("--protocol-version", config.protocol_version,
-                   "Announce this protocol version in the hello (testing aid: a server refuses "
-                   "any other than its own)")
-        ->capture_default_str();
+    dsoc::cli::add_setting(
+        app, "--protocol-version", config.protocol_version,
+        "Announce this protocol version in the hello (testing aid: a server refuses "
+        "any other than its own)");
     const std::map<std::string, dsoc::simclient::LoadConfig::Transport> transports{
         {"tcp", dsoc::simclient::LoadConfig::Transport::tcp},
         {"udp", dsoc::simclient::LoadConfig::Transport::udp}};
@@ -121,32 +119,31 @@ int main(int argc, char** argv) {
                    "over UDP datagrams (docs/protocol.md)")
         ->transform(CLI::CheckedTransformer(transports, CLI::ignore_case))
         ->default_str("tcp");
-    app.add_option("--udp-loss", config.udp_faults.loss,
-                   "UDP only: drop each datagram either way with this probability (emulated "
-                   "loss)")
-        ->capture_default_str()
+    dsoc::cli::add_setting(
+        app, "--udp-loss", config.udp_faults.loss,
+        "UDP only: drop each datagram either way with this probability (emulated "
+        "loss)")
         ->check(CLI::Range(0.0, 0.9));
-    app.add_option("--udp-duplicate", config.udp_faults.duplicate,
-                   "UDP only: deliver each datagram either way twice with this probability")
-        ->capture_default_str()
+    dsoc::cli::add_setting(app, "--udp-duplicate", config.udp_faults.duplicate,
+                           "UDP only: deliver each datagram either way twice with this probability")
         ->check(CLI::Range(0.0, 0.9));
-    app.add_option("--udp-reorder", config.udp_faults.reorder,
-                   "UDP only: hold each datagram either way back behind the next one with this "
-                   "probability")
-        ->capture_default_str()
+    dsoc::cli::add_setting(
+        app, "--udp-reorder", config.udp_faults.reorder,
+        "UDP only: hold each datagram either way back behind the next one with this "
+        "probability")
         ->check(CLI::Range(0.0, 0.9));
-    app.add_option("--threads", threads,
-                   "Threads, each running its share of the clients (at most one per client; "
-                   "a load generator on a machine of its own wants one per core)")
-        ->capture_default_str()
+    dsoc::cli::add_setting(
+        app, "--threads", threads,
+        "Threads, each running its share of the clients (at most one per client; "
+        "a load generator on a machine of its own wants one per core)")
         ->check(CLI::Range(1, 1024));
     app.add_flag("--quiet", quiet, "No progress lines");
     std::string token_key_file;
     std::string token_hex;
     app.add_option("--token-key-file", token_key_file,
                    "Server's token key: each client mints a token for client id base + index");
-    app.add_option("--client-id-base", config.client_id_base, "First client id (with a key)")
-        ->capture_default_str()
+    dsoc::cli::add_setting(app, "--client-id-base", config.client_id_base,
+                           "First client id (with a key)")
         ->check(CLI::PositiveNumber);
     app.add_option("--token", token_hex,
                    "Connect token (hex, from dsoc-token mint) sent by every client")

@@ -7,6 +7,9 @@
 #include "dsoc/eval/world_sim.hpp"
 #include "dsoc/trace/trace_reader.hpp"
 
+#include "support/temp_dir.hpp"
+#include "support/trace_checks.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -31,13 +34,6 @@ Scenario tiny_scenario() {
     return s;
 }
 
-/// A trace file's path in the temp directory, unique to this test run.
-std::string temp_trace_path(const std::string& stem) {
-    return (std::filesystem::temp_directory_path() /
-            (stem + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + ".jsonl"))
-        .string();
-}
-
 const PolicyMetrics& find(const EvalResult& r, const std::string& name) {
     for (const auto& m : r.policies) {
         if (m.name == name) {
@@ -48,7 +44,7 @@ const PolicyMetrics& find(const EvalResult& r, const std::string& name) {
 }
 
 TEST(EvalRun, TraceFollowsTheSpecAndDsocHasNoPopIn) {
-    const std::string path = temp_trace_path("dsoc-eval-test-");
+    const std::string path = testing::run_temp_path("dsoc-eval-test", ".jsonl");
     EvalOptions options;
     options.scenario = tiny_scenario();
     options.policies = {"broadcast", "occlusion", "dsoc", "raycast"};
@@ -152,7 +148,7 @@ namespace dsoc::eval {
 namespace {
 
 TEST(EvalRun, WithTeamsEveryPolicySendsTeammatesAndTheOracleJudgesTheOtherPairs) {
-    const std::string path = temp_trace_path("dsoc-eval-teams-");
+    const std::string path = testing::run_temp_path("dsoc-eval-teams", ".jsonl");
     EvalOptions options;
     options.scenario = tiny_scenario();
     options.scenario.teams = 2;
@@ -195,7 +191,7 @@ TEST(EvalRun, WithSoundsHeardOnlyEntitiesAreCoarseAndJudgedApartFromSight) {
     // The same world with and without sounds (sounds move nothing): with them every
     // policy sends more, the extra entities are heard-only (coarse, judged apart), dsoc
     // still pops nothing in, and no heard-only entity is one the oracle sees.
-    const std::string path = temp_trace_path("dsoc-eval-sounds-");
+    const std::string path = testing::run_temp_path("dsoc-eval-sounds", ".jsonl");
     EvalOptions options;
     options.scenario = tiny_scenario();
     options.scenario.sounds = true;
@@ -220,19 +216,7 @@ TEST(EvalRun, WithSoundsHeardOnlyEntitiesAreCoarseAndJudgedApartFromSight) {
     }
     EXPECT_EQ(find(loud, "dsoc").popin_lookahead, 0u);
     EXPECT_EQ(find(loud, "dsoc").heard_visible, 0u);
-    trace::TraceReader reader;
-    ASSERT_TRUE(reader.open(path)) << reader.error();
-    trace::TraceTick tick;
-    std::size_t heard = 0;
-    while (reader.next(tick)) {
-        for (const trace::TraceClient& c : tick.clients) {
-            for (const std::uint32_t id : c.heard) {
-                EXPECT_TRUE(std::binary_search(c.replicated.begin(), c.replicated.end(), id));
-            }
-            heard += c.heard.size();
-        }
-    }
-    EXPECT_GT(heard, 0u);
+    EXPECT_GT(testing::expect_heard_are_replicated(path), 0u);
     std::filesystem::remove(path);
 }
 

@@ -85,14 +85,9 @@ TEST(EndToEnd, ClientsPastTheCullingBudgetGetTheCheapestAnswerAndAreCounted) {
     sc.culling_budget = 1e-9;
     testing::RunningServer server(sc);
 
-    const simclient::LoadConfig lc = testing::load_config(server, 4, 1.5, 0.1);
-    boost::asio::io_context io;
-    simclient::LoadRun run(io, lc);
-    run.start();
-    io.run();
+    const auto report = testing::run_load(testing::load_config(server, 4, 1.5, 0.1));
     server.stop();
 
-    const auto report = run.report();
     EXPECT_EQ(report.connected, 4);
     EXPECT_EQ(report.protocol_errors, 0u) << simclient::format_summary(report);
     EXPECT_TRUE(report.passed());

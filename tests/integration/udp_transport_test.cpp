@@ -11,7 +11,7 @@
 #include "dsoc/protocol/connect_token.hpp"
 #include "dsoc/protocol/datagram.hpp"
 #include "dsoc/server/snapshot_pacer.hpp"
-#include "dsoc/simclient/load_run.hpp"
+#include "server/raw_client.hpp"
 
 #include <boost/asio/ip/udp.hpp>
 
@@ -213,11 +213,7 @@ TEST(UdpTransport, UnderLossDuplicationAndReorderingTheReplicaStaysExactAndNothi
 
 TEST(UdpTransport, HostileDatagramsAreDroppedByReasonWhileClientsKeepTheirSnapshots) {
     testing::RunningServer server(udp_config());
-    const simclient::LoadConfig lc = udp_load(server, 4, 2.5);
-    asio::io_context io;
-    simclient::LoadRun run(io, lc);
-    run.start();
-    std::thread good_clients([&] { io.run(); });
+    testing::GoodClients good(udp_load(server, 4, 2.5));
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
 
     RawUdp raw(server.port());
@@ -261,14 +257,8 @@ TEST(UdpTransport, HostileDatagramsAreDroppedByReasonWhileClientsKeepTheirSnapsh
     // The raw session keeps receiving snapshots of its own.
     EXPECT_TRUE(raw.receive_kind(DatagramKind::snapshot, std::chrono::seconds(1)).has_value());
 
-    good_clients.join();
+    testing::expect_served(good, 100.0);
     server.stop();
-    const auto report = run.report();
-    EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
-    EXPECT_LT(report.snapshot_interarrival_ms.p99, 100.0) << simclient::format_summary(report);
-    for (const auto& client : run.clients()) {
-        EXPECT_GE(client->stats().snapshots, 55u); // ~2.3 s at 30 Hz = 69
-    }
     EXPECT_EQ(drops(server, UdpDrop::not_dsoc), 1u);
     EXPECT_EQ(drops(server, UdpDrop::truncated), 2u);
     EXPECT_EQ(drops(server, UdpDrop::oversized), 1u);

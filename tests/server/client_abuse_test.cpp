@@ -21,6 +21,7 @@ namespace {
 
 namespace pb = protocol::pb;
 using testing::client_hello;
+using testing::expect_served;
 using testing::GoodClients;
 using testing::RawClient;
 using testing::RunningServer;
@@ -33,18 +34,6 @@ server::ServerConfig base_config() {
     c.handshake_timeout_ms = 400;
     c.max_frame_bytes = 1024;
     return c;
-}
-
-/// The good clients were served all along: all connected, no protocol error, no
-/// unexpected disconnect, and snapshots arrived at about the tick rate.
-void expect_served(GoodClients& good) {
-    const auto report = good.finish();
-    EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
-    EXPECT_LT(report.snapshot_interarrival_ms.p99, 150.0) << simclient::format_summary(report);
-    const double expected = good.seconds() * 30.0;
-    for (const auto& client : good.run().clients()) {
-        EXPECT_GE(static_cast<double>(client->stats().snapshots), 0.7 * expected);
-    }
 }
 
 void expect_reason(RawClient& client, pb::DisconnectReason reason, const char* text_part) {

@@ -5,13 +5,13 @@
 // error. The replication trace lists the heard-only entities of each client.
 
 #include "dsoc/simclient/load_run.hpp"
-#include "dsoc/trace/trace_reader.hpp"
 #include "integration/server_fixture.hpp"
 #include "server/raw_client.hpp"
+#include "support/temp_dir.hpp"
+#include "support/trace_checks.hpp"
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <thread>
@@ -20,13 +20,10 @@ namespace dsoc {
 namespace {
 
 TEST(Hearing, SimulatedPlayersHearCoarseWithoutAnglesAndTheTraceSaysWhichOnesTheyHear) {
-    const auto trace_path =
-        std::filesystem::temp_directory_path() /
-        ("dsoc-hearing-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-         ".jsonl");
+    const std::string trace_path = testing::run_temp_path("dsoc-hearing", ".jsonl");
     server::ServerConfig c;
     c.bots = 60;
-    c.trace_file = trace_path.string();
+    c.trace_file = trace_path;
     c.trace_every = 3;
     ASSERT_TRUE(c.sounds) << "sounds are on by default";
     testing::RunningServer server(c);
@@ -40,22 +37,7 @@ TEST(Hearing, SimulatedPlayersHearCoarseWithoutAnglesAndTheTraceSaysWhichOnesThe
     EXPECT_GT(report.entities_heard.mean, 0.5) << simclient::format_summary(report);
     EXPECT_GT(server.stats().heard_entities_sent, 100u);
 
-    trace::TraceReader reader;
-    ASSERT_TRUE(reader.open(trace_path.string())) << reader.error();
-    trace::TraceTick tick;
-    std::size_t heard = 0;
-    while (reader.next(tick)) {
-        for (const trace::TraceClient& client : tick.clients) {
-            for (const std::uint32_t id : client.heard) {
-                EXPECT_TRUE(
-                    std::binary_search(client.replicated.begin(), client.replicated.end(), id))
-                    << "tick " << tick.t << ": heard " << id << " is not replicated";
-            }
-            heard += client.heard.size();
-        }
-    }
-    EXPECT_TRUE(reader.error().empty()) << reader.error();
-    EXPECT_GT(heard, 0u);
+    EXPECT_GT(testing::expect_heard_are_replicated(trace_path), 0u);
     std::filesystem::remove(trace_path);
 }
 

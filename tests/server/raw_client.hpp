@@ -1,15 +1,18 @@
 #pragma once
 // Test helpers for hostile-client tests: a raw TCP client that sends whatever the
-// test wants, and a few well-behaved simulated clients running beside it.
+// test wants, and a few well-behaved simulated clients running beside it, with the
+// check that they were served all along.
 
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/framing.hpp"
+#include "dsoc/simclient/load_report.hpp"
 #include "dsoc/simclient/load_run.hpp"
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/read.hpp>
 #include <boost/asio/write.hpp>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
@@ -115,18 +118,18 @@ inline protocol::pb::Envelope client_hello(std::span<const std::uint8_t> token =
     return m;
 }
 
-/// A few well-behaved dsoc-simclient clients on their own thread for `seconds`.
+/// Well-behaved dsoc-simclient clients on a thread of their own, from construction until
+/// finish(), while the test does what it wants to the server beside them.
 class GoodClients {
 public:
+    /// `clients` TCP clients, all connecting at once, for `seconds`; with `key`, each
+    /// mints a token for client id 1000 + index.
     GoodClients(std::uint16_t port, double seconds,
-                std::optional<protocol::TokenKey> key = std::nullopt, int clients = 3) {
-        config_.port = port;
-        config_.clients = clients;
-        config_.duration_s = seconds;
-        config_.ramp_up_s = 0.0;
+                std::optional<protocol::TokenKey> key = std::nullopt, int clients = 3)
+        : GoodClients(tcp_config(port, seconds, key, clients)) {}
+    /// The clients `config` describes (its progress lines are turned off).
+    explicit GoodClients(simclient::LoadConfig config) : config_(std::move(config)) {
         config_.progress = false;
-        config_.token_key = key;
-        config_.client_id_base = 1000;
         run_ = std::make_unique<simclient::LoadRun>(io_, config_);
         run_->start();
         thread_ = std::thread([this] { io_.run(); });
@@ -147,10 +150,37 @@ public:
     [[nodiscard]] double seconds() const { return config_.duration_s; }
 
 private:
+    static simclient::LoadConfig tcp_config(std::uint16_t port, double seconds,
+                                            std::optional<protocol::TokenKey> key, int clients) {
+        simclient::LoadConfig c;
+        c.port = port;
+        c.clients = clients;
+        c.duration_s = seconds;
+        c.ramp_up_s = 0.0;
+        c.token_key = key;
+        c.client_id_base = 1000;
+        return c;
+    }
+
     simclient::LoadConfig config_;
     boost::asio::io_context io_;
     std::unique_ptr<simclient::LoadRun> run_;
     std::thread thread_;
 };
+
+/// Waits for the end of `good`'s run and checks that its clients were served all along:
+/// all connected, no protocol error, no unexpected disconnect, the 99th percentile of
+/// the time between snapshots under `max_interarrival_p99_ms`, and each client got at
+/// least 70% of the snapshots 30 Hz (the default tick rate) makes over the run.
+inline void expect_served(GoodClients& good, double max_interarrival_p99_ms = 150.0) {
+    const auto report = good.finish();
+    EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
+    EXPECT_LT(report.snapshot_interarrival_ms.p99, max_interarrival_p99_ms)
+        << simclient::format_summary(report);
+    const double expected = good.seconds() * 30.0;
+    for (const auto& client : good.run().clients()) {
+        EXPECT_GE(static_cast<double>(client->stats().snapshots), 0.7 * expected);
+    }
+}
 
 } // namespace dsoc::testing

@@ -8,6 +8,7 @@
 #include "dsoc/trace/trace_reader.hpp"
 #include "integration/server_fixture.hpp"
 #include "server/raw_client.hpp"
+#include "support/temp_dir.hpp"
 
 #include <gtest/gtest.h>
 
@@ -42,15 +43,12 @@ std::vector<std::uint32_t> with(std::vector<std::uint32_t> ids, std::uint32_t id
 class Spectating : public ::testing::TestWithParam<interest::PolicyKind> {};
 
 TEST_P(Spectating, AClientWatchingAPlayerIsSentThatPlayersViewThenItsOwnAgain) {
-    const auto trace_path =
-        std::filesystem::temp_directory_path() /
-        ("dsoc-spectate-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-         ".jsonl");
+    const std::string trace_path = testing::run_temp_path("dsoc-spectate", ".jsonl");
     server::ServerConfig c;
     c.bots = 40; // entity ids 1..40; the players reserve 41 and 42 in hello order
     c.policy = GetParam();
     c.distance_radius = 600.0f;
-    c.trace_file = trace_path.string();
+    c.trace_file = trace_path;
     c.trace_every = 1;
     constexpr std::uint32_t kPlayer = 41;
     constexpr std::uint32_t kSpectator = 42;
@@ -70,7 +68,7 @@ TEST_P(Spectating, AClientWatchingAPlayerIsSentThatPlayersViewThenItsOwnAgain) {
     }
 
     trace::TraceReader reader;
-    ASSERT_TRUE(reader.open(trace_path.string())) << reader.error();
+    ASSERT_TRUE(reader.open(trace_path)) << reader.error();
     trace::TraceTick tick;
     enum class Phase { before, watching, after } phase = Phase::before;
     int ticks[3] = {0, 0, 0};

@@ -1,5 +1,8 @@
 #pragma once
-// A fresh directory for one test's files, removed (with what is in it) at the end.
+// Where a test keeps its files: a fresh directory, removed (with what is in it) at the
+// end, or one file's path below the system's temporary directory.
+
+#include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
@@ -34,5 +37,15 @@ public:
 private:
     std::filesystem::path dir_;
 };
+
+/// "<temporary directory>/<stem>-<seed><extension>", with the random seed of this test
+/// run: a file of this run's own, so that runs side by side do not share it. Nothing is
+/// created; the test removes what it writes there.
+inline std::string run_temp_path(const std::string& stem, const std::string& extension) {
+    return (std::filesystem::temp_directory_path() /
+            (stem + "-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+             extension))
+        .string();
+}
 
 } // namespace dsoc::testing

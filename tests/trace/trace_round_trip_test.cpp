@@ -1,6 +1,8 @@
 #include "dsoc/trace/trace_reader.hpp"
 #include "dsoc/trace/trace_writer.hpp"
 
+#include "support/temp_dir.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -9,15 +11,8 @@
 namespace dsoc::trace {
 namespace {
 
-std::string temp_path(const std::string& name) {
-    return (std::filesystem::temp_directory_path() /
-            (name + "-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-             ".jsonl"))
-        .string();
-}
-
 TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
-    const std::string path = temp_path("dsoc-trace");
+    const std::string path = testing::run_temp_path("dsoc-trace", ".jsonl");
     TraceHeader header;
     header.map = "oa_dm4";
     header.tick_rate = 30;
@@ -107,7 +102,7 @@ TEST(Trace, WritesExactlyTheSpecFieldsAndReadsThemBack) {
 }
 
 TEST(Trace, ReaderNamesTheLineAndTheProblem) {
-    const std::string path = temp_path("dsoc-bad-trace");
+    const std::string path = testing::run_temp_path("dsoc-bad-trace", ".jsonl");
     {
         std::ofstream out(path);
         out << R"({"type":"header","version":1,"map":"m","tick_rate":30,"policy":"p","lookahead_ticks":0,"occluders":[]})"

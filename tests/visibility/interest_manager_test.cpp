@@ -5,6 +5,8 @@
 
 #include "dsoc/visibility/interest_manager.hpp"
 
+#include "test_scene.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -486,11 +488,8 @@ TEST(DsocConfig, ValidateNamesTheField) {
     c.max_adaptive_duration = 10;
     c.fuzzy_confidence = 2.0f;
     c.entity_cluster_size = 4.0f;
-    const auto problems = validate(c);
-    ASSERT_EQ(problems.size(), 3u);
-    EXPECT_NE(problems[0].find("max_adaptive_duration"), std::string::npos);
-    EXPECT_NE(problems[1].find("fuzzy_confidence"), std::string::npos);
-    EXPECT_NE(problems[2].find("entity_cluster_size"), std::string::npos);
+    testing::expect_problems_naming(
+        validate(c), {"max_adaptive_duration", "fuzzy_confidence", "entity_cluster_size"});
     EXPECT_TRUE(validate(DSOCConfig{}).empty());
 }
 

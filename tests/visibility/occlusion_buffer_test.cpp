@@ -89,10 +89,7 @@ TEST(OcclusionBuffer, ValidateNamesTheField) {
     EXPECT_TRUE(validate(config).empty());
     config.face_resolution = 100;
     config.near_distance = 0.0f;
-    const auto problems = validate(config);
-    ASSERT_EQ(problems.size(), 2u);
-    EXPECT_NE(problems[0].find("face_resolution"), std::string::npos);
-    EXPECT_NE(problems[1].find("near_distance"), std::string::npos);
+    testing::expect_problems_naming(validate(config), {"face_resolution", "near_distance"});
 }
 
 } // namespace

@@ -65,26 +65,21 @@ void run_world(const char* name, const TestWorld& tw, std::uint32_t seed, int ey
     const ReferenceVisibility reference(tw.world);
     OcclusionBuffer buffer(config);
     OcclusionBeams beams;
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-    const Aabb area = tw.play_area;
-    auto random_point = [&] {
-        return area.min + area.size() * glm::vec3(unit(rng), unit(rng), unit(rng));
-    };
+    testing::WorldDice dice(tw.play_area, seed);
     Tally t;
     for (int e = 0; e < eyes; ++e) {
-        glm::vec3 eye = random_point();
-        const auto& o = tw.world.occluder(static_cast<OccluderId>(rng() % tw.world.size()));
+        glm::vec3 eye = dice.point();
+        const auto& o = tw.world.occluder(static_cast<OccluderId>(dice.rng() % tw.world.size()));
         if (e % 3 == 1) {
             // Next to an occluder: a point just outside a random vertex.
-            const glm::vec3 v = o.vertices()[rng() % o.vertices().size()];
+            const glm::vec3 v = o.vertices()[dice.rng() % o.vertices().size()];
             const glm::vec3 c = o.bounding_sphere().center;
-            eye = v + (v - c) * (0.01f + 0.3f * unit(rng));
+            eye = v + (v - c) * (0.01f + 0.3f * dice.unit());
         } else if (e % 3 == 2) {
             // In (or a hair off) the plane of one of its faces: grazing views.
-            const Plane& p = o.faces()[rng() % o.faces().size()].plane;
+            const Plane& p = o.faces()[dice.rng() % o.faces().size()].plane;
             eye -= p.normal * p.signed_distance(eye);
-            eye += p.normal * (unit(rng) < 0.5f ? 0.0f : 0.01f * unit(rng));
+            eye += p.normal * (dice.unit() < 0.5f ? 0.0f : 0.01f * dice.unit());
         }
         if (inside_any(tw.world, eye)) {
             --e;
@@ -93,11 +88,11 @@ void run_world(const char* name, const TestWorld& tw, std::uint32_t seed, int ey
         buffer.build(eye, tw.world, bsp);
         beams.build(eye, tw.world, bsp);
         for (int b = 0; b < boxes; ++b) {
-            Aabb box = testing::random_test_box(rng, unit, random_point, tw.world, b,
-                                                {0.5f, 4.0f, 40.0f, 64.0f, 128.0f});
+            Aabb box =
+                testing::random_test_box(dice, tw.world, b, {0.5f, 4.0f, 40.0f, 64.0f, 128.0f});
             if (b % 5 == 0) {
                 // Snap one face onto an axis plane through the eye (a cube-face seam).
-                const int axis = static_cast<int>(rng() % 3);
+                const int axis = static_cast<int>(dice.rng() % 3);
                 const float shift = eye[axis] - box.min[axis];
                 box.min[axis] += shift;
                 box.max[axis] += shift;
@@ -197,17 +192,13 @@ void run_region_world(const char* name, const TestWorld& tw, std::uint32_t seed,
     bsp.build(tw.world);
     const ReferenceVisibility reference(tw.world);
     OcclusionBuffer buffer;
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-    const Aabb area = tw.play_area;
-    auto random_point = [&] {
-        return area.min + area.size() * glm::vec3(unit(rng), unit(rng), unit(rng));
-    };
+    testing::WorldDice dice(tw.play_area, seed);
     Tally t;
     std::vector<glm::vec3> eyes;
     for (int r = 0; r < regions; ++r) {
-        const glm::vec3 c = random_point();
-        const glm::vec3 half(8.0f + 40.0f * unit(rng), 8.0f + 40.0f * unit(rng), 16.0f * unit(rng));
+        const glm::vec3 c = dice.point();
+        const glm::vec3 half(8.0f + 40.0f * dice.unit(), 8.0f + 40.0f * dice.unit(),
+                             16.0f * dice.unit());
         const Aabb region = Aabb::from_center_half_extents(c, half);
         eyes.clear();
         for (int j = 0; j < 8; ++j) {
@@ -217,13 +208,14 @@ void run_region_world(const char* name, const TestWorld& tw, std::uint32_t seed,
         }
         eyes.push_back(c);
         for (int k = 0; k < 8; ++k) {
-            eyes.push_back(region.min + region.size() * glm::vec3(unit(rng), unit(rng), unit(rng)));
+            eyes.push_back(region.min +
+                           region.size() * glm::vec3(dice.unit(), dice.unit(), dice.unit()));
         }
         buffer.build_region(region, tw.world, bsp);
         for (int b = 0; b < boxes; ++b) {
-            const float h = 4.0f + 40.0f * unit(rng);
+            const float h = 4.0f + 40.0f * dice.unit();
             const Aabb box =
-                Aabb::from_center_half_extents(random_point(), glm::vec3(h, h, h * 1.5f));
+                Aabb::from_center_half_extents(dice.point(), glm::vec3(h, h, h * 1.5f));
             bool seen = false;
             for (const glm::vec3& e : eyes) {
                 seen = seen || reference.test_box(e, box, 4) == Visibility::visible;

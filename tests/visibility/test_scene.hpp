@@ -11,10 +11,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <initializer_list>
 #include <random>
 #include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace dsoc::visibility::testing {
 
@@ -88,27 +90,57 @@ struct BoxSizes {
     float tiny, mid, mid_span, large, large_span;
 };
 
+/// The dice of a randomized test over a test world: a seeded generator, uniform draws
+/// in [0, 1) and uniform points of the world's play area, drawn in the order of the
+/// calls (the same run for a seed).
+class WorldDice {
+public:
+    WorldDice(const Aabb& area, std::uint32_t seed) : rng(seed), area_(area) {}
+
+    /// Uniform in [0, 1).
+    float unit() { return unit_(rng); }
+    /// Uniform in the play area.
+    glm::vec3 point() { return area_.min + area_.size() * glm::vec3(unit(), unit(), unit()); }
+
+    std::mt19937 rng; ///< for whole-number draws: rng() % n
+
+private:
+    Aabb area_;
+    std::uniform_real_distribution<float> unit_{0.0f, 1.0f};
+};
+
 /// The property tests' random box number `b`: odd ones around a random vertex of a
-/// random occluder of `world`, the others around `random_point()`; each axis of the
-/// half-size scaled by 0.5..1.5. Draws from `rng` in a fixed order (the same boxes
+/// random occluder of `world`, the others around a point of the play area; each axis of
+/// the half-size scaled by 0.5..1.5. Draws from `dice` in a fixed order (the same boxes
 /// for a seed).
-template <class RandomPoint>
-Aabb random_test_box(std::mt19937& rng, std::uniform_real_distribution<float>& unit,
-                     RandomPoint&& random_point, const OccluderWorld& world, int b,
-                     const BoxSizes& sizes) {
-    const float size_pick = unit(rng);
+inline Aabb random_test_box(WorldDice& dice, const OccluderWorld& world, int b,
+                            const BoxSizes& sizes) {
+    const float size_pick = dice.unit();
     const float h = size_pick < 0.2f
                         ? sizes.tiny
-                        : (size_pick < 0.9f ? sizes.mid + sizes.mid_span * unit(rng)
-                                            : sizes.large + sizes.large_span * unit(rng));
-    glm::vec3 c = random_point();
+                        : (size_pick < 0.9f ? sizes.mid + sizes.mid_span * dice.unit()
+                                            : sizes.large + sizes.large_span * dice.unit());
+    glm::vec3 c = dice.point();
     if (b % 2 == 1) {
-        const auto& near = world.occluder(static_cast<OccluderId>(rng() % world.size()));
-        c = near.vertices()[rng() % near.vertices().size()] +
-            glm::vec3(unit(rng) - 0.5f, unit(rng) - 0.5f, unit(rng) - 0.5f) * 40.0f;
+        const auto& near = world.occluder(static_cast<OccluderId>(dice.rng() % world.size()));
+        c = near.vertices()[dice.rng() % near.vertices().size()] +
+            glm::vec3(dice.unit() - 0.5f, dice.unit() - 0.5f, dice.unit() - 0.5f) * 40.0f;
     }
-    const glm::vec3 half(h * (0.5f + unit(rng)), h * (0.5f + unit(rng)), h * (0.5f + unit(rng)));
+    const glm::vec3 half(h * (0.5f + dice.unit()), h * (0.5f + dice.unit()),
+                         h * (0.5f + dice.unit()));
     return Aabb::from_center_half_extents(c, half);
+}
+
+/// Expects `problems`, what a config's validate() returned, to be one per field of
+/// `fields`, in that order, each naming its field.
+inline void expect_problems_naming(const std::vector<std::string>& problems,
+                                   std::initializer_list<const char*> fields) {
+    ASSERT_EQ(problems.size(), fields.size());
+    std::size_t i = 0;
+    for (const char* field : fields) {
+        EXPECT_NE(problems[i].find(field), std::string::npos) << problems[i];
+        ++i;
+    }
 }
 
 /// "(x, y, z)", for failure messages.

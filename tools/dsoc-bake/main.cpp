@@ -6,6 +6,7 @@
 
 #include "dsoc/cli/program.hpp"
 #include "dsoc/cli/progress.hpp"
+#include "dsoc/cli/setting_option.hpp"
 #include "dsoc/interest/bake_request.hpp"
 #include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/maps/map_source.hpp"
@@ -52,28 +53,23 @@ int main(int argc, char** argv) {
     std::uint64_t max_mib = dsoc::maps::BakeRequest{}.max_table_bytes >> 20;
     app.add_option("maps", specs, "map names (oa_dm4), .bsp/.pk3/text map paths or gen:...")
         ->required();
-    app.add_option("--cell-size", request.config.cell_size, "cell edge in world units")
-        ->capture_default_str();
-    app.add_option("--threads", request.config.threads, "worker threads (0: one per core)")
-        ->capture_default_str();
-    app.add_option("--portal-depth", request.config.portal_depth,
-                   "portal levels of the exact tests")
-        ->capture_default_str();
-    app.add_option("--top-level", request.config.top_level,
-                   "hierarchy levels (blocks of 2^L cells paired first; 0: none)")
-        ->capture_default_str();
-    app.add_option("--witness-stop-level", request.config.witness_stop_level,
-                   "a clear segment between blocks of 2^L cells marks them all visible")
-        ->capture_default_str();
-    app.add_option("--witness-segments", request.config.witness_segments,
-                   "segments cast between two blocks before an exact test")
-        ->capture_default_str();
+    dsoc::cli::add_setting(app, "--cell-size", request.config.cell_size,
+                           "cell edge in world units");
+    dsoc::cli::add_setting(app, "--threads", request.config.threads,
+                           "worker threads (0: one per core)");
+    dsoc::cli::add_setting(app, "--portal-depth", request.config.portal_depth,
+                           "portal levels of the exact tests");
+    dsoc::cli::add_setting(app, "--top-level", request.config.top_level,
+                           "hierarchy levels (blocks of 2^L cells paired first; 0: none)");
+    dsoc::cli::add_setting(app, "--witness-stop-level", request.config.witness_stop_level,
+                           "a clear segment between blocks of 2^L cells marks them all visible");
+    dsoc::cli::add_setting(app, "--witness-segments", request.config.witness_segments,
+                           "segments cast between two blocks before an exact test");
     app.add_flag("--both-directions,!--one-direction", request.config.both_directions,
                  "retry a failed exact test of two cells with region and box swapped")
         ->capture_default_str();
-    app.add_option("--max-table-mib", max_mib,
-                   "cells grow until the dense rows the bake fills fit this many MiB")
-        ->capture_default_str();
+    dsoc::cli::add_setting(app, "--max-table-mib", max_mib,
+                           "cells grow until the dense rows the bake fills fit this many MiB");
     app.add_option("--cache-dir", dir,
                    "where tables are kept (default: $DSOC_BAKE_DIR, "
                    "$XDG_CACHE_HOME/dsoc/bakes or ~/.cache/dsoc/bakes)");

@@ -16,6 +16,7 @@
 
 #include "dsoc/cli/choice_option.hpp"
 #include "dsoc/cli/program.hpp"
+#include "dsoc/cli/setting_option.hpp"
 #include "dsoc/inspect/captioned.hpp"
 #include "dsoc/inspect/depth_view.hpp"
 #include "dsoc/inspect/live_source.hpp"
@@ -364,53 +365,43 @@ int main(int argc, char** argv) {
     app.add_option("--client", o.client,
                    "live: the bot (1..bots) the client views from, default 1; trace: the "
                    "client id, default the first listed");
-    app.add_option("--tick", o.tick, "the tick drawn in plan.png (trace: first recorded >= it)")
-        ->capture_default_str();
+    cli::add_setting(app, "--tick", o.tick,
+                     "the tick drawn in plan.png (trace: first recorded >= it)");
     app.add_option("--frames", o.frames, "also write this many plans to frames/")
         ->check(CLI::Range(0, 100000));
-    app.add_option("--frame-every", o.frame_every, "ticks between frames")
-        ->capture_default_str()
+    cli::add_setting(app, "--frame-every", o.frame_every, "ticks between frames")
         ->check(CLI::Range(1, 100000));
-    app.add_option("--frame-crop", o.frame_crop,
-                   "frames show only this far around the eye [world units]; 0: the whole map")
-        ->capture_default_str()
+    cli::add_setting(app, "--frame-crop", o.frame_crop,
+                     "frames show only this far around the eye [world units]; 0: the whole map")
         ->check(CLI::NonNegativeNumber);
-    app.add_option("--sheet-columns", o.sheet_columns, "frames per row of frames/sheet.png")
-        ->capture_default_str()
+    cli::add_setting(app, "--sheet-columns", o.sheet_columns, "frames per row of frames/sheet.png")
         ->check(CLI::Range(1, 100));
     cli::add_choice_option(app, "--policy", o.live.policy, "live: dsoc or occlusion");
-    app.add_option("--bots", o.live.bots, "live: wandering entities (arena-64: 576)")
-        ->capture_default_str();
-    app.add_option("--tick-rate", o.live.tick_rate, "live: [Hz]")->capture_default_str();
-    app.add_option("--latency-ms", o.live.latency_allowance_ms,
-                   "live: round trip + interpolation covered [ms]")
-        ->capture_default_str();
+    cli::add_setting(app, "--bots", o.live.bots, "live: wandering entities (arena-64: 576)");
+    cli::add_setting(app, "--tick-rate", o.live.tick_rate, "live: [Hz]");
+    cli::add_setting(app, "--latency-ms", o.live.latency_allowance_ms,
+                     "live: round trip + interpolation covered [ms]");
     cli::add_choice_option(app, "--culler", o.live.culler, "live: shaft, pyramid or both");
-    app.add_option("--seed", o.live.seed, "live: bots' seed")->capture_default_str();
-    app.add_option("--units-per-pixel", o.plan.units_per_pixel, "plan scale [world units]")
-        ->capture_default_str()
+    cli::add_setting(app, "--seed", o.live.seed, "live: bots' seed");
+    cli::add_setting(app, "--units-per-pixel", o.plan.units_per_pixel, "plan scale [world units]")
         ->check(CLI::PositiveNumber);
     app.add_option("--cut-above", o.plan.cut_above,
                    "leave out occluders whose bottom is above this z [world units] (default: "
                    "the eye + --cut-above-eye)");
-    app.add_option("--cut-above-eye", o.cut_above_eye,
-                   "default cut height above the eye [world units]")
-        ->capture_default_str();
+    cli::add_setting(app, "--cut-above-eye", o.cut_above_eye,
+                     "default cut height above the eye [world units]");
     app.add_flag("--no-cut", o.no_cut, "draw every occluder (ceilings too)");
-    app.add_option("--pyramid", o.pyramid,
-                   "z-pyramid dumped: region (from the client's reachable eye region, live "
-                   "only), eye (from the present eye), none; auto = region live, eye for traces")
-        ->capture_default_str()
+    cli::add_setting(app, "--pyramid", o.pyramid,
+                     "z-pyramid dumped: region (from the client's reachable eye region, live "
+                     "only), eye (from the present eye), none; auto = region live, eye for traces")
         ->check(CLI::IsMember({"auto", "region", "eye", "none"}));
-    app.add_option("--level", o.level, "pyramid level drawn (0 = finest)")->capture_default_str();
-    app.add_option("--face-resolution", o.face_resolution,
-                   "pyramid texels per face side (power of two, 8..1024)")
-        ->capture_default_str();
-    app.add_option("--far-depth", o.depth.far_depth, "depth drawn black [world units]")
-        ->capture_default_str()
+    cli::add_setting(app, "--level", o.level, "pyramid level drawn (0 = finest)");
+    cli::add_setting(app, "--face-resolution", o.face_resolution,
+                     "pyramid texels per face side (power of two, 8..1024)");
+    cli::add_setting(app, "--far-depth", o.depth.far_depth, "depth drawn black [world units]")
         ->check(CLI::PositiveNumber);
-    app.add_option("--face-pixels", o.depth.face_pixels, "pixels per face side in the images")
-        ->capture_default_str()
+    cli::add_setting(app, "--face-pixels", o.depth.face_pixels,
+                     "pixels per face side in the images")
         ->check(CLI::Range(8, 4096));
     if (const auto stop = dsoc::cli::parse(app, argc, argv)) {
         return *stop;

@@ -166,25 +166,11 @@ bool OccluderGrid::walk_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch, 
     }
     // Clip the segment to the grid (slabs), in the segment's parameter t in [0, 1].
     const glm::vec3 dir = to - from;
+    const glm::vec3 inv(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
     float t0 = 0.0f;
     float t1 = 1.0f;
-    for (int a = 0; a < 3; ++a) {
-        if (std::abs(dir[a]) < 1e-12f) {
-            if (from[a] < bounds_.min[a] || from[a] > bounds_.max[a]) {
-                return false;
-            }
-            continue;
-        }
-        float ta = (bounds_.min[a] - from[a]) / dir[a];
-        float tb = (bounds_.max[a] - from[a]) / dir[a];
-        if (ta > tb) {
-            std::swap(ta, tb);
-        }
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-        if (t0 > t1) {
-            return false;
-        }
+    if (!clip_segment_to_box(from, dir, inv, bounds_, t0, t1)) {
+        return false;
     }
     const glm::vec3 start = from + dir * t0;
     int cell[3];

@@ -20,30 +20,12 @@ std::array<glm::vec3, 8> corners(const Aabb& b) {
     return c;
 }
 
-/// Slab test: does the segment from + t * dir, t in [0, 1], touch the closed box?
-/// `inv` is 1 / dir per axis (infinite for a zero component, handled below).
+/// Does the segment from + t * dir, t in [0, 1], touch the closed box? `inv` is 1 / dir
+/// per axis.
 bool segment_hits_box(glm::vec3 from, glm::vec3 dir, glm::vec3 inv, const Aabb& box) {
     float t0 = 0.0f;
     float t1 = 1.0f;
-    for (int a = 0; a < 3; ++a) {
-        if (dir[a] == 0.0f) {
-            if (from[a] < box.min[a] || from[a] > box.max[a]) {
-                return false;
-            }
-            continue;
-        }
-        float ta = (box.min[a] - from[a]) * inv[a];
-        float tb = (box.max[a] - from[a]) * inv[a];
-        if (ta > tb) {
-            std::swap(ta, tb);
-        }
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-        if (t0 > t1) {
-            return false;
-        }
-    }
-    return true;
+    return clip_segment_to_box(from, dir, inv, box, t0, t1);
 }
 
 } // namespace

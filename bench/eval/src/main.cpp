@@ -3,6 +3,7 @@
 // oracle. Deterministic for a seed; no sockets. docs/evaluation.md.
 
 #include "dsoc/cli/program.hpp"
+#include "dsoc/cli/setting_option.hpp"
 #include "dsoc/eval/evaluation.hpp"
 #include "dsoc/eval/policies.hpp"
 #include "dsoc/eval/report.hpp"
@@ -38,9 +39,8 @@ int main(int argc, char** argv) {
     std::string json_path;
     bool list = false;
     bool quiet = false;
-    app.add_option("--scenarios", scenarios_path, "scenarios file")->capture_default_str();
-    app.add_option("--scenario", scenario_name, "scenario name (see --list)")
-        ->capture_default_str();
+    dsoc::cli::add_setting(app, "--scenarios", scenarios_path, "scenarios file");
+    dsoc::cli::add_setting(app, "--scenario", scenario_name, "scenario name (see --list)");
     app.add_flag("--list", list, "list the scenarios and exit");
     app.add_option("--map", map, "override the scenario's map (name, path, gen:city, gen:rooms)");
     app.add_option("--policy", policy_list,
@@ -64,13 +64,12 @@ int main(int argc, char** argv) {
                    "the oracle judges every K-th tick (and the one before); 1 = every tick");
     app.add_option("--oracle-clients", oracle_clients,
                    "the oracle judges at most this many clients per judged tick (0 = all)");
-    app.add_option("--oracle-grid", options.sample_grid,
-                   "oracle samples per side of each box face turned toward the eye")
-        ->capture_default_str();
-    app.add_option("--threads", options.threads, "worker threads")->capture_default_str();
+    dsoc::cli::add_setting(app, "--oracle-grid", options.sample_grid,
+                           "oracle samples per side of each box face turned toward the eye");
+    dsoc::cli::add_setting(app, "--threads", options.threads, "worker threads");
     app.add_option("--trace", options.trace_path, "write a replication trace (JSON Lines)");
-    app.add_option("--trace-every", options.trace_every, "record every K-th tick in the trace")
-        ->capture_default_str();
+    dsoc::cli::add_setting(app, "--trace-every", options.trace_every,
+                           "record every K-th tick in the trace");
     app.add_option("--trace-policy", options.trace_policy,
                    "policy whose decisions the trace records (default: dsoc, else the first)");
     app.add_option("--dsoc-set", options.dsoc_overrides,
@@ -80,33 +79,30 @@ int main(int argc, char** argv) {
                    "emulate an overloaded server: this share of the culling policies' "
                    "client-ticks gets the cheapest conservative answer (the server's fail-open)")
         ->check(CLI::Range(0.0, 1.0));
-    app.add_option("--entity-clusters", options.entity_cluster_size,
-                   "DSOCConfig::entity_cluster_size for occlusion and dsoc alike (0 = off)")
-        ->capture_default_str();
+    dsoc::cli::add_setting(
+        app, "--entity-clusters", options.entity_cluster_size,
+        "DSOCConfig::entity_cluster_size for occlusion and dsoc alike (0 = off)");
     app.add_flag("--fusion,!--no-fusion", options.fusion,
                  "occluder fusion across cut planes in the culler's shaft stage (default on)");
-    app.add_option("--portal-depth", options.portal_depth,
-                   "levels of portal tests in the culler's shaft stage (0 = off)")
-        ->check(CLI::Range(0, 4))
-        ->capture_default_str();
-    app.add_option("--bake-cell-size", options.bake_cell_size,
-                   "cell edge of the baked table the dsoc-baked and dsoc-table policies use")
-        ->check(CLI::Range(4.0f, 1024.0f))
-        ->capture_default_str();
-    app.add_option("--bake-max-table-mib", options.bake_max_table_mib,
-                   "cells grow (by 1.25x) until the baked table fits this many MiB")
-        ->check(CLI::Range(1, 65536))
-        ->capture_default_str();
+    dsoc::cli::add_setting(app, "--portal-depth", options.portal_depth,
+                           "levels of portal tests in the culler's shaft stage (0 = off)")
+        ->check(CLI::Range(0, 4));
+    dsoc::cli::add_setting(
+        app, "--bake-cell-size", options.bake_cell_size,
+        "cell edge of the baked table the dsoc-baked and dsoc-table policies use")
+        ->check(CLI::Range(4.0f, 1024.0f));
+    dsoc::cli::add_setting(app, "--bake-max-table-mib", options.bake_max_table_mib,
+                           "cells grow (by 1.25x) until the baked table fits this many MiB")
+        ->check(CLI::Range(1, 65536));
     app.add_option("--bake-dir", options.bake_dir,
                    "cache of baked tables (default: $DSOC_BAKE_DIR, $XDG_CACHE_HOME/dsoc/bakes "
                    "or ~/.cache/dsoc/bakes)");
     app.add_flag("--region-bound", options.region_bound,
                  "also judge pairs from a lattice of eyes over each client's reachable region "
                  "(what any policy covering that region must send; slow)");
-    app.add_option("--region-lattice", options.region_lattice,
-                   "eyes per side of the region bound's lattice (n^3 eyes)")
-        ->check(CLI::Range(2, 9))
-        ->capture_default_str();
+    dsoc::cli::add_setting(app, "--region-lattice", options.region_lattice,
+                           "eyes per side of the region bound's lattice (n^3 eyes)")
+        ->check(CLI::Range(2, 9));
     app.add_option("--json", json_path, "write every figure as JSON to this file");
     app.add_flag("--quiet", quiet, "no progress line on stderr");
     if (const auto stop = dsoc::cli::parse(app, argc, argv)) {

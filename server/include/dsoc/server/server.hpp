@@ -197,6 +197,10 @@ private:
     void on_hello(Connection& session, const protocol::pb::ClientHello& hello) override;
     void on_input(Connection& session, const protocol::pb::ClientInput& input) override;
     void on_closed(Connection& session) override;
+    /// Adds what `session` counted (bytes either way, snapshots dropped and paced, inputs
+    /// dropped and clamped) to those totals of `stats`: a closed session's to stats_, the
+    /// open ones' to a count of their own for /metrics.
+    static void add_session_counts(const Connection& session, ServerStats& stats);
     /// A new connection (either transport): registered, and refused when over max_clients.
     void open_connection(const std::shared_ptr<Connection>& connection);
 

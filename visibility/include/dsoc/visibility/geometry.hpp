@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace dsoc::visibility {
 
@@ -75,6 +76,33 @@ struct Plane {
     }
     [[nodiscard]] glm::vec4 as_vec4() const { return {normal, distance}; }
 };
+
+/// The slab test of the segment from + t * dir against the closed box `box`: narrows
+/// [t0, t1] to the parameters at which the segment is in the box; false when nothing is
+/// left. `inv` is 1 / dir per axis; an axis where dir is 0 leaves [t0, t1] as it is when
+/// `from` lies within the box's extent on that axis, and empties it when not.
+[[nodiscard]] inline bool clip_segment_to_box(glm::vec3 from, glm::vec3 dir, glm::vec3 inv,
+                                              const Aabb& box, float& t0, float& t1) {
+    for (int a = 0; a < 3; ++a) {
+        if (dir[a] == 0.0f) {
+            if (from[a] < box.min[a] || from[a] > box.max[a]) {
+                return false;
+            }
+            continue;
+        }
+        float ta = (box.min[a] - from[a]) * inv[a];
+        float tb = (box.max[a] - from[a]) * inv[a];
+        if (ta > tb) {
+            std::swap(ta, tb);
+        }
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t0 > t1) {
+            return false;
+        }
+    }
+    return true;
+}
 
 /// Squared distance from `p` to the closest point of `box` (0 inside).
 [[nodiscard]] inline float distance_squared(const Aabb& box, glm::vec3 p) {
