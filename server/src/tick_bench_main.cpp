@@ -166,6 +166,7 @@ int main(int argc, char** argv) {
     server::SharedPoses poses;
     interest::Hearing hearing;
     std::uint64_t heard = 0;
+    std::uint64_t sent_entities = 0; // every entity a client is sent, seen or heard
     std::mt19937_64 rng(config.seed);
     const float dt = 1.0f / static_cast<float>(config.tick_rate);
     Phases total;
@@ -227,6 +228,7 @@ int main(int argc, char** argv) {
             heard += measured ? heard_now : 0;
             lap(p.hearing);
             server::add_own_entity(c->interest, c->entity_id);
+            sent_entities += measured ? c->interest.size() : 0;
             if (udp) {
                 // Nothing acknowledged until the delay has passed (acknowledgements never go
                 // back: an undelayed one first would be newer than the delayed ones after).
@@ -316,6 +318,9 @@ int main(int argc, char** argv) {
     const double clock_us = 1000.0 * clock_read_ms();
     const double select_us = 1000.0 * total.select / client_tick - clock_us;
     const double hearing_us = 1000.0 * total.hearing / client_tick - clock_us;
+    fmt::print("  entities             {:.2f} sent per client-tick, seen or heard (what a "
+               "snapshot's frame holds)\n",
+               static_cast<double>(sent_entities) / client_tick);
     fmt::print("  hearing              {:.2f} heard-only entities per client-tick; beyond the "
                "{:.2f} us clock read each carries: {:.2f} us, {:.1f}% of select's {:.2f} us\n",
                static_cast<double>(heard) / client_tick, clock_us, hearing_us,
