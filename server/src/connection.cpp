@@ -1,5 +1,9 @@
 #include "dsoc/server/connection.hpp"
 
+#include "dsoc/protocol/codec.hpp"
+
+#include <spdlog/spdlog.h>
+
 namespace dsoc::server {
 
 namespace pb = protocol::pb;
@@ -50,6 +54,16 @@ bool Connection::deliver_input(const pb::ClientInput& input) {
     }
     inputs_clamped_ += static_cast<std::uint64_t>(verdict.clamped_fields > 0);
     host_.on_input(*this, input_);
+    return true;
+}
+
+bool Connection::begin_disconnect(pb::DisconnectReason reason, const std::string& text) {
+    if (state_ == State::closing || state_ == State::closed) {
+        return false;
+    }
+    spdlog::info("client {} ({}) disconnected: {}: {}", client_id_, remote_,
+                 protocol::disconnect_reason_name(reason), text);
+    close_reason_ = reason;
     return true;
 }
 

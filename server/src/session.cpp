@@ -10,8 +10,6 @@
 
 #include <sys/socket.h>
 
-#include <spdlog/spdlog.h>
-
 namespace dsoc::server {
 
 namespace asio = boost::asio;
@@ -274,12 +272,9 @@ bool Session::finish_write_now(std::vector<std::uint8_t>& frame, std::size_t wri
 }
 
 void Session::disconnect(pb::DisconnectReason reason, const std::string& text) {
-    if (state_ == State::closing || state_ == State::closed) {
+    if (!begin_disconnect(reason, text)) {
         return;
     }
-    spdlog::info("client {} ({}) disconnected: {}: {}", client_id_, remote_,
-                 protocol::disconnect_reason_name(reason), text);
-    close_reason_ = reason;
     state_ = State::closing;
     // The reason goes right after the frame being written (a frame cannot be cut):
     // everything queued behind that frame is dropped, stale snapshots included.

@@ -166,12 +166,9 @@ bool UdpConnection::finish_write_now(std::vector<std::uint8_t>& frame, std::size
 }
 
 void UdpConnection::disconnect(pb::DisconnectReason reason, const std::string& text) {
-    if (state_ == State::closing || state_ == State::closed) {
+    if (!begin_disconnect(reason, text)) {
         return;
     }
-    spdlog::info("client {} ({}) disconnected: {}: {}", client_id_, remote_,
-                 protocol::disconnect_reason_name(reason), text);
-    close_reason_ = reason;
     pb::Envelope message;
     message.mutable_disconnect()->set_reason(reason);
     message.mutable_disconnect()->set_text(text);

@@ -130,6 +130,11 @@ protected:
     bool deliver_input(const protocol::pb::ClientInput& input);
     /// The pong that answers `ping`.
     [[nodiscard]] static protocol::pb::Envelope pong_for(const protocol::pb::Ping& ping);
+    /// What every transport's disconnect() does first: false when the connection is
+    /// already closing or closed (a second reason changes nothing); otherwise logs the
+    /// reason and keeps it as close_reason(), and the transport goes on to tell the client.
+    [[nodiscard]] bool begin_disconnect(protocol::pb::DisconnectReason reason,
+                                        const std::string& text);
 
     std::uint32_t client_id_;
     std::uint32_t entity_id_ = 0;
