@@ -28,7 +28,8 @@ void check(const dsoc::protocol::DeltaFrame& frame, std::uint32_t steps) {
             std::abs(static_cast<std::int64_t>(e.pose.z)) <= kMaxQuantizedCoordinate;
         if ((i > 0 && frame.entities[i - 1].id >= e.id) || e.tier >= kTiers ||
             (e.tier == kHeardTier && (e.pose.yaw != 0 || e.pose.pitch != 0)) || e.pose.yaw < 0 ||
-            static_cast<std::uint32_t>(e.pose.yaw) >= steps || !in_range) {
+            static_cast<std::uint32_t>(e.pose.yaw) >= steps || !in_range ||
+            e.held_ticks >= update_interval(e.tier) || e.motion_ticks > kMaxPredictedTicks) {
             std::abort();
         }
     }

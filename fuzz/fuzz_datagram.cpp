@@ -284,6 +284,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         if (read_datagram(datagram, header, body) != DatagramError::none) {
             continue;
         }
+        require(datagram.size() <= kMaxDatagramBytes); // a larger one is never read
         begin_datagram(header, header_bytes);
         require(same(header_bytes, datagram.first(kDatagramHeaderBytes)));
         require(body.data() == datagram.data() + kDatagramHeaderBytes &&

@@ -440,12 +440,14 @@ void SimClient::apply_acked_snapshot(const pb::Snapshot& s) {
 void SimClient::send_input_on_snapshot() {
     const auto now = Clock::now();
     const auto tick = std::chrono::nanoseconds(1'000'000'000LL / tick_rate_);
-    if (state_ != State::active || next_input_at_ - now > tick / 2) {
-        return; // an input left less than half a tick ago: the next one keeps the clock
+    if (state_ != State::active || now - last_input_at_ < tick / 2) {
+        return; // an input left less than half a tick ago
     }
-    next_input_at_ = now;
     send_input();
-    schedule_input(); // re-arms the clock a tick from now
+    // The clock's next input a tick and a half from now: it stands in for a snapshot
+    // lost or paced, and does not race one that comes a little late.
+    next_input_at_ = now + tick / 2;
+    schedule_input();
 }
 
 std::size_t SimClient::known() const {
@@ -481,9 +483,13 @@ void SimClient::players(std::vector<std::uint32_t>& out) const {
 
 void SimClient::schedule_input() {
     next_input_at_ += std::chrono::nanoseconds(1'000'000'000LL / tick_rate_);
+    // A wait that already completed, its handler queued, is not cancelled by re-arming
+    // the timer: the handler knows it is stale by this count.
+    const std::uint64_t armed = ++input_clock_armed_;
     input_timer_.expires_at(on_whole_millisecond(next_input_at_));
-    input_timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
-        if (ec || self->state_ != State::active) {
+    input_timer_.async_wait([self = shared_from_this(),
+                             armed](const boost::system::error_code& ec) {
+        if (ec || self->state_ != State::active || armed != self->input_clock_armed_) {
             return;
         }
         if (self->udp_ && Clock::now() - self->last_heard_ > kUdpSilence) {
@@ -502,6 +508,7 @@ void SimClient::schedule_input() {
 }
 
 void SimClient::send_input() {
+    last_input_at_ = Clock::now();
     pb::Envelope message;
     auto& input = *message.mutable_client_input();
     input.set_tick(++input_seq_);

@@ -262,6 +262,38 @@ TEST(AckedSnapshot, APacedClientGetsEveryCoarseEntityWithinItsInterval) {
     }
 }
 
+// A coarse-tier entity moving steadily costs nothing on the ticks it is due either: its
+// prediction spans every tick since its pose was set, held ticks included; and the
+// decoder's pose() of a held entity is where it is now, not where it was set.
+TEST(AckedSnapshot, AHeldEntityIsPredictedOverEveryTickSinceItsPoseWasSet) {
+    const QuantizationSettings settings;
+    for (const std::uint8_t tier : {std::uint8_t{1}, std::uint8_t{2}, kHeardTier}) {
+        SCOPED_TRACE("tier " + std::to_string(tier));
+        AckedSnapshotEncoder encoder(settings);
+        AckedSnapshotDecoder decoder(settings);
+        const float step = 3.0f * settings.quantum(tier); // whole quanta a tick: exact
+        std::vector<TruthEntity> interest{{5, {0.0f, 0.0f, 0.0f, 0.0f, 0.0f}, {}, tier}};
+        std::optional<std::uint64_t> acked;
+        std::uint32_t late_entries = 0;
+        int held = 0;
+        for (std::uint64_t tick = 1; tick <= 60; ++tick) {
+            interest[0].pose.x += step;
+            pb::Snapshot s;
+            encode(encoder, tick, acked, interest, s);
+            ASSERT_TRUE(decoder.apply(through_wire(s)).empty());
+            acked = tick;
+            if (tick > 20) {
+                late_entries += static_cast<std::uint32_t>(s.update_head_size());
+                held += decoder.newest()->entities[0].held_ticks > 0 ? 1 : 0;
+                EXPECT_NEAR(decoder.pose(5)->x, interest[0].pose.x, 0.5f * settings.quantum(tier))
+                    << "tick " << tick;
+            }
+        }
+        EXPECT_EQ(late_entries, 0u);
+        EXPECT_GT(held, 15); // most of those ticks it was held, not due
+    }
+}
+
 TEST(AckedSnapshot, SteadyMotionCostsNoUpdateEntries) {
     const QuantizationSettings settings;
     AckedSnapshotEncoder encoder(settings);

@@ -169,7 +169,7 @@ bool OccluderGrid::walk_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch, 
     const glm::vec3 inv(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
     float t0 = 0.0f;
     float t1 = 1.0f;
-    if (!clip_segment_to_box(from, dir, inv, bounds_, t0, t1)) {
+    if (!clip_segment_to_box(from, inv, bounds_, t0, t1)) {
         return false;
     }
     const glm::vec3 start = from + dir * t0;

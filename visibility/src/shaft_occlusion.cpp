@@ -22,10 +22,10 @@ std::array<glm::vec3, 8> corners(const Aabb& b) {
 
 /// Does the segment from + t * dir, t in [0, 1], touch the closed box? `inv` is 1 / dir
 /// per axis.
-bool segment_hits_box(glm::vec3 from, glm::vec3 dir, glm::vec3 inv, const Aabb& box) {
+bool segment_hits_box(glm::vec3 from, glm::vec3 inv, const Aabb& box) {
     float t0 = 0.0f;
     float t1 = 1.0f;
-    return clip_segment_to_box(from, dir, inv, box, t0, t1);
+    return clip_segment_to_box(from, inv, box, t0, t1);
 }
 
 } // namespace
@@ -285,7 +285,7 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     };
     for (const OccluderId id : scratch.grid.found) {
         const Aabb& ob = world_->occluder(id).bounds();
-        if (!segment_hits_box(from, dir, inv, ob)) {
+        if (!segment_hits_box(from, inv, ob)) {
             continue; // misses the occluder's bounds, so it cannot block the segment
         }
         const auto planes = world_->solid_planes(id);

@@ -6,8 +6,9 @@
 // whole set the client knows at its tick: entities not in the baseline enter with full
 // state, the baseline's entities not wanted any more leave, and every other one is carried
 // at its predicted position plus the residual its update entry holds (none: the
-// prediction was exact). So a lost snapshot needs no repair, never leaves a stale entity
-// and never loses a leave: the next one is coded against a frame the client has.
+// prediction was exact), or, on a coarse tier between the ticks it is due, held as it was. So a
+// lost snapshot needs no repair, never leaves a stale entity and never loses a leave: the next one
+// is coded against a frame the client has.
 //
 // Threading: neither class is thread-safe; one per connection. Distinct instances may be
 // used concurrently.

@@ -1,10 +1,11 @@
 #pragma once
 // Acknowledged-delta frames (docs/protocol.md, "Acknowledged deltas"): what both ends of
 // a connection hold for one snapshot tick. A frame lists every entity the client knew
-// after that snapshot, with the pose the snapshot gave it and a velocity both ends derive
-// from it, so that a later snapshot can be coded against any frame the client has
-// acknowledged (a lost snapshot is never needed again), its positions as residuals
-// against one prediction rule: an entity moving steadily costs no bytes.
+// after that snapshot, with the pose it was last given (a coarse-tier entity is held
+// between the ticks it is due) and a velocity both ends derive from it, so that a later snapshot
+// can be coded against any frame the client has acknowledged (a lost snapshot is never needed
+// again), its positions as residuals against one prediction rule: an entity moving steadily costs
+// no bytes.
 //
 // Pure data and integer arithmetic: both ends compute bit-identical frames.
 //
@@ -30,9 +31,9 @@ inline constexpr std::int64_t kVelocityScale = 256;
 /// One entity of a frame.
 struct FrameEntity {
     QuantizedPose pose; ///< on `tier`
-    /// The position's change per tick, measured over the last `motion_ticks` ticks up to
-    /// this frame, in quanta of `tier` / kVelocityScale: zero when the entity entered or
-    /// changed tier.
+    /// The position's change per tick, measured over the `motion_ticks` ticks up to when
+    /// `pose` was set (this frame's tick - held_ticks), in quanta of `tier` / kVelocityScale: zero
+    /// when the entity entered or changed tier.
     std::array<std::int32_t, 3> velocity{};
     /// How the z velocity changed per tick since the one before (a fall, a jump's arc),
     /// in quanta of `tier` / kVelocityScale per tick. Vertical only: gravity is the steady
@@ -60,6 +61,7 @@ inline constexpr std::uint64_t kMaxHeldTicks = update_interval(kHeardTier) - 1;
 /// The most ticks a prediction spans: a baseline kAckedHistory - 1 ticks old whose entity
 /// was held kMaxHeldTicks. [Units: ticks]
 inline constexpr std::uint64_t kMaxPredictedTicks = kAckedHistory - 1 + kMaxHeldTicks;
+static_assert(kMaxPredictedTicks <= 255, "motion_ticks holds a prediction's span");
 
 /// Whether entity `id` on `tier` (< kTiers) is due at `tick`, its pose last set at
 /// `set_tick` (< tick): whether a tick in (set_tick, tick] is a multiple of

@@ -84,9 +84,9 @@ public:
     /// The acknowledged-delta snapshot of `tick` (protocol/acked_snapshot.hpp) that moves
     /// the client to `interest`, coded against the frame of `acked_tick` (the newest tick
     /// the client acknowledged) when the encoder still holds it, else against nothing.
-    /// Entities on tier t > 0 are updated on the same staggered ticks as build_snapshot()'s
-    /// and carried at their prediction on the others. `audit`: the exact pose of every
-    /// tier-0 entity (those are updated every tick). `poses`, `columns`: as
+    /// Entities on tier t > 0 are updated when due (protocol::due_since(): the first
+    /// snapshot after their staggered tick of the interval) and held on the others. `audit`: the
+    /// exact pose of every tier-0 entity (those are updated every tick). `poses`, `columns`: as
     /// build_snapshot()'s (frame with snapshot_frame() given the same columns). Only when
     /// acked().
     void build_acked_snapshot(const interest::GameWorld& world,

@@ -105,10 +105,10 @@ private:
     /// Over UDP the input, and with it the acknowledgement, leaves as soon as a snapshot
     /// is applied, as a game client's does when its frame runs on the snapshot it just
     /// got (at 60 frames a second or more, within a few milliseconds); the input clock
-    /// then runs a tick from there and sends only when no snapshot came. On a clock of
-    /// its own phase the acknowledgement would wait up to a tick, and every snapshot
-    /// coded against a baseline a tick older costs both ends more (docs/simclient.md).
-    /// At most one input per half tick: one just sent by the clock is not repeated.
+    /// then sends a tick and a half later, and a tick apart after that, only while no
+    /// snapshot comes. On a clock of its own phase the acknowledgement would wait up to a
+    /// tick, and every snapshot coded against a baseline a tick older costs both ends
+    /// more (docs/simclient.md). Never within half a tick of the last input.
     void send_input_on_snapshot();
     void send(const protocol::pb::Envelope& message, bool goodbye = false);
     void queue_frame(std::span<const std::uint8_t> frame, bool goodbye);
@@ -150,6 +150,8 @@ private:
     /// When the next input falls due (one tick after the last); it leaves at the next
     /// whole millisecond, with the other clients' inputs due in that millisecond.
     std::chrono::steady_clock::time_point next_input_at_;
+    std::chrono::steady_clock::time_point last_input_at_; ///< when the last input left
+    std::uint64_t input_clock_armed_ = 0;                 ///< waits armed on input_timer_
 };
 
 } // namespace dsoc::simclient

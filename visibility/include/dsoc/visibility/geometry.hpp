@@ -77,14 +77,15 @@ struct Plane {
     [[nodiscard]] glm::vec4 as_vec4() const { return {normal, distance}; }
 };
 
-/// The slab test of the segment from + t * dir against the closed box `box`: narrows
-/// [t0, t1] to the parameters at which the segment is in the box; false when nothing is
-/// left. `inv` is 1 / dir per axis; an axis where dir is 0 leaves [t0, t1] as it is when
-/// `from` lies within the box's extent on that axis, and empties it when not.
-[[nodiscard]] inline bool clip_segment_to_box(glm::vec3 from, glm::vec3 dir, glm::vec3 inv,
-                                              const Aabb& box, float& t0, float& t1) {
+/// The slab test of the segment from + t * dir against the closed box `box`, given
+/// `inv` = 1 / dir per axis: narrows [t0, t1] to the parameters at which the segment is
+/// in the box; false when nothing is left. An axis where dir is 0, or so small that
+/// 1 / dir is not finite, leaves [t0, t1] as it is when `from` lies within the box's
+/// extent on that axis, and empties it when not (no infinity times 0 can make a NaN).
+[[nodiscard]] inline bool clip_segment_to_box(glm::vec3 from, glm::vec3 inv, const Aabb& box,
+                                              float& t0, float& t1) {
     for (int a = 0; a < 3; ++a) {
-        if (dir[a] == 0.0f) {
+        if (!std::isfinite(inv[a])) {
             if (from[a] < box.min[a] || from[a] > box.max[a]) {
                 return false;
             }
