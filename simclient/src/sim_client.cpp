@@ -439,7 +439,7 @@ void SimClient::apply_acked_snapshot(const pb::Snapshot& s) {
 
 void SimClient::send_input_on_snapshot() {
     const auto now = Clock::now();
-    const auto tick = std::chrono::nanoseconds(1'000'000'000LL / tick_rate_);
+    const auto tick = tick_period();
     if (state_ != State::active || now - last_input_at_ < tick / 2) {
         return; // an input left less than half a tick ago
     }
@@ -482,7 +482,7 @@ void SimClient::players(std::vector<std::uint32_t>& out) const {
 }
 
 void SimClient::schedule_input() {
-    next_input_at_ += std::chrono::nanoseconds(1'000'000'000LL / tick_rate_);
+    next_input_at_ += tick_period();
     // A wait that already completed, its handler queued, is not cancelled by re-arming
     // the timer: the handler knows it is stale by this count.
     const std::uint64_t armed = ++input_clock_armed_;

@@ -100,6 +100,10 @@ private:
     void on_server_hello(const protocol::pb::ServerHello& hello);
     void on_disconnect(const protocol::pb::Disconnect& disconnect);
     void apply_snapshot(const protocol::pb::Snapshot& snapshot);
+    /// The server's tick period (its tick rate from the ServerHello).
+    [[nodiscard]] std::chrono::nanoseconds tick_period() const {
+        return std::chrono::nanoseconds(1'000'000'000LL / tick_rate_);
+    }
     void schedule_input();
     void send_input();
     /// Over UDP the input, and with it the acknowledgement, leaves as soon as a snapshot
