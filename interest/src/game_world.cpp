@@ -28,6 +28,7 @@ GameWorld::GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::
     respawn_delay_ticks_ = settings.respawn_delay_ticks;
     teams_ = settings.teams;
     sounds_ = settings.sounds;
+    shots_ = settings.shots;
     seed_ = settings.seed;
     entities_.reserve(static_cast<std::size_t>(settings.bots) + 64);
     bots_ = sim::spawn_wander_bots(collision_, move_, map_->spawn_points,
@@ -150,6 +151,7 @@ void GameWorld::fire(std::uint32_t id) {
 
 void GameWorld::step(float dt, const ParallelFor& parallel) {
     died_.assign(entities_.size(), 0);
+    fired_.assign(entities_.size(), 0);
     const std::uint64_t step = steps_++;
     const auto move_one = [this, dt, step](std::size_t i) {
         Entity& e = entities_[i];
@@ -178,8 +180,9 @@ void GameWorld::step(float dt, const ParallelFor& parallel) {
             died_[i] = static_cast<std::uint8_t>(!map_->spawn_points.empty() &&
                                                  sim::touches_hazard(move_, e.move, map_->hazards));
         }
-        sim::step_sounds(e.audible, e.move, !e.respawn && died_[i] == 0, e.firing, move_.max_speed,
-                         sounds_, dt);
+        const bool alive = !e.respawn && died_[i] == 0;
+        sim::step_sounds(e.audible, e.move, alive, e.firing, move_.max_speed, sounds_, dt);
+        fired_[i] = static_cast<std::uint8_t>(alive && e.firing);
         e.firing = false;
     };
     if (parallel) {
@@ -189,18 +192,64 @@ void GameWorld::step(float dt, const ParallelFor& parallel) {
             move_one(i);
         }
     }
-    // The dead players get the next spawn points in id order; they are put there
-    // respawn_delay_ticks steps later (at once without a delay, as bots are).
+    resolve_shots();
+    // The dead players get the next spawn points in id order, the bots killed by shots
+    // theirs from their own streams; they are put there respawn_delay_ticks steps later
+    // (at once without a delay, as bots are).
     for (std::size_t i = 0; i < entities_.size(); ++i) {
         if (died_[i] == 0) {
             continue;
         }
         Entity& e = entities_[i];
+        e.health = sim::kMaxHealth; // as it will respawn
+        if (e.bot >= 0) {
+            sim::WanderBot& brain = bots_[static_cast<std::size_t>(e.bot)];
+            sim::kill_bot(brain, collision_, wander_, move_, map_->spawn_points);
+            e.move = brain.state;
+            e.teleported = brain.respawned;
+            e.respawn = brain.respawn;
+            continue;
+        }
         const auto& spawn = map_->spawn_points[next_spawn_++ % map_->spawn_points.size()];
         e.teleported = sim::die(e.move, sim::spawn_state(collision_, move_, spawn.origin),
                                 spawn.yaw_degrees, respawn_delay_ticks_, e.respawn);
         if (e.teleported) {
             e.yaw_deg = wrap_degrees(spawn.yaw_degrees);
+        }
+    }
+}
+
+void GameWorld::resolve_shots() {
+    if (shots_.damage <= 0 || map_->spawn_points.empty()) {
+        return;
+    }
+    const std::size_t count = entities_.size();
+    shot_boxes_.resize(count);
+    hittable_.resize(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        const Entity& e = entities_[i];
+        shot_boxes_[i] = box_of(e);
+        hittable_[i] = static_cast<std::uint8_t>(!e.respawn && died_[i] == 0);
+    }
+    // In id order, each against the world after this step's moves; one killed by an
+    // earlier shot of the step fires no more.
+    for (std::size_t i = 0; i < count; ++i) {
+        if (fired_[i] == 0 || hittable_[i] == 0) {
+            continue;
+        }
+        const Entity& shooter = entities_[i];
+        const auto hit = sim::first_hit(collision_, eye_of(shooter),
+                                        sim::view_direction(shooter.yaw_deg, shooter.pitch_deg),
+                                        shots_.range, shot_boxes_, hittable_, i);
+        if (!hit) {
+            continue;
+        }
+        Entity& target = entities_[*hit];
+        target.health -= shots_.damage;
+        if (target.health <= 0) {
+            hittable_[*hit] = 0;
+            died_[*hit] = 1;
+            ++frags_;
         }
     }
 }

@@ -20,6 +20,7 @@ interest::WorldSettings world_settings(const ServerConfig& config) {
     s.sounds.footstep_range = config.footstep_range;
     s.sounds.shot_range = config.shot_range;
     s.sounds.bot_shots_per_second = config.bot_shots_per_second;
+    s.shots.damage = config.shot_damage;
     s.max_speed = config.max_speed;
     s.seed = config.seed;
     // The shortest delay that keeps respawns from popping entities in (sim/respawn.hpp).

@@ -26,6 +26,9 @@ void add_world_options(App& app, ServerConfig& config) {
     cli::add_setting(app, "--shot-range", config.shot_range, "How far shots are heard [units]");
     cli::add_setting(app, "--bot-shots-per-second", config.bot_shots_per_second,
                      "How often a bot fires, on average [1/s]");
+    cli::add_setting(app, "--shot-damage", config.shot_damage,
+                     "Health a shot takes from the entity it hits, of 100 (0 = harmless); "
+                     "the killed respawn at spawn points");
     cli::add_setting(app, "--seed", config.seed, "Seed for bots and spawns");
 }
 

@@ -45,6 +45,7 @@ std::vector<std::string> validate(const ServerConfig& c) {
               c.bot_shots_per_second <= 100.0f,
           "bot_shots_per_second",
           "must be 0..100 per second, got " + std::to_string(c.bot_shots_per_second));
+    check_range(p, "shot_damage", c.shot_damage, 0, sim::kMaxHealth);
     check(p,
           c.tbv_strategy == "adaptive" || c.tbv_strategy == "explicit" || c.tbv_strategy == "fuzzy",
           "tbv_strategy", "must be one of adaptive, explicit, fuzzy; got '" + c.tbv_strategy + "'");

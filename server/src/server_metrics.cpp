@@ -64,6 +64,9 @@ std::string Server::render_metrics() const {
               d(sessions_.size()));
     out.gauge("dsoc_entities", "Entities in the world (bots and players).",
               d(world_.entities().size()));
+    out.counter("dsoc_frags_total",
+                "Entities killed by shots (shot_damage), each respawned at a spawn point.",
+                d(world_.frags()));
     // As of the last hand-over: during a phase the jobs are changing them.
     out.gauge("dsoc_tbvs_alive", "Live Temporal Bounding Volume groups over all clients.",
               d(tbvs_alive_));

@@ -120,13 +120,18 @@ void wander_step(WanderBot& bot, const CollisionWorld& world, const WanderConfig
     const MoveInput input = wander_think(bot, config, move, spawns, dt);
     player_move(world, move, input, dt, bot.state);
     if (!spawns.empty() && touches_hazard(move, bot.state, hazards)) {
-        ++bot.deaths;
-        const maps::SpawnPoint& spawn = spawns[next_random(bot.random_state) % spawns.size()];
-        if (die(bot.state, spawn_state(world, move, spawn.origin), spawn.yaw_degrees,
-                config.respawn_delay_ticks, bot.respawn)) { // no delay
-            bot.respawned = true;
-            pick_goal(bot, config, spawns);
-        }
+        kill_bot(bot, world, config, move, spawns);
+    }
+}
+
+void kill_bot(WanderBot& bot, const CollisionWorld& world, const WanderConfig& config,
+              const MoveConfig& move, std::span<const maps::SpawnPoint> spawns) {
+    ++bot.deaths;
+    const maps::SpawnPoint& spawn = spawns[next_random(bot.random_state) % spawns.size()];
+    if (die(bot.state, spawn_state(world, move, spawn.origin), spawn.yaw_degrees,
+            config.respawn_delay_ticks, bot.respawn)) { // no delay
+        bot.respawned = true;
+        pick_goal(bot, config, spawns);
     }
 }
 

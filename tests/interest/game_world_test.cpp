@@ -7,7 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
+
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -129,6 +133,95 @@ TEST(GameWorld, ADeadPlayerIsPutAtItsSpawnPointOnlyAfterTheRespawnDelay) {
     EXPECT_FALSE(world.arrival_eye_of(*e).has_value());
 }
 
+TEST(GameWorld, ShotsTakeHealthKillAndTheKilledRespawnAfterTheDelay) {
+    // Players on every spawn point; a pair with nothing between them is found by the
+    // same hitscan rule, and one shoots the other twice (half of its health each time).
+    constexpr int kDelay = 3;
+    const auto map = testing::rooms_map();
+    WorldSettings settings;
+    settings.bots = 0;
+    settings.respawn_delay_ticks = kDelay;
+    settings.shots.damage = sim::kMaxHealth / 2;
+    GameWorld world(settings, map);
+    for (std::size_t i = 0; i < map->spawn_points.size(); ++i) {
+        world.spawn_player();
+    }
+    const sim::CollisionWorld walls(map->collision_brushes);
+    const std::size_t count = world.entities().size();
+    std::vector<visibility::Aabb> boxes;
+    for (const Entity& e : world.entities()) {
+        boxes.push_back(world.box_of(e));
+    }
+    const std::vector<std::uint8_t> alive(count, 1);
+    std::optional<std::pair<std::size_t, std::size_t>> pair;
+    for (std::size_t a = 0; a < count && !pair; ++a) {
+        for (std::size_t b = 0; b < count && !pair; ++b) {
+            const glm::vec3 eye = world.eye_of(world.entities()[a]);
+            const glm::vec3 to = glm::normalize(boxes[b].center() - eye);
+            if (a != b && sim::first_hit(walls, eye, to, 8192.0f, boxes, alive, a) == b) {
+                pair = {a, b};
+            }
+        }
+    }
+    ASSERT_TRUE(pair) << "no two spawn points see each other";
+    const std::uint32_t shooter = world.entities()[pair->first].id;
+    const std::uint32_t target = world.entities()[pair->second].id;
+    const auto aim = [&] {
+        const glm::vec3 eye = world.eye_of(*world.find(shooter));
+        const glm::vec3 d = world.box_of(*world.find(target)).center() - eye;
+        const float yaw = glm::degrees(std::atan2(d.y, d.x));
+        const float pitch = -glm::degrees(std::atan2(d.z, std::hypot(d.x, d.y)));
+        for (const Entity& e : world.entities()) { // everyone stands still
+            world.set_player_input(e.id, glm::vec3(0.0f), false, e.id == shooter ? yaw : 0.0f,
+                                   e.id == shooter ? pitch : 0.0f);
+        }
+        world.fire(shooter);
+    };
+    aim();
+    world.step(1.0f / 30.0f);
+    EXPECT_EQ(world.find(target)->health, sim::kMaxHealth / 2);
+    EXPECT_FALSE(world.find(target)->respawn.has_value());
+    EXPECT_EQ(world.frags(), 0u);
+    world.step(1.0f / 30.0f); // no shot: nothing changes
+    EXPECT_EQ(world.find(target)->health, sim::kMaxHealth / 2);
+    aim();
+    world.step(1.0f / 30.0f);
+    const Entity* dead = world.find(target);
+    ASSERT_TRUE(dead->respawn.has_value()) << "the second hit kills";
+    EXPECT_EQ(dead->health, sim::kMaxHealth) << "full again for its next life";
+    EXPECT_EQ(world.frags(), 1u);
+    EXPECT_EQ(world.find(shooter)->health, sim::kMaxHealth);
+    const glm::vec3 arrival = dead->respawn->arrival.position;
+    for (int step = 1; step < kDelay; ++step) {
+        aim(); // a dead entity is not hit again (the shot may go on to one behind it)
+        world.step(1.0f / 30.0f);
+        EXPECT_EQ(world.find(target)->health, sim::kMaxHealth) << "step " << step;
+        EXPECT_TRUE(world.find(target)->respawn.has_value()) << "step " << step;
+    }
+    world.step(1.0f / 30.0f);
+    EXPECT_TRUE(world.find(target)->teleported);
+    EXPECT_EQ(world.find(target)->move.position, arrival);
+}
+
+TEST(GameWorld, HarmlessShotsKillNobody) {
+    const auto map = testing::rooms_map();
+    WorldSettings settings;
+    settings.bots = 20;
+    settings.sounds.bot_shots_per_second = 30.0f; // every bot fires every step
+    settings.shots.damage = 0;
+    GameWorld world(settings, map);
+    for (int step = 0; step < 300; ++step) {
+        world.step(1.0f / 30.0f);
+    }
+    EXPECT_EQ(world.frags(), 0u);
+    settings.shots.damage = sim::kMaxHealth;
+    GameWorld deadly(settings, map);
+    for (int step = 0; step < 300; ++step) {
+        deadly.step(1.0f / 30.0f);
+    }
+    EXPECT_GT(deadly.frags(), 0u) << "the same bots with deadly shots kill";
+}
+
 TEST(GameWorld, MovesThroughAParallelForGiveTheSameWorldAsOneByOne) {
     // Pits under half the spawn points, so players die and respawn (the one step that
     // is not per entity); the parallel world's moves run on four threads, in blocks.
@@ -139,6 +232,7 @@ TEST(GameWorld, MovesThroughAParallelForGiveTheSameWorldAsOneByOne) {
     WorldSettings settings;
     settings.bots = 40;
     settings.respawn_delay_ticks = 3;
+    settings.shots.damage = sim::kMaxHealth / 2; // two hits kill: deaths by shots too
     GameWorld serial(settings, map);
     GameWorld parallel(settings, map);
     std::vector<std::uint32_t> players;
@@ -172,6 +266,10 @@ TEST(GameWorld, MovesThroughAParallelForGiveTheSameWorldAsOneByOne) {
             const float yaw = unit(rng) * 180.0f;
             serial.set_player_input(id, wish, jump, yaw, 0.0f);
             parallel.set_player_input(id, wish, jump, yaw, 0.0f);
+            if (unit(rng) > 0.8f) {
+                serial.fire(id);
+                parallel.fire(id);
+            }
         }
         serial.step(1.0f / 30.0f);
         parallel.step(1.0f / 30.0f, four_threads);
@@ -182,7 +280,7 @@ TEST(GameWorld, MovesThroughAParallelForGiveTheSameWorldAsOneByOne) {
             ASSERT_EQ(a.id, b.id);
             ASSERT_TRUE(a.move.position == b.move.position && a.move.velocity == b.move.velocity &&
                         a.move.on_ground == b.move.on_ground && a.yaw_deg == b.yaw_deg &&
-                        a.teleported == b.teleported &&
+                        a.teleported == b.teleported && a.health == b.health &&
                         a.respawn.has_value() == b.respawn.has_value() &&
                         (!a.respawn || a.respawn->arrival.position == b.respawn->arrival.position))
                 << "tick " << tick << " entity " << a.id;
@@ -191,6 +289,8 @@ TEST(GameWorld, MovesThroughAParallelForGiveTheSameWorldAsOneByOne) {
     }
     EXPECT_EQ(parallel_calls, 300u);
     EXPECT_GT(teleports, 10) << "the pits should have killed players and bots";
+    EXPECT_EQ(serial.frags(), parallel.frags());
+    EXPECT_GT(serial.frags(), 0u) << "the shots should have killed players and bots";
 }
 
 } // namespace

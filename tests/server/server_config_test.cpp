@@ -42,10 +42,11 @@ TEST(ServerConfig, SoundSettingsAreCheckedWithTheirNames) {
     c.shot_range = -1.0f;
     c.bot_shots_per_second = 1000.0f;
     c.heard_quantum = 0.25f; // finer than the far tier
+    c.shot_damage = 101;     // more than an entity's health
     const auto problems = validate(c);
-    ASSERT_EQ(problems.size(), 4u);
+    ASSERT_EQ(problems.size(), 5u);
     for (const char* field :
-         {"footstep_range", "shot_range", "bot_shots_per_second", "heard_quantum"}) {
+         {"footstep_range", "shot_range", "bot_shots_per_second", "heard_quantum", "shot_damage"}) {
         EXPECT_TRUE(std::any_of(problems.begin(), problems.end(), [&](const std::string& p) {
             return p.find(field) != std::string::npos;
         })) << field;

@@ -15,6 +15,7 @@
 #include "dsoc/sim/collision_world.hpp"
 #include "dsoc/sim/player_move.hpp"
 #include "dsoc/sim/respawn.hpp"
+#include "dsoc/sim/shots.hpp"
 #include "dsoc/sim/sounds.hpp"
 #include "dsoc/sim/wander_bot.hpp"
 #include "dsoc/visibility/geometry.hpp"
@@ -50,6 +51,8 @@ struct WorldSettings {
     int teams = 0;
     /// Footsteps and shots (sim/sounds.hpp): who hears whom (interest/hearing.hpp).
     sim::SoundSettings sounds;
+    /// What a shot does to the entity it hits (sim/shots.hpp).
+    sim::ShotSettings shots;
 };
 
 enum class EntityKind : std::uint8_t { bot = 0, player = 1 };
@@ -65,8 +68,9 @@ struct Entity {
     bool teleported = false;                    ///< respawned during the last step()
     std::optional<sim::PendingRespawn> respawn; ///< dead, waiting to be put at a spawn point
     visibility::TeamId team = visibility::kNoTeam;
-    bool firing = false;  ///< players: fires in the next step() (GameWorld::fire)
-    sim::Audible audible; ///< the sounds it is making
+    bool firing = false;          ///< players: fires in the next step() (GameWorld::fire)
+    int health = sim::kMaxHealth; ///< shots take it (sim/shots.hpp); full again at each death
+    sim::Audible audible;         ///< the sounds it is making
 };
 
 class GameWorld final : public WorldView {
@@ -105,8 +109,9 @@ public:
         std::function<void(std::size_t count, const std::function<void(std::size_t)>& body)>;
 
     /// Advances every entity by `dt` seconds. Each entity moves on its own (bots with
-    /// their own random streams), so the moves may run through `parallel`; the players
-    /// who touched a hazard are then put at spawn points in id order, so the world is
+    /// their own random streams), so the moves may run through `parallel`; then the
+    /// step's shots hit in id order (sim/shots.hpp), and the entities that touched a
+    /// hazard or lost their health are put at spawn points in id order, so the world is
     /// the same with or without it.
     void step(float dt, const ParallelFor& parallel = {});
 
@@ -134,12 +139,16 @@ public:
     [[nodiscard]] float max_speed() const { return move_.max_speed; }
     [[nodiscard]] const sim::MoveConfig& move_config() const { return move_; }
     [[nodiscard]] const sim::SoundSettings& sound_settings() const { return sounds_; }
+    /// Entities killed by shots since the world began.
+    [[nodiscard]] std::uint64_t frags() const { return frags_; }
     [[nodiscard]] const maps::Map& map() const { return *map_; }
     [[nodiscard]] const std::shared_ptr<const maps::Map>& map_ptr() const { return map_; }
 
 private:
     Entity& add(EntityKind kind, std::uint32_t id);
     void rebuild_index();
+    /// step(): the shots of the entities in fired_, marking the killed in died_.
+    void resolve_shots();
 
     std::shared_ptr<const maps::Map> map_;
     sim::CollisionWorld collision_;
@@ -153,9 +162,16 @@ private:
     int respawn_delay_ticks_ = 0;
     int teams_ = 0;
     sim::SoundSettings sounds_;
+    sim::ShotSettings shots_;
     std::uint64_t seed_ = 0;
-    std::uint64_t steps_ = 0;        ///< step() calls so far: the bots' shot draws
-    std::vector<std::uint8_t> died_; ///< step(): players who touched a hazard, by index
+    std::uint64_t steps_ = 0; ///< step() calls so far: the bots' shot draws
+    std::uint64_t frags_ = 0;
+    /// step(), by index: players who touched a hazard and entities a shot killed; who
+    /// fired while alive; the boxes shots may hit and which of them live.
+    std::vector<std::uint8_t> died_;
+    std::vector<std::uint8_t> fired_;
+    std::vector<visibility::Aabb> shot_boxes_;
+    std::vector<std::uint8_t> hittable_;
 };
 
 } // namespace dsoc::interest

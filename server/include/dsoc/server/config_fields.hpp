@@ -20,6 +20,7 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("footstep_range", config.footstep_range);
     visit("shot_range", config.shot_range);
     visit("bot_shots_per_second", config.bot_shots_per_second);
+    visit("shot_damage", config.shot_damage);
     visit("map", config.map);
     visit("policy", config.policy);
     visit("tbv_strategy", config.tbv_strategy);

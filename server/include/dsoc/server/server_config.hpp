@@ -59,6 +59,10 @@ struct ServerConfig {
     float shot_range = sim::SoundSettings{}.shot_range;
     /// How often a bot fires, on average. [Units: 1/s] [Limit: 0..100]
     float bot_shots_per_second = sim::SoundSettings{}.bot_shots_per_second;
+    /// Health a shot takes from the entity it hits, of sim::kMaxHealth (0: harmless);
+    /// an entity with none left dies and respawns at a spawn point (sim/shots.hpp).
+    /// [Units: health points] [Limit: 0..100]
+    int shot_damage = sim::ShotSettings{}.damage;
     /// Map: a name looked up in OpenArena's .pk3 archives (and $DSOC_MAP_PATH), a path
     /// to a .bsp or text map, or "gen:city[:seed]" / "gen:rooms[:seed]".
     std::string map = "oa_dm4";

@@ -77,4 +77,10 @@ void wander_step(WanderBot& bot, const CollisionWorld& world, const WanderConfig
                  const MoveConfig& move, std::span<const maps::SpawnPoint> spawns,
                  std::span<const maps::Hazard> hazards, float dt);
 
+/// The living bot dies (a hazard, a shot): it is given a spawn point from its own
+/// random stream and respawned there at once when config.respawn_delay_ticks is 0
+/// (`respawned` set), else `respawn` is set. Precondition: !spawns.empty().
+void kill_bot(WanderBot& bot, const CollisionWorld& world, const WanderConfig& config,
+              const MoveConfig& move, std::span<const maps::SpawnPoint> spawns);
+
 } // namespace dsoc::sim
