@@ -104,6 +104,10 @@ DeltaFrame& FrameRing::start(std::uint64_t tick) {
 }
 
 void FrameRing::commit() {
+    newest_size_ = next_.entities.size();
+    if (oversized(next_.entities.capacity())) {
+        next_.entities.shrink_to_fit(); // built in a buffer once needed for a larger set
+    }
     Slot& s = slots_[next_.tick % kAckedHistory];
     if (s.used) {
         keep_spare(std::move(s.frame.entities), false); // last used kAckedHistory ticks ago
@@ -133,8 +137,8 @@ void FrameRing::forget_older_than(std::uint64_t tick) {
 }
 
 void FrameRing::keep_spare(std::vector<FrameEntity>&& memory, bool warm) {
-    if (memory.capacity() == 0) {
-        return; // nothing to reuse; must not push a buffer that has memory out
+    if (memory.capacity() == 0 || oversized(memory.capacity())) {
+        return; // nothing to reuse (must not push a buffer that has memory out), or too much
     }
     memory.clear();
     if (warm) {
@@ -145,6 +149,17 @@ void FrameRing::keep_spare(std::vector<FrameEntity>&& memory, bool warm) {
     if (spare_.size() > kMaxSpare) {
         spare_.erase(spare_.begin());
     }
+}
+
+std::size_t FrameRing::capacity() const {
+    std::size_t entities = next_.entities.capacity();
+    for (const Slot& s : slots_) {
+        entities += s.frame.entities.capacity();
+    }
+    for (const std::vector<FrameEntity>& memory : spare_) {
+        entities += memory.capacity();
+    }
+    return entities;
 }
 
 // --- encoder ---

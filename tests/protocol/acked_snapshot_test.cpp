@@ -398,6 +398,28 @@ TEST(FrameRing, AFrameIsBuiltInTheMemoryForgottenMostRecently) {
     EXPECT_EQ(ring.find(3)->entities.data(), memory[2]); // held frames keep theirs
 }
 
+TEST(FrameRing, MemoryFollowsTheFramesDownAfterAPeak) {
+    // One frame of 1,000 entities, then frames of 10, each acknowledged at once: the
+    // peak's buffer is given back, not kept for the connection's life.
+    FrameRing ring;
+    DeltaFrame& peak = ring.start(1);
+    peak.entities.resize(1000);
+    ring.commit();
+    EXPECT_GE(ring.capacity(), 1000u);
+    for (std::uint64_t tick = 2; tick <= 2 * kAckedHistory; ++tick) {
+        ring.forget_older_than(tick - 1);
+        DeltaFrame& f = ring.start(tick);
+        f.entities.resize(10);
+        ring.commit();
+    }
+    // Two frames held, the one being built and two spares, each within the bound.
+    EXPECT_LE(ring.capacity(), 5 * (2 * 10 + FrameRing::kSlackEntities));
+    // A buffer within twice the need is still reused (no allocation per tick).
+    ring.forget_older_than(2 * kAckedHistory);
+    const FrameEntity* reused = ring.start(2 * kAckedHistory + 1).entities.data();
+    EXPECT_NE(reused, nullptr);
+}
+
 TEST(AckedSnapshot, AnAcknowledgementOlderThanTheHistoryGetsAFullSnapshot) {
     const QuantizationSettings settings;
     AckedSnapshotEncoder encoder(settings);

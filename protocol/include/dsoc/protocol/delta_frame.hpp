@@ -117,6 +117,11 @@ void set_motion(FrameEntity& e, const QuantizedPose& from, std::uint64_t ticks,
 /// still in cache, where a slot's own old memory was last used kAckedHistory ticks ago
 /// (500 clients' frames do not fit in cache, and writing a frame into cold memory was most
 /// of the codec's cost).
+///
+/// Memory follows the frames' sizes: a buffer with room for more than twice the newest
+/// frame's entities (and kSlackEntities) is given back, not kept, so a connection whose
+/// set once peaked does not hold that peak's memory for the rest of its life (a
+/// ten-minute soak's RSS rose with every client's largest set so far).
 class FrameRing {
 public:
     /// The frame of `tick`, or nullptr when it was never stored, has been replaced or
@@ -134,6 +139,12 @@ public:
     /// Forgets every frame older than `tick`: an end that knows no snapshot will be coded
     /// against them any more hands their memory to the next frames.
     void forget_older_than(std::uint64_t tick);
+    /// Entities the ring's buffers have room for, held frames' and spare: its memory is
+    /// this times sizeof(FrameEntity).
+    [[nodiscard]] std::size_t capacity() const;
+
+    /// Room kept beyond twice the newest frame's entities. [Units: entities]
+    static constexpr std::size_t kSlackEntities = 64;
 
 private:
     /// Forgotten buffers kept for reuse beyond those in the slots (more are freed, the
@@ -149,10 +160,15 @@ private:
         bool used = false;
     };
     void keep_spare(std::vector<FrameEntity>&& memory, bool warm);
+    /// Whether a buffer of `capacity` entities is more than the newest frame needs.
+    [[nodiscard]] bool oversized(std::size_t capacity) const {
+        return capacity > 2 * newest_size_ + kSlackEntities;
+    }
 
     std::array<Slot, kAckedHistory> slots_{};
     DeltaFrame next_;
     std::vector<std::vector<FrameEntity>> spare_; ///< coldest first
+    std::size_t newest_size_ = 0;                 ///< entities of the frame committed last
 };
 
 } // namespace dsoc::protocol
