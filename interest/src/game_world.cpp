@@ -22,7 +22,8 @@ float wrap_degrees(float deg) {
 } // namespace
 
 GameWorld::GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::Map> map)
-    : map_(std::move(map)), collision_(map_->collision_brushes) {
+    : map_(std::move(map)), collision_(map_->collision_brushes),
+      shot_walls_(map_->collision_brushes, maps::contents_solid) {
     move_.max_speed = settings.max_speed;
     wander_.respawn_delay_ticks = settings.respawn_delay_ticks;
     respawn_delay_ticks_ = settings.respawn_delay_ticks;
@@ -158,8 +159,12 @@ void GameWorld::step(float dt, const ParallelFor& parallel) {
         if (e.bot >= 0) {
             e.firing = sim::bot_fires(seed_, e.id, step, sounds_, dt);
             sim::WanderBot& brain = bots_[static_cast<std::size_t>(e.bot)];
+            const std::uint32_t deaths = brain.deaths;
             sim::wander_step(brain, collision_, wander_, move_, map_->spawn_points, map_->hazards,
                              dt);
+            if (brain.deaths != deaths) {
+                e.health = sim::kMaxHealth; // a hazard: full again, as it will respawn
+            }
             e.move = brain.state;
             e.teleported = brain.respawned;
             e.respawn = brain.respawn;
@@ -211,8 +216,10 @@ void GameWorld::step(float dt, const ParallelFor& parallel) {
             continue;
         }
         const auto& spawn = map_->spawn_points[next_spawn_++ % map_->spawn_points.size()];
+        // Shot on the step it arrived at a spawn point: it still jumped there this step.
         e.teleported = sim::die(e.move, sim::spawn_state(collision_, move_, spawn.origin),
-                                spawn.yaw_degrees, respawn_delay_ticks_, e.respawn);
+                                spawn.yaw_degrees, respawn_delay_ticks_, e.respawn) ||
+                       e.teleported;
         if (e.teleported) {
             e.yaw_deg = wrap_degrees(spawn.yaw_degrees);
         }
@@ -238,9 +245,13 @@ void GameWorld::resolve_shots() {
             continue;
         }
         const Entity& shooter = entities_[i];
-        const auto hit = sim::first_hit(collision_, eye_of(shooter),
-                                        sim::view_direction(shooter.yaw_deg, shooter.pitch_deg),
-                                        shots_.range, shot_boxes_, hittable_, i);
+        const glm::vec3 direction = sim::view_direction(shooter.yaw_deg, shooter.pitch_deg);
+        if (!std::isfinite(direction.x) || !std::isfinite(direction.y) ||
+            !std::isfinite(direction.z)) {
+            continue; // angles the caller should have refused (set_player_input)
+        }
+        const auto hit = sim::first_hit(shot_walls_, eye_of(shooter), direction, shots_.range,
+                                        shot_boxes_, hittable_, i);
         if (!hit) {
             continue;
         }

@@ -212,6 +212,9 @@ TEST(GameWorld, HarmlessShotsKillNobody) {
     GameWorld world(settings, map);
     for (int step = 0; step < 300; ++step) {
         world.step(1.0f / 30.0f);
+        for (const Entity& e : world.entities()) {
+            ASSERT_EQ(e.health, sim::kMaxHealth) << "step " << step << " entity " << e.id;
+        }
     }
     EXPECT_EQ(world.frags(), 0u);
     settings.shots.damage = sim::kMaxHealth;
@@ -285,6 +288,9 @@ TEST(GameWorld, MovesThroughAParallelForGiveTheSameWorldAsOneByOne) {
                         (!a.respawn || a.respawn->arrival.position == b.respawn->arrival.position))
                 << "tick " << tick << " entity " << a.id;
             teleports += a.teleported ? 1 : 0;
+            // Death, by a pit or by shots, makes the entity whole for its next life.
+            ASSERT_TRUE(!a.respawn || a.health == sim::kMaxHealth)
+                << "tick " << tick << " entity " << a.id << " dead with " << a.health;
         }
     }
     EXPECT_EQ(parallel_calls, 300u);

@@ -399,25 +399,30 @@ TEST(FrameRing, AFrameIsBuiltInTheMemoryForgottenMostRecently) {
 }
 
 TEST(FrameRing, MemoryFollowsTheFramesDownAfterAPeak) {
-    // One frame of 1,000 entities, then frames of 10, each acknowledged at once: the
-    // peak's buffer is given back, not kept for the connection's life.
+    // A frame of 1,000 entities, forgotten, so that the next frame (of 10) is built in
+    // its buffer; then frames of 10, each acknowledged at once: the peak's memory is
+    // given back, not kept for the connection's life.
     FrameRing ring;
-    DeltaFrame& peak = ring.start(1);
-    peak.entities.resize(1000);
+    ring.start(1).entities.resize(1000);
     ring.commit();
-    EXPECT_GE(ring.capacity(), 1000u);
-    for (std::uint64_t tick = 2; tick <= 2 * kAckedHistory; ++tick) {
+    ring.forget_older_than(2);
+    DeltaFrame& small = ring.start(2);
+    EXPECT_GE(small.entities.capacity(), 1000u) << "built in the peak's buffer";
+    small.entities.resize(10);
+    ring.commit();
+    EXPECT_LE(ring.find(2)->entities.capacity(), 2 * 10 + FrameRing::kSlackEntities)
+        << "committed at its own size";
+    for (std::uint64_t tick = 3; tick <= 2 * kAckedHistory; ++tick) {
         ring.forget_older_than(tick - 1);
-        DeltaFrame& f = ring.start(tick);
-        f.entities.resize(10);
+        ring.start(tick).entities.resize(10);
         ring.commit();
     }
     // Two frames held, the one being built and two spares, each within the bound.
     EXPECT_LE(ring.capacity(), 5 * (2 * 10 + FrameRing::kSlackEntities));
     // A buffer within twice the need is still reused (no allocation per tick).
+    const FrameEntity* forgotten = ring.find(2 * kAckedHistory - 1)->entities.data();
     ring.forget_older_than(2 * kAckedHistory);
-    const FrameEntity* reused = ring.start(2 * kAckedHistory + 1).entities.data();
-    EXPECT_NE(reused, nullptr);
+    EXPECT_EQ(ring.start(2 * kAckedHistory + 1).entities.data(), forgotten);
 }
 
 TEST(AckedSnapshot, AnAcknowledgementOlderThanTheHistoryGetsAFullSnapshot) {

@@ -152,6 +152,7 @@ private:
 
     std::shared_ptr<const maps::Map> map_;
     sim::CollisionWorld collision_;
+    sim::CollisionWorld shot_walls_; ///< solid brushes only: a player clip stops no shot
     sim::MoveConfig move_;
     sim::WanderConfig wander_;
     std::vector<Entity> entities_;

@@ -1,8 +1,9 @@
 #pragma once
 // Shots that hit: the deathmatch rule that keeps a world's population spread over its
 // map as a real match's is. A shot is hitscan, as Quake 3's machinegun and railgun:
-// a segment from the shooter's eye along its view, stopped by the first solid brush,
-// that hits the nearest other living entity's box on it. Each hit takes `damage` of an
+// a segment from the shooter's eye along its view, stopped by the first solid brush
+// (not by player clips, which block only movement, as in Quake 3's shot mask), that hits
+// the nearest other living entity's box on it. Each hit takes `damage` of an
 // entity's kMaxHealth; at none left it dies and respawns at a spawn point (respawn.hpp).
 //
 // Without deaths, walkers that step off ledges they cannot climb gather on a map's
@@ -39,8 +40,9 @@ struct ShotSettings {
 
 /// Which of `boxes` a shot from `eye` along the unit vector `direction` hits: the one
 /// whose box the segment enters first, among those with `hittable[i]` set and
-/// i != `shooter`, before `range` and before the first solid brush of `world`; nothing
-/// when it hits none. `hittable` has boxes.size() entries.
+/// i != `shooter`, before `range` and before the first brush of `world` (the brushes
+/// that stop shots: solid ones); nothing when it hits none. `hittable` has
+/// boxes.size() entries.
 [[nodiscard]] std::optional<std::size_t> first_hit(const CollisionWorld& world, glm::vec3 eye,
                                                    glm::vec3 direction, float range,
                                                    std::span<const visibility::Aabb> boxes,
