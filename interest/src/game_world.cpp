@@ -227,8 +227,9 @@ void GameWorld::step(float dt, const ParallelFor& parallel) {
 }
 
 void GameWorld::resolve_shots() {
-    if (shots_.damage <= 0 || map_->spawn_points.empty()) {
-        return;
+    if (shots_.damage <= 0 || map_->spawn_points.empty() ||
+        std::find(fired_.begin(), fired_.end(), 1) == fired_.end()) {
+        return; // nothing can be hit, or nobody fired: no boxes to gather this step
     }
     const std::size_t count = entities_.size();
     shot_boxes_.resize(count);
