@@ -127,6 +127,9 @@ void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
                            "Disconnect a UDP client from which nothing arrived this long [ms]");
     dsoc::cli::add_setting(app, "--udp-handshake-rate", config.udp_handshake_rate,
                            "UDP handshake datagrams one source address may send per second [1/s]");
+    dsoc::cli::add_setting(app, "--heap-metrics", config.heap_metrics,
+                           "/metrics also reads the allocator's live and free bytes (a "
+                           "diagnosis: each scrape stalls allocation; true/false)");
     dsoc::cli::add_setting(app, "--max-speed", config.max_speed,
                            "Speed bound of every entity [units/s]");
     dsoc::cli::add_setting(app, "--duration", config.duration_s,
@@ -332,7 +335,8 @@ int serve(const ServerConfig& config, const ProgramOptions& options) {
             std::string text = live != nullptr ? live->render_metrics() : std::string();
             dsoc::server::PrometheusText process;
             dsoc::server::write_build_info(process, build.version, build.commit);
-            dsoc::server::write_process_metrics(process, dsoc::server::read_process_sample());
+            dsoc::server::write_process_metrics(
+                process, dsoc::server::read_process_sample(config.heap_metrics));
             return text + process.text();
         },
         [&] {

@@ -1,6 +1,7 @@
 #include "dsoc/server/process_metrics.hpp"
 
 #include <dirent.h>
+#include <malloc.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -82,7 +83,7 @@ double start_time_seconds() {
 
 } // namespace
 
-ProcessSample read_process_sample() {
+ProcessSample read_process_sample(bool heap) {
     ProcessSample s;
     if (rusage usage{}; ::getrusage(RUSAGE_SELF, &usage) == 0) {
         s.cpu_seconds = seconds(usage.ru_utime) + seconds(usage.ru_stime);
@@ -102,6 +103,15 @@ ProcessSample read_process_sample() {
         s.max_fds = static_cast<double>(limit.rlim_cur);
     }
     s.start_time_seconds = start_time_seconds();
+#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
+    if (heap) {
+        const struct mallinfo2 info = ::mallinfo2();
+        s.heap_in_use_bytes = static_cast<double>(info.uordblks + info.hblkhd);
+        s.heap_free_bytes = static_cast<double>(info.fordblks);
+    }
+#else
+    (void)heap;
+#endif
     return s;
 }
 
@@ -126,6 +136,17 @@ void write_process_metrics(PrometheusText& out, const ProcessSample& s) {
     if (s.start_time_seconds >= 0.0) {
         out.gauge("process_start_time_seconds",
                   "Start time of the process since unix epoch in seconds.", s.start_time_seconds);
+    }
+    if (s.heap_in_use_bytes >= 0.0) {
+        out.gauge("dsoc_heap_in_use_bytes",
+                  "Bytes of the C allocator's live allocations (glibc mallinfo2, every arena).",
+                  s.heap_in_use_bytes);
+    }
+    if (s.heap_free_bytes >= 0.0) {
+        out.gauge("dsoc_heap_free_bytes",
+                  "Bytes in the C allocator's free chunks: memory the server does not use, "
+                  "resident unless given back to the system.",
+                  s.heap_free_bytes);
     }
 }
 

@@ -8,16 +8,20 @@ DelayLine::DelayLine(boost::asio::io_context& io, double latency_ms, double jitt
                      std::uint64_t seed)
     : timer_(io), latency_ms_(latency_ms), jitter_ms_(jitter_ms), rng_(seed) {}
 
-void DelayLine::push(std::function<void()> work, std::shared_ptr<void> keepalive) {
+DelayLine::Clock::time_point DelayLine::push(std::function<void()> work,
+                                             std::shared_ptr<void> keepalive,
+                                             std::optional<Clock::time_point> arrived) {
     std::uniform_real_distribution<double> jitter(0.0, jitter_ms_);
     const double delay_ms = latency_ms_ + (jitter_ms_ > 0.0 ? jitter(rng_) : 0.0);
-    const auto due = std::max(
-        last_due_, Clock::now() + std::chrono::microseconds(static_cast<long>(delay_ms * 1000.0)));
+    const auto due =
+        std::max(last_due_, arrived.value_or(Clock::now()) +
+                                std::chrono::microseconds(static_cast<long>(delay_ms * 1000.0)));
     last_due_ = due;
     items_.push_back({due, std::move(work)});
     if (!armed_) {
         arm(std::move(keepalive));
     }
+    return due;
 }
 
 void DelayLine::clear() {

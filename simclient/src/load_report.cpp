@@ -18,6 +18,8 @@ LoadReport summarize_sessions(const std::vector<std::shared_ptr<SimClient>>& ses
     SampleHistogram known;
     SampleHistogram heard;
     SampleHistogram interarrival;
+    SampleHistogram socket_interarrival;
+    SampleHistogram handling_lag;
     SampleHistogram rtt;
     SampleHistogram connect;
     double down_rate_sum = 0.0;
@@ -72,6 +74,8 @@ LoadReport summarize_sessions(const std::vector<std::shared_ptr<SimClient>>& ses
         known.merge(s.known_samples);
         heard.merge(s.heard_samples);
         interarrival.merge(s.interarrival_ms);
+        socket_interarrival.merge(s.socket_interarrival_ms);
+        handling_lag.merge(s.handling_lag_ms);
         rtt.merge(s.rtt_ms);
     }
     if (r.connected > 0) {
@@ -82,6 +86,8 @@ LoadReport summarize_sessions(const std::vector<std::shared_ptr<SimClient>>& ses
     r.entities_known = known.summary();
     r.entities_heard = heard.summary();
     r.snapshot_interarrival_ms = interarrival.summary();
+    r.snapshot_socket_interarrival_ms = socket_interarrival.summary();
+    r.handling_lag_ms = handling_lag.summary();
     r.rtt_ms = rtt.summary();
     r.connect_ms = connect.summary();
     return r;

@@ -115,10 +115,10 @@ int main(int argc, char** argv) {
         {"tcp", dsoc::simclient::LoadConfig::Transport::tcp},
         {"udp", dsoc::simclient::LoadConfig::Transport::udp}};
     app.add_option("--transport", config.transport,
-                   "tcp: compact snapshots over a TCP stream; udp: acknowledged-delta snapshots "
-                   "over UDP datagrams (docs/protocol.md)")
+                   "udp: acknowledged-delta snapshots over UDP datagrams; tcp: compact "
+                   "snapshots over a TCP stream (docs/protocol.md)")
         ->transform(CLI::CheckedTransformer(transports, CLI::ignore_case))
-        ->default_str("tcp");
+        ->default_str("udp");
     dsoc::cli::add_setting(
         app, "--udp-loss", config.udp_faults.loss,
         "UDP only: drop each datagram either way with this probability (emulated "

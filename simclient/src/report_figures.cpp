@@ -34,8 +34,14 @@ Figure plain(const char* name, const char* meaning, std::function<double(const L
 
 std::vector<Figure> make_figures() {
     std::vector<Figure> f;
-    add_summary(f, "interarrival", "the time between a client's snapshots",
+    add_summary(f, "interarrival", "the time between a client's snapshots as it handled them",
                 &LoadReport::snapshot_interarrival_ms);
+    add_summary(f, "socket_interarrival",
+                "the time between a client's snapshots as its socket received them (UDP)",
+                &LoadReport::snapshot_socket_interarrival_ms);
+    add_summary(f, "handling_lag",
+                "a snapshot's wait between the client's socket and its handling (UDP)",
+                &LoadReport::handling_lag_ms);
     add_summary(f, "rtt", "the ping round trip", &LoadReport::rtt_ms);
     add_summary(f, "connect_time", "a session's start to its server hello",
                 &LoadReport::connect_ms);

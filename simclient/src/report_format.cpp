@@ -61,13 +61,7 @@ std::string format_summary(const LoadReport& r) {
         "  up per client          {:.2f} KiB/s ({:.0f} B/s)\n"
         "  snapshots received     {}\n"
         "  entities known/client  mean {:.1f}  p95 {:.0f}; by hearing only mean {:.1f}\n"
-        "  snapshot interarrival  p50 {:.1f} ms  p95 {:.1f} ms  p99 {:.1f} ms\n"
-        "  round trip             p50 {:.2f} ms  p99 {:.2f} ms\n"
-        "  replica audit          {} poses, max error {:.3f} quanta (limit 0.5)\n"
-        "  protocol errors        {} ({})\n"
-        "  unexpected disconnects {}; clients missing own entity {}\n"
-        "  disconnect reasons     {}\n"
-        "  failures               {} ({})\n",
+        "  snapshot interarrival  p50 {:.1f} ms  p95 {:.1f} ms  p99 {:.1f} ms\n",
         r.clients, r.config.host, r.config.port, r.wall_seconds, r.scenario_seconds,
         r.passed() ? "PASS" : "FAIL", r.connected, r.clients, r.peak_connected, r.connect_failures,
         r.cancelled_before_hello, r.connect_ms.p50, r.connect_ms.p99,
@@ -75,10 +69,24 @@ std::string format_summary(const LoadReport& r) {
         r.entity_updates_per_client_s, r.bytes_up_per_client_s / 1024.0, r.bytes_up_per_client_s,
         r.snapshots, r.entities_known.mean, r.entities_known.p95, r.entities_heard.mean,
         r.snapshot_interarrival_ms.p50, r.snapshot_interarrival_ms.p95,
-        r.snapshot_interarrival_ms.p99, r.rtt_ms.p50, r.rtt_ms.p99, r.audited_poses,
-        r.max_audit_error, r.protocol_errors, counts_or_none(r.protocol_errors_by_kind),
-        r.unexpected_disconnects, r.missing_own_entity, counts_or_none(r.disconnect_reasons),
-        r.failures, counts_or_none(r.failures_by_reason));
+        r.snapshot_interarrival_ms.p99);
+    if (r.snapshot_socket_interarrival_ms.count > 0) {
+        out += fmt::format(
+            "    at the sockets       p50 {:.1f} ms  p95 {:.1f} ms  p99 {:.1f} ms; "
+            "handling lag p50 {:.1f} ms  p99 {:.1f} ms\n",
+            r.snapshot_socket_interarrival_ms.p50, r.snapshot_socket_interarrival_ms.p95,
+            r.snapshot_socket_interarrival_ms.p99, r.handling_lag_ms.p50, r.handling_lag_ms.p99);
+    }
+    out += fmt::format(
+        "  round trip             p50 {:.2f} ms  p99 {:.2f} ms\n"
+        "  replica audit          {} poses, max error {:.3f} quanta (limit 0.5)\n"
+        "  protocol errors        {} ({})\n"
+        "  unexpected disconnects {}; clients missing own entity {}\n"
+        "  disconnect reasons     {}\n"
+        "  failures               {} ({})\n",
+        r.rtt_ms.p50, r.rtt_ms.p99, r.audited_poses, r.max_audit_error, r.protocol_errors,
+        counts_or_none(r.protocol_errors_by_kind), r.unexpected_disconnects, r.missing_own_entity,
+        counts_or_none(r.disconnect_reasons), r.failures, counts_or_none(r.failures_by_reason));
     for (const auto& [reason, example] : r.failure_examples) {
         out += fmt::format("    {:<20} first: {}\n", reason, example);
     }
@@ -154,6 +162,8 @@ std::string format_json(const LoadReport& r) {
     j["entities_heard_per_client"] = {{"mean", r.entities_heard.mean},
                                       {"p95", r.entities_heard.p95}};
     j["snapshot_interarrival_ms"] = summary_json(r.snapshot_interarrival_ms);
+    j["snapshot_socket_interarrival_ms"] = summary_json(r.snapshot_socket_interarrival_ms);
+    j["handling_lag_ms"] = summary_json(r.handling_lag_ms);
     j["rtt_ms"] = summary_json(r.rtt_ms);
     j["connect_ms"] = summary_json(r.connect_ms);
     j["groups"] = nlohmann::json::object();

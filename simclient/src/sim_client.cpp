@@ -94,7 +94,7 @@ void SimClient::start() {
 
 void SimClient::on_resolved(const asio::ip::tcp::resolver::results_type& endpoints) {
     if (config_.transport == LoadConfig::Transport::udp) {
-        connect_udp(endpoints.begin()->endpoint());
+        connect_udp(endpoints);
         return;
     }
     asio::async_connect(socket_, endpoints,
@@ -141,7 +141,7 @@ pb::Envelope SimClient::make_hello() const {
     return hello;
 }
 
-void SimClient::connect_udp(const asio::ip::tcp::endpoint& server) {
+void SimClient::connect_udp(const asio::ip::tcp::resolver::results_type& endpoints) {
     state_ = State::awaiting_hello;
     std::weak_ptr<SimClient> weak = weak_from_this();
     UdpLink::Handlers handlers;
@@ -165,14 +165,25 @@ void SimClient::connect_udp(const asio::ip::tcp::endpoint& server) {
             self->error(kind);
         }
     };
+    handlers.on_refused = [weak](const boost::system::error_code& ec) {
+        if (auto self = weak.lock(); self && self->state_ != State::closed) {
+            self->stats_.connect_failed = true;
+            self->fail(failure::refused, fmt::format("UDP to {}:{}: {}", self->config_.host,
+                                                     self->config_.port, ec.message()));
+            self->close();
+        }
+    };
     const DatagramFaults faults = setup_.group != nullptr
                                       ? config_.udp_faults.worst_with(setup_.group->network.faults)
                                       : config_.udp_faults;
     udp_ = std::make_unique<UdpLink>(io_, std::move(handlers), faults,
                                      config_.seed ^ (setup_.session << 3));
     std::string why;
-    if (!udp_->connect(asio::ip::udp::endpoint(server.address(), server.port()), make_hello(),
-                       shared_from_this(), why)) {
+    std::vector<asio::ip::udp::endpoint> servers;
+    for (const auto& entry : endpoints) {
+        servers.emplace_back(entry.endpoint().address(), entry.endpoint().port());
+    }
+    if (!udp_->connect(std::move(servers), make_hello(), shared_from_this(), why)) {
         stats_.connect_failed = true;
         fail(failure::connection_lost, why);
         close();
@@ -182,23 +193,30 @@ void SimClient::connect_udp(const asio::ip::tcp::endpoint& server) {
 void SimClient::receive_udp(const pb::Envelope& message) {
     last_heard_ = Clock::now();
     if (!delay_in_) {
+        arrival_ = udp_->arrival();
         handle(message);
+        arrival_.reset();
         if (message.has_disconnect()) {
             close(); // the server has closed its side: there is no stream to end
         }
         return;
     }
-    delay_in_->push(
-        [self = shared_from_this(), message] {
+    // Its arrival over the emulated link is when the delay line delivers it, known once
+    // pushed: counted from the datagram's arrival at the socket, not from this moment.
+    auto arrival = std::make_shared<Clock::time_point>();
+    *arrival = delay_in_->push(
+        [self = shared_from_this(), message, arrival] {
             if (self->state_ == State::closed) {
                 return;
             }
+            self->arrival_ = *arrival;
             self->handle(message);
+            self->arrival_.reset();
             if (message.has_disconnect()) {
                 self->close();
             }
         },
-        shared_from_this());
+        shared_from_this(), udp_->arrival());
 }
 
 void SimClient::send_udp(const pb::Envelope& message) {
@@ -382,6 +400,18 @@ void SimClient::count_snapshot(const pb::Snapshot& s) {
         if (setup_.on_interarrival) {
             setup_.on_interarrival(gap);
         }
+    }
+    if (arrival_) {
+        // Arrivals are in order (the kernel's, or the delay line's due times); a
+        // negative span is conversion noise of a microsecond.
+        const auto ms = [](Clock::duration d) {
+            return std::max(0.0, std::chrono::duration<double, std::milli>(d).count());
+        };
+        stats_.handling_lag_ms.add(ms(now - *arrival_));
+        if (last_snapshot_arrival_) {
+            stats_.socket_interarrival_ms.add(ms(*arrival_ - *last_snapshot_arrival_));
+        }
+        last_snapshot_arrival_ = arrival_;
     }
     last_snapshot_tick_ = s.server_tick();
     last_snapshot_at_ = now;

@@ -2,6 +2,7 @@
 
 #include "dsoc/protocol/challenge_cookie.hpp"
 #include "dsoc/protocol/codec.hpp"
+#include "dsoc/simclient/receive_time.hpp"
 
 #include <boost/asio/buffer.hpp>
 
@@ -23,30 +24,45 @@ UdpLink::UdpLink(asio::io_context& io, Handlers handlers, const DatagramFaults& 
                  std::uint64_t seed)
     : handlers_(std::move(handlers)), socket_(io), retry_timer_(io), faults_(faults), rng_(seed) {}
 
-bool UdpLink::connect(const asio::ip::udp::endpoint& server, const pb::Envelope& hello,
+bool UdpLink::connect(std::vector<asio::ip::udp::endpoint> servers, const pb::Envelope& hello,
                       std::shared_ptr<void> owner, std::string& error) {
     owner_ = owner;
-    server_ = server;
+    servers_ = std::move(servers);
+    next_server_ = 0;
     nonce_ = protocol::random_nonzero_u64();
-    boost::system::error_code ec;
-    socket_.open(server.protocol(), ec);
-    if (!ec) {
-        socket_.connect(server, ec); // the kernel then drops datagrams from anywhere else
-    }
-    if (ec) {
-        error = "UDP socket towards " + server.address().to_string() + ": " + ec.message();
+    if (servers_.empty()) {
+        error = "no address to send to";
         return false;
     }
-    socket_.non_blocking(true, ec);
     if (!protocol::write_request(nonce_, hello, request_) ||
         !protocol::write_response(nonce_, protocol::ChallengeCookie{}, hello, response_)) {
         error = "the hello does not fit in one datagram";
         return false;
     }
     response_.clear(); // written for real once the cookie arrives
+    if (!open_next(error)) {
+        return false;
+    }
+    retry_handshake();
+    return true;
+}
+
+bool UdpLink::open_next(std::string& error) {
+    server_ = servers_[next_server_++];
+    boost::system::error_code ec;
+    socket_.close(ec); // the address tried before, if any
+    socket_.open(server_.protocol(), ec);
+    if (!ec) {
+        socket_.connect(server_, ec); // the kernel then drops datagrams from anywhere else
+    }
+    if (ec) {
+        error = "UDP socket towards " + server_.address().to_string() + ": " + ec.message();
+        return false;
+    }
+    socket_.non_blocking(true, ec);
+    enable_receive_times(socket_.native_handle());
     receive_next();
     send(request_);
-    retry_handshake();
     return true;
 }
 
@@ -141,7 +157,18 @@ void UdpLink::receive_next() {
                 return;
             }
             if (!ec) {
+                arrival_ = last_receive_time(socket_.native_handle());
                 on_datagram(n);
+            } else if (ec == asio::error::connection_refused && session_ == 0) {
+                // Nothing listens at this address: the next one the name resolved to, as a
+                // TCP connect tries each, or the owner's to decide.
+                std::string why;
+                if (next_server_ < servers_.size() && open_next(why)) {
+                    return; // receiving on the new socket
+                }
+                if (handlers_.on_refused) {
+                    handlers_.on_refused(ec); // the owner closes the link
+                }
             }
             if (!closed_) {
                 receive_next();

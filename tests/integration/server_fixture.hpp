@@ -64,10 +64,12 @@ private:
 };
 
 /// Quiet simulated clients for a test against `server`: `clients` of them, joining over
-/// `ramp_up_s`, each leaving after `duration_s`.
+/// `ramp_up_s`, each leaving after `duration_s`, over TCP (the stream these tests check;
+/// UDP's own tests set udp).
 inline simclient::LoadConfig load_config(const RunningServer& server, int clients,
                                          double duration_s, double ramp_up_s) {
     simclient::LoadConfig lc;
+    lc.transport = simclient::LoadConfig::Transport::tcp;
     lc.port = server.port();
     lc.clients = clients;
     lc.duration_s = duration_s;

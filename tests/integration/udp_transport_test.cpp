@@ -175,6 +175,13 @@ TEST(UdpTransport, ClientsGetSnapshotsAuditsAndTheirOwnEntity) {
     EXPECT_GT(report.audited_poses, 0u);
     EXPECT_LE(report.max_audit_error, 0.5 + 1e-3);
     EXPECT_LT(report.snapshot_interarrival_ms.p99, 100.0);
+    // The same gaps as the sockets received them: a tick apart, every snapshot after a
+    // client's first, each handled after it arrived.
+    EXPECT_EQ(report.snapshot_socket_interarrival_ms.count, report.snapshot_interarrival_ms.count);
+    EXPECT_NEAR(report.snapshot_socket_interarrival_ms.p50, 1000.0 / 30.0, 8.0);
+    EXPECT_EQ(report.handling_lag_ms.count, report.snapshots);
+    EXPECT_GE(report.handling_lag_ms.p50, 0.0);
+    EXPECT_LT(report.handling_lag_ms.p50, report.snapshot_socket_interarrival_ms.p50);
     EXPECT_EQ(server.stats().disconnects.at("client_quit"), 6u);
     EXPECT_GT(server.stats().snapshots_sent, 0u);
     // Acknowledgements carried the run: after each client's first snapshot, every one

@@ -236,6 +236,8 @@ TEST(ServerProbes, HealthReadinessAndMetricsOfTheRunningProcess) {
           "dsoc_bytes_sent_total "}) {
         EXPECT_NE(metrics.find(std::string("\n") + name), std::string::npos) << name;
     }
+    // The allocator's figures cost every allocating thread a wait: only when asked.
+    EXPECT_EQ(metrics.find("dsoc_heap_in_use_bytes"), std::string::npos);
     EXPECT_EQ(status, 0) << server.err();
 }
 

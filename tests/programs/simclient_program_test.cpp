@@ -8,6 +8,7 @@
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/ip/udp.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -91,18 +92,6 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 TEST(SimclientFailures, RefusedUnresolvableAndTimeoutAreNamedAndEndTheRunEarly) {
     const TempDir files("dsoc-simclient-connect");
     json report;
-    auto t0 = std::chrono::steady_clock::now();
-    // On two threads, one client each, with progress lines: the run gives up as one,
-    // and says so once.
-    const ProgramRun refused = run_program(
-        {program("dsoc-simclient"), "--report", files.path("report.json"), "--server",
-         "127.0.0.1:" + closed_port(), "--clients", "2", "--duration", "20", "--threads", "2"});
-    report = read_json(files.path("report.json"));
-    EXPECT_LT(seconds_since(t0), 10.0); // not the whole --duration
-    EXPECT_EQ(refused.status, 1) << refused.out << refused.err;
-    EXPECT_NE(refused.out.find("failures               2 (refused=2)"), std::string::npos)
-        << refused.out;
-    EXPECT_NE(refused.out.find("Connection refused"), std::string::npos) << refused.out;
     const auto count = [](const std::string& text, const std::string& what) {
         std::size_t n = 0;
         for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) {
@@ -110,12 +99,28 @@ TEST(SimclientFailures, RefusedUnresolvableAndTimeoutAreNamedAndEndTheRunEarly) 
         }
         return n;
     };
-    EXPECT_EQ(count(refused.err, "failed: refused"), 1u) << refused.err;
-    EXPECT_EQ(count(refused.err, "stopping early"), 1u) << refused.err;
-    EXPECT_EQ(report["failures_by_reason"], json({{"refused", 2}})) << report.dump(2);
-    EXPECT_EQ(report["protocol_errors"], 0);
-    EXPECT_NE(report["stopped_early"].get<std::string>().find("no client could connect"),
-              std::string::npos);
+    auto t0 = std::chrono::steady_clock::now();
+    // On two threads, one client each, with progress lines: the run gives up as one,
+    // and says so once. Over UDP the host's ICMP answer says the same as TCP's reset.
+    for (const char* transport : {"tcp", "udp"}) {
+        t0 = std::chrono::steady_clock::now();
+        const ProgramRun refused =
+            run_program({program("dsoc-simclient"), "--report", files.path("report.json"),
+                         "--server", "127.0.0.1:" + closed_port(), "--transport", transport,
+                         "--clients", "2", "--duration", "20", "--threads", "2"});
+        report = read_json(files.path("report.json"));
+        EXPECT_LT(seconds_since(t0), 10.0) << transport; // not the whole --duration
+        EXPECT_EQ(refused.status, 1) << refused.out << refused.err;
+        EXPECT_NE(refused.out.find("failures               2 (refused=2)"), std::string::npos)
+            << refused.out;
+        EXPECT_NE(refused.out.find("Connection refused"), std::string::npos) << refused.out;
+        EXPECT_EQ(count(refused.err, "failed: refused"), 1u) << refused.err;
+        EXPECT_EQ(count(refused.err, "stopping early"), 1u) << refused.err;
+        EXPECT_EQ(report["failures_by_reason"], json({{"refused", 2}})) << report.dump(2);
+        EXPECT_EQ(report["protocol_errors"], 0);
+        EXPECT_NE(report["stopped_early"].get<std::string>().find("no client could connect"),
+                  std::string::npos);
+    }
 
     // .invalid never resolves (RFC 2606); the timeout leaves the resolver time to say so.
     const ProgramRun unresolvable = simclient(files,
@@ -126,19 +131,27 @@ TEST(SimclientFailures, RefusedUnresolvableAndTimeoutAreNamedAndEndTheRunEarly) 
     EXPECT_EQ(report["failures_by_reason"], json({{"unresolvable", 2}})) << report.dump(2);
     EXPECT_EQ(report["protocol_errors"], 0) << "an unresolvable host is no protocol error";
 
-    // A port that accepts (the kernel completes the handshake) and never answers.
+    // A port that accepts (the kernel completes the handshake) and never answers; over
+    // UDP, a socket that reads and never answers.
     boost::asio::io_context io;
     boost::asio::ip::tcp::acceptor silent(io, {boost::asio::ip::make_address("127.0.0.1"), 0});
-    t0 = std::chrono::steady_clock::now();
-    const ProgramRun timeout = simclient(
-        files,
-        {"--server", "127.0.0.1:" + std::to_string(silent.local_endpoint().port()), "--clients",
-         "2", "--ramp-up", "0", "--duration", "20", "--connect-timeout", "0.5"},
-        report);
-    EXPECT_LT(seconds_since(t0), 10.0);
-    EXPECT_EQ(timeout.status, 1);
-    EXPECT_EQ(report["failures_by_reason"], json({{"timeout", 2}})) << report.dump(2);
-    EXPECT_EQ(report["failure_examples"]["timeout"], "sim-0: no server hello within 0.5 s");
+    boost::asio::ip::udp::socket silent_udp(
+        io, {boost::asio::ip::make_address("127.0.0.1"), silent.local_endpoint().port()});
+    for (const char* transport : {"tcp", "udp"}) {
+        t0 = std::chrono::steady_clock::now();
+        const ProgramRun timeout =
+            simclient(files,
+                      {"--server", "127.0.0.1:" + std::to_string(silent.local_endpoint().port()),
+                       "--transport", transport, "--clients", "2", "--ramp-up", "0", "--duration",
+                       "20", "--connect-timeout", "0.5"},
+                      report);
+        EXPECT_LT(seconds_since(t0), 10.0) << transport;
+        EXPECT_EQ(timeout.status, 1) << transport;
+        EXPECT_EQ(report["failures_by_reason"], json({{"timeout", 2}}))
+            << transport << report.dump(2);
+        EXPECT_EQ(report["failure_examples"]["timeout"], "sim-0: no server hello within 0.5 s")
+            << transport;
+    }
 }
 
 TEST(SimclientFailures, UnauthorizedVersionMismatchAndDroppedByServer) {

@@ -10,8 +10,11 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
+#include <memory>
 #include <thread>
+#include <vector>
 
 namespace dsoc::server {
 namespace {
@@ -135,8 +138,19 @@ TEST(ProcessMetrics, ReadsThisProcess) {
     const ProcessSample before = read_process_sample();
     std::FILE* file = std::tmpfile();
     ASSERT_NE(file, nullptr);
-    const ProcessSample with_file = read_process_sample();
+    const ProcessSample with_file = read_process_sample(true);
+    // The allocator's live bytes follow an allocation and its release.
+    constexpr double kBlockBytes = 8.0 * 1024 * 1024;
+    auto block = std::make_unique<std::vector<std::uint8_t>>(8u << 20, std::uint8_t{1});
+    ASSERT_EQ(std::fwrite(block->data(), 1, 1, file), 1u); // the block is used
+    const ProcessSample holding = read_process_sample(true);
+    block.reset();
+    const ProcessSample released = read_process_sample(true);
     std::fclose(file);
+    EXPECT_GE(holding.heap_in_use_bytes - with_file.heap_in_use_bytes, kBlockBytes);
+    EXPECT_LE(released.heap_in_use_bytes, holding.heap_in_use_bytes - kBlockBytes);
+    EXPECT_GE(with_file.heap_free_bytes, 0.0);
+    EXPECT_LT(before.heap_in_use_bytes, 0.0) << "read only when asked";
     const double now =
         std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 
@@ -157,6 +171,8 @@ TEST(ProcessMetrics, WritesTheStandardNamesAndBuildInfo) {
     sample.resident_bytes = 4096;
     sample.open_fds = 7;
     sample.start_time_seconds = 1700000000;
+    sample.heap_in_use_bytes = 8192;
+    sample.heap_free_bytes = 512;
     PrometheusText out;
     write_process_metrics(out, sample);
     write_build_info(out, "0.1.0", "0123456789ab");
@@ -167,6 +183,8 @@ TEST(ProcessMetrics, WritesTheStandardNamesAndBuildInfo) {
     EXPECT_NE(t.find("process_resident_memory_bytes 4096\n"), std::string::npos) << t;
     EXPECT_NE(t.find("process_open_fds 7\n"), std::string::npos) << t;
     EXPECT_NE(t.find("process_start_time_seconds 1700000000\n"), std::string::npos) << t;
+    EXPECT_NE(t.find("dsoc_heap_in_use_bytes 8192\n"), std::string::npos) << t;
+    EXPECT_NE(t.find("dsoc_heap_free_bytes 512\n"), std::string::npos) << t;
     // Fields that were not read are left out, not written as -1.
     EXPECT_EQ(t.find("process_virtual_memory_bytes"), std::string::npos) << t;
     EXPECT_EQ(t.find("process_max_fds"), std::string::npos) << t;

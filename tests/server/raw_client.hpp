@@ -153,6 +153,7 @@ private:
     static simclient::LoadConfig tcp_config(std::uint16_t port, double seconds,
                                             std::optional<protocol::TokenKey> key, int clients) {
         simclient::LoadConfig c;
+        c.transport = simclient::LoadConfig::Transport::tcp;
         c.port = port;
         c.clients = clients;
         c.duration_s = seconds;

@@ -114,6 +114,7 @@ TEST(Spectating, SimulatedSpectatorsWatchPlayersAndEverySwitchPassesTheProtocolC
     c.bots = 40;
     testing::RunningServer server(c);
     simclient::LoadConfig lc;
+    lc.transport = simclient::LoadConfig::Transport::tcp;
     lc.port = server.port();
     lc.progress = false;
     simclient::Scenario scenario;

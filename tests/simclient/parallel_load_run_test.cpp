@@ -75,6 +75,7 @@ TEST(ParallelLoadRun, NoSessionCanConnectSoTheRunStopsEarlyOnEveryThread) {
         closed_port = probe.local_endpoint().port();
     }
     LoadConfig config;
+    config.transport = LoadConfig::Transport::tcp; // the port was a TCP listener's
     config.port = closed_port;
     config.clients = 12;
     config.duration_s = 30.0; // far longer than the test: the run must end early

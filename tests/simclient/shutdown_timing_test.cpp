@@ -81,6 +81,7 @@ LoadReport run_against(std::chrono::milliseconds shutdown_after, double duration
     asio::io_context io;
     ScriptedServer server(io, shutdown_after);
     LoadConfig config;
+    config.transport = LoadConfig::Transport::tcp; // the scripted server speaks TCP
     config.port = server.port();
     config.clients = 1;
     config.duration_s = duration_s;

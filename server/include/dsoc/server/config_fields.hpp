@@ -51,6 +51,7 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("udp", config.udp);
     visit("udp_timeout_ms", config.udp_timeout_ms);
     visit("udp_handshake_rate", config.udp_handshake_rate);
+    visit("heap_metrics", config.heap_metrics);
     visit("slow_client_timeout_ms", config.slow_client_timeout_ms);
     visit("socket_send_buffer_bytes", config.socket_send_buffer_bytes);
     visit("io_gather_us", config.io_gather_us);

@@ -36,7 +36,14 @@ struct ClientStats {
     /// Of them, entities known only by hearing (the heard tier: a coarse position, no
     /// angles; the decoder rejects angles or an audit pose for one).
     SampleHistogram heard_samples;
-    SampleHistogram interarrival_ms;
+    SampleHistogram interarrival_ms; ///< between snapshots as the client handled them
+    /// Over UDP: between snapshots as they reached the client's socket (the kernel's
+    /// receive timestamps, plus emulated latency): the server's and the network's timing
+    /// without the load generator's own delay in getting to them.
+    SampleHistogram socket_interarrival_ms;
+    /// Over UDP: from a snapshot reaching the socket (plus emulated latency) to its
+    /// handling: the load generator's own delay (a busy machine, too few threads).
+    SampleHistogram handling_lag_ms;
     SampleHistogram rtt_ms;
     std::map<std::string, std::uint64_t> protocol_errors; ///< by kind
 };

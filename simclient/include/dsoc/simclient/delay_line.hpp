@@ -13,6 +13,7 @@
 #include <deque>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <random>
 
 namespace dsoc::simclient {
@@ -21,8 +22,12 @@ class DelayLine {
 public:
     DelayLine(boost::asio::io_context& io, double latency_ms, double jitter_ms, std::uint64_t seed);
 
-    /// Runs `work` after the delay, after everything pushed before it.
-    void push(std::function<void()> work, std::shared_ptr<void> keepalive);
+    /// Runs `work` the delay after `arrived` (when it reached this end; now by default),
+    /// after everything pushed before it. Returns when it is due: where the emulated
+    /// link delivers it.
+    std::chrono::steady_clock::time_point
+    push(std::function<void()> work, std::shared_ptr<void> keepalive,
+         std::optional<std::chrono::steady_clock::time_point> arrived = std::nullopt);
     /// Drops what has not run yet.
     void clear();
 

@@ -55,10 +55,11 @@ struct LoadConfig {
     /// The protocol version sent in the hello. A testing aid: a server refuses any
     /// other than its own (version_mismatch).
     std::uint32_t protocol_version = protocol::kProtocolVersion;
-    /// How the clients reach the server: a TCP stream of compact snapshots, or UDP
-    /// datagrams with acknowledged-delta snapshots (docs/protocol.md, "UDP transport").
+    /// How the clients reach the server: UDP datagrams with acknowledged-delta snapshots
+    /// (docs/protocol.md, "UDP transport"; what a game's clients use), or a TCP stream of
+    /// compact snapshots.
     enum class Transport : std::uint8_t { tcp, udp };
-    Transport transport = Transport::tcp;
+    Transport transport = Transport::udp;
     /// UDP only: datagram faults for every client (emulated loss, duplication and
     /// reordering, on top of the groups' latency and jitter); a group's own faults
     /// (scenario files) count where larger.

@@ -59,9 +59,12 @@ struct LoadReport {
     double bytes_down_per_client_s = 0.0; ///< mean over connected sessions of bytes / active s
     double bytes_up_per_client_s = 0.0;
     double entity_updates_per_client_s = 0.0;
-    common::Summary entities_known; ///< over every snapshot of every client
-    common::Summary entities_heard; ///< of them, known only by hearing (heard tier)
-    common::Summary snapshot_interarrival_ms;
+    common::Summary entities_known;           ///< over every snapshot of every client
+    common::Summary entities_heard;           ///< of them, known only by hearing (heard tier)
+    common::Summary snapshot_interarrival_ms; ///< as the clients handled the snapshots
+    /// Over UDP: as the snapshots reached the clients' sockets (ClientStats).
+    common::Summary snapshot_socket_interarrival_ms;
+    common::Summary handling_lag_ms; ///< over UDP: the load generator's own delay
     common::Summary rtt_ms;
     common::Summary connect_ms; ///< session start (resolve, TCP connect) to server hello
     std::map<std::string, GroupCounts> groups; ///< by group name

@@ -82,7 +82,7 @@ private:
     void on_resolved(const boost::asio::ip::tcp::resolver::results_type& endpoints);
     void on_connected();
     [[nodiscard]] protocol::pb::Envelope make_hello() const;
-    void connect_udp(const boost::asio::ip::tcp::endpoint& server);
+    void connect_udp(const boost::asio::ip::tcp::resolver::results_type& endpoints);
     void receive_udp(const protocol::pb::Envelope& message);
     void send_udp(const protocol::pb::Envelope& message);
     void apply_acked_snapshot(const protocol::pb::Snapshot& snapshot);
@@ -151,6 +151,11 @@ private:
     std::chrono::steady_clock::time_point started_at_;
     std::chrono::steady_clock::time_point active_since_;
     std::chrono::steady_clock::time_point last_snapshot_at_;
+    /// Over UDP, while a message is handled: when it arrived, the kernel's receive time of
+    /// its last datagram, or when the emulated link of the client's group delivered it
+    /// (that time plus the group's latency). Unset over TCP.
+    std::optional<std::chrono::steady_clock::time_point> arrival_;
+    std::optional<std::chrono::steady_clock::time_point> last_snapshot_arrival_;
     /// When the next input falls due (one tick after the last); it leaves at the next
     /// whole millisecond, with the other clients' inputs due in that millisecond.
     std::chrono::steady_clock::time_point next_input_at_;

@@ -5,7 +5,9 @@
 // carries the newest snapshot tick applied and the last kMaxRedundantInputs inputs, so
 // one lost datagram loses no input), and the reassembly of snapshot fragments. What it
 // receives from the server it hands over as envelopes; datagrams from elsewhere, of
-// another session, replayed or malformed are dropped and counted.
+// another session, replayed or malformed are dropped and counted. Each datagram's arrival
+// is the kernel's receive timestamp, so a client's figures can tell the server's and the
+// network's timing from its own delay in handling what arrived.
 //
 // Threading: the io_context's thread only. Lifetime: the handlers are not called after
 // close().
@@ -19,6 +21,7 @@
 #include <boost/asio/steady_timer.hpp>
 
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -40,19 +43,26 @@ public:
         std::function<void(std::size_t)> on_bytes_up;
         /// Something the server sent that a correct server never sends (a protocol error).
         std::function<void(const std::string&)> on_error;
+        /// Before the session is accepted: at the last of the addresses the host said
+        /// nothing listens on the port (ICMP port unreachable, read as a receive error).
+        /// The link stays open; the owner decides. Later ones are ignored (a lost server
+        /// shows as silence).
+        std::function<void(const boost::system::error_code&)> on_refused;
     };
     /// `faults`: emulated on each datagram either way (dropped, delivered twice, or held
     /// back and delivered right after the next one).
     UdpLink(boost::asio::io_context& io, Handlers handlers, const DatagramFaults& faults,
             std::uint64_t seed);
 
-    /// Opens a socket towards `server` and sends the request carrying `hello` (retried
-    /// every 250 ms, the response likewise, until the accepted datagram arrives).
-    /// Returns false (with `error`) when the socket cannot be opened or the hello does
-    /// not fit.
+    /// Opens a socket towards the first of `servers` (the addresses a name resolved to)
+    /// and sends the request carrying `hello` (retried every 250 ms, the response
+    /// likewise, until the accepted datagram arrives); where the host answers that
+    /// nothing listens, the next address. Returns false (with `error`) when there is no
+    /// address, the socket cannot be opened or the hello does not fit.
     /// `owner` is kept alive by every pending handler (the SimClient that owns this link).
-    bool connect(const boost::asio::ip::udp::endpoint& server, const protocol::pb::Envelope& hello,
-                 std::shared_ptr<void> owner, std::string& error);
+    bool connect(std::vector<boost::asio::ip::udp::endpoint> servers,
+                 const protocol::pb::Envelope& hello, std::shared_ptr<void> owner,
+                 std::string& error);
     /// A message datagram (ping, disconnect), once the session is accepted.
     void send_message(const protocol::pb::Envelope& message);
     /// An input datagram with `input` and the inputs sent before it, and `ack`.
@@ -66,8 +76,15 @@ public:
     [[nodiscard]] std::uint64_t emulated_losses() const { return emulated_losses_; }
     /// Snapshots given up with fragments missing.
     [[nodiscard]] std::uint64_t snapshots_incomplete() const { return assembler_.abandoned(); }
+    /// When the kernel received the datagram being handled (inside on_envelope: the one
+    /// that completed the envelope), on the steady clock; the time it was read where the
+    /// kernel gave no timestamp.
+    [[nodiscard]] std::chrono::steady_clock::time_point arrival() const { return arrival_; }
 
 private:
+    /// Opens the socket towards servers_[next_server_] (closing the one before), starts
+    /// receiving and sends the request.
+    bool open_next(std::string& error);
     void receive_next();
     void on_datagram(std::size_t bytes);
     void process(std::span<const std::uint8_t> datagram);
@@ -81,6 +98,8 @@ private:
     std::weak_ptr<void> owner_;
     boost::asio::ip::udp::socket socket_;
     boost::asio::steady_timer retry_timer_;
+    std::vector<boost::asio::ip::udp::endpoint> servers_;
+    std::size_t next_server_ = 0; ///< the address to try when this one refuses
     boost::asio::ip::udp::endpoint server_;
     boost::asio::ip::udp::endpoint sender_;
     std::array<std::uint8_t, protocol::kMaxDatagramBytes + 1> buffer_{};
@@ -97,6 +116,7 @@ private:
     std::vector<std::uint8_t> held_out_; ///< a sent datagram held back (reorder), or empty
     std::vector<std::uint8_t> held_in_;  ///< a received datagram held back, or empty
     std::mt19937_64 rng_;
+    std::chrono::steady_clock::time_point arrival_{};
     std::uint64_t dropped_ = 0;
     std::uint64_t emulated_losses_ = 0;
     bool closed_ = false;
