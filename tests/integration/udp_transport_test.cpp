@@ -203,6 +203,26 @@ TEST(UdpTransport, ClientsGetSnapshotsAuditsAndTheirOwnEntity) {
     }
 }
 
+TEST(UdpTransport, OverAnEmulatedLinkSnapshotsArriveATickApartAndTheDelayIsTheLinks) {
+    testing::RunningServer server(udp_config());
+    simclient::LoadConfig lc = udp_load(server, 4, 3.0);
+    simclient::Scenario scenario;
+    scenario.stages = {{0.0, 4}, {3.0, 4}};
+    scenario.groups.resize(1);
+    scenario.groups[0].network.latency_ms = 40.0; // each way
+    lc.scenario = scenario;
+    const simclient::LoadReport report = testing::run_load(lc);
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    server.stop();
+    EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
+    EXPECT_GT(report.rtt_ms.p50, 80.0); // the link's 40 ms each way
+    // The link delays every snapshot alike: a tick apart as it delivers them.
+    EXPECT_NEAR(report.snapshot_socket_interarrival_ms.p50, 1000.0 / 30.0, 8.0);
+    // Arrival is the link's delivery, so its 40 ms are not counted as the client's lag.
+    EXPECT_GT(report.handling_lag_ms.count, 0u);
+    EXPECT_LT(report.handling_lag_ms.p50, 20.0);
+}
+
 TEST(UdpTransport, UnderLossDuplicationAndReorderingTheReplicaStaysExactAndNothingIsStale) {
     testing::RunningServer server(udp_config());
     simclient::LoadConfig lc = udp_load(server, 4, 3.0);
