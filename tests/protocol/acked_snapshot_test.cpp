@@ -398,6 +398,21 @@ TEST(FrameRing, AFrameIsBuiltInTheMemoryForgottenMostRecently) {
     EXPECT_EQ(ring.find(3)->entities.data(), memory[2]); // held frames keep theirs
 }
 
+TEST(FrameRing, AFrameStartedWithoutMemoryToReuseHasRoomForTheNewestAtOnce) {
+    // No acknowledgement between two frames: nothing was forgotten, nothing is spare.
+    FrameRing ring;
+    ring.start(1).entities.resize(440);
+    ring.commit();
+    DeltaFrame& next = ring.start(2);
+    EXPECT_TRUE(next.entities.empty());
+    EXPECT_GE(next.entities.capacity(), 440u + FrameRing::kSlackEntities);
+    const FrameEntity* room = next.entities.data();
+    next.entities.resize(440 + FrameRing::kSlackEntities);
+    EXPECT_EQ(next.entities.data(), room) << "filled without growing";
+    ring.commit();
+    EXPECT_EQ(ring.find(2)->entities.data(), room) << "and kept at that size";
+}
+
 TEST(FrameRing, MemoryFollowsTheFramesDownAfterAPeak) {
     // A frame of 1,000 entities, forgotten, so that the next frame (of 10) is built in
     // its buffer; then frames of 10, each acknowledged at once: the peak's memory is

@@ -131,7 +131,9 @@ public:
         return s.used && s.frame.tick == tick ? &s.frame : nullptr;
     }
     /// The frame of `tick` (newer than every stored one) to fill: empty, in the memory
-    /// forgotten most recently. Valid until the next start(); commit() stores it.
+    /// forgotten most recently, or, with none to reuse, in new memory with room for the
+    /// newest frame's entities and kSlackEntities. Valid until the next start(); commit()
+    /// stores it.
     DeltaFrame& start(std::uint64_t tick);
     /// Stores the frame start() gave, in its slot, replacing the frame kAckedHistory or
     /// more ticks older.
