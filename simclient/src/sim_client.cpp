@@ -403,13 +403,12 @@ void SimClient::count_snapshot(const pb::Snapshot& s) {
     }
     if (arrival_) {
         // Arrivals are in order (the kernel's, or the delay line's due times); a
-        // negative span is conversion noise of a microsecond.
-        const auto ms = [](Clock::duration d) {
-            return std::max(0.0, std::chrono::duration<double, std::milli>(d).count());
-        };
-        stats_.handling_lag_ms.add(ms(now - *arrival_));
+        // negative span is conversion noise of a microsecond, counted as 0 (the
+        // histogram would drop it).
+        stats_.handling_lag_ms.add(std::max(0.0, ms_between(*arrival_, now)));
         if (last_snapshot_arrival_) {
-            stats_.socket_interarrival_ms.add(ms(*arrival_ - *last_snapshot_arrival_));
+            stats_.socket_interarrival_ms.add(
+                std::max(0.0, ms_between(*last_snapshot_arrival_, *arrival_)));
         }
         last_snapshot_arrival_ = arrival_;
     }
