@@ -128,8 +128,9 @@ void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
     dsoc::cli::add_setting(app, "--udp-handshake-rate", config.udp_handshake_rate,
                            "UDP handshake datagrams one source address may send per second [1/s]");
     dsoc::cli::add_setting(app, "--heap-metrics", config.heap_metrics,
-                           "/metrics also reads the allocator's live and free bytes (a "
-                           "diagnosis: each scrape stalls allocation; true/false)");
+                           "/metrics also reads glibc malloc's live and free bytes (a "
+                           "diagnosis: each scrape stalls allocation; jemalloc's are always "
+                           "read; true/false)");
     dsoc::cli::add_setting(app, "--max-speed", config.max_speed,
                            "Speed bound of every entity [units/s]");
     dsoc::cli::add_setting(app, "--duration", config.duration_s,

@@ -1,7 +1,8 @@
 #include "dsoc/server/process_metrics.hpp"
 
+#include "dsoc/server/heap_stats.hpp"
+
 #include <dirent.h>
-#include <malloc.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -83,7 +84,7 @@ double start_time_seconds() {
 
 } // namespace
 
-ProcessSample read_process_sample(bool heap) {
+ProcessSample read_process_sample(bool costly_heap) {
     ProcessSample s;
     if (rusage usage{}; ::getrusage(RUSAGE_SELF, &usage) == 0) {
         s.cpu_seconds = seconds(usage.ru_utime) + seconds(usage.ru_stime);
@@ -103,15 +104,12 @@ ProcessSample read_process_sample(bool heap) {
         s.max_fds = static_cast<double>(limit.rlim_cur);
     }
     s.start_time_seconds = start_time_seconds();
-#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
-    if (heap) {
-        const struct mallinfo2 info = ::mallinfo2();
-        s.heap_in_use_bytes = static_cast<double>(info.uordblks + info.hblkhd);
-        s.heap_free_bytes = static_cast<double>(info.fordblks);
+    const HeapAllocator allocator = running_heap_allocator();
+    s.allocator = allocator_name(allocator);
+    if (const auto heap = read_heap_sample(costly_heap)) {
+        s.heap_in_use_bytes = heap->in_use_bytes;
+        s.heap_free_bytes = heap->free_bytes;
     }
-#else
-    (void)heap;
-#endif
     return s;
 }
 
@@ -137,15 +135,18 @@ void write_process_metrics(PrometheusText& out, const ProcessSample& s) {
         out.gauge("process_start_time_seconds",
                   "Start time of the process since unix epoch in seconds.", s.start_time_seconds);
     }
+    if (!s.allocator.empty()) {
+        out.gauge("dsoc_heap_allocator_info", "The C allocator the server runs on. Always 1.",
+                  {{"allocator", std::string(s.allocator)}}, 1.0);
+    }
     if (s.heap_in_use_bytes >= 0.0) {
-        out.gauge("dsoc_heap_in_use_bytes",
-                  "Bytes of the C allocator's live allocations (glibc mallinfo2, every arena).",
+        out.gauge("dsoc_heap_in_use_bytes", "Bytes of the C allocator's live allocations.",
                   s.heap_in_use_bytes);
     }
     if (s.heap_free_bytes >= 0.0) {
         out.gauge("dsoc_heap_free_bytes",
-                  "Bytes in the C allocator's free chunks: memory the server does not use, "
-                  "resident unless given back to the system.",
+                  "Bytes the C allocator holds beyond its live allocations: memory the server "
+                  "freed, resident until the allocator gives it back to the system.",
                   s.heap_free_bytes);
     }
 }

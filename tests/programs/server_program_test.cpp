@@ -236,8 +236,15 @@ TEST(ServerProbes, HealthReadinessAndMetricsOfTheRunningProcess) {
           "dsoc_bytes_sent_total "}) {
         EXPECT_NE(metrics.find(std::string("\n") + name), std::string::npos) << name;
     }
-    // The allocator's figures cost every allocating thread a wait: only when asked.
-    EXPECT_EQ(metrics.find("dsoc_heap_in_use_bytes"), std::string::npos);
+    // The allocator it runs on; its figures always on jemalloc, where they are cheap, and
+    // on glibc only when asked (they cost every allocating thread a wait there).
+    const std::string allocator = DSOC_SERVER_ALLOCATOR;
+    EXPECT_NE(metrics.find("\ndsoc_heap_allocator_info{allocator=\"" + allocator + "\"} 1\n"),
+              std::string::npos)
+        << metrics;
+    EXPECT_EQ(metrics.find("\ndsoc_heap_in_use_bytes ") != std::string::npos,
+              allocator == "jemalloc")
+        << metrics;
     EXPECT_EQ(status, 0) << server.err();
 }
 

@@ -173,6 +173,7 @@ TEST(ProcessMetrics, WritesTheStandardNamesAndBuildInfo) {
     sample.start_time_seconds = 1700000000;
     sample.heap_in_use_bytes = 8192;
     sample.heap_free_bytes = 512;
+    sample.allocator = "jemalloc";
     PrometheusText out;
     write_process_metrics(out, sample);
     write_build_info(out, "0.1.0", "0123456789ab");
@@ -185,6 +186,8 @@ TEST(ProcessMetrics, WritesTheStandardNamesAndBuildInfo) {
     EXPECT_NE(t.find("process_start_time_seconds 1700000000\n"), std::string::npos) << t;
     EXPECT_NE(t.find("dsoc_heap_in_use_bytes 8192\n"), std::string::npos) << t;
     EXPECT_NE(t.find("dsoc_heap_free_bytes 512\n"), std::string::npos) << t;
+    EXPECT_NE(t.find("dsoc_heap_allocator_info{allocator=\"jemalloc\"} 1\n"), std::string::npos)
+        << t;
     // Fields that were not read are left out, not written as -1.
     EXPECT_EQ(t.find("process_virtual_memory_bytes"), std::string::npos) << t;
     EXPECT_EQ(t.find("process_max_fds"), std::string::npos) << t;

@@ -19,26 +19,23 @@ struct ProcessSample {
     double open_fds = -1.0;           ///< open file descriptors
     double max_fds = -1.0;            ///< the soft limit on them (RLIMIT_NOFILE)
     double start_time_seconds = -1.0; ///< start of the process, Unix time [s]
-    /// The C allocator's view (glibc mallinfo2, every arena), read only when asked:
-    /// bytes of live allocations, and bytes in free chunks it holds. RSS that grows
-    /// with the second is the allocator keeping memory, not the server keeping data.
-    /// [bytes]
+    /// The C allocator's view (heap_stats.hpp): bytes of live allocations, and bytes it
+    /// holds beyond them. RSS that grows with the second is the allocator keeping
+    /// memory, not the server keeping data. [bytes]
     double heap_in_use_bytes = -1.0;
     double heap_free_bytes = -1.0;
+    std::string_view allocator; ///< allocator_name() of the running one; empty if unread
 };
 
-/// Reads the calling process's figures from /proc and getrusage(), and with `heap` the
-/// allocator's from mallinfo2(). Thread-safe. A few system calls and one directory
-/// listing (/proc/self/fd); mallinfo2() walks every free chunk of every arena under
-/// that arena's lock, tens of milliseconds on a heap fragmented into a few hundred
-/// thousand free chunks, during which allocating threads wait: a diagnosis, not a
-/// figure to scrape by default.
-[[nodiscard]] ProcessSample read_process_sample(bool heap = false);
+/// Reads the calling process's figures from /proc and getrusage(), and the allocator's
+/// (read_heap_sample(costly_heap): jemalloc's always, glibc's only with `costly_heap`).
+/// Thread-safe. A few system calls and one directory listing (/proc/self/fd).
+[[nodiscard]] ProcessSample read_process_sample(bool costly_heap = false);
 
 /// process_cpu_seconds_total, process_resident_memory_bytes,
 /// process_virtual_memory_bytes, process_open_fds, process_max_fds,
-/// process_start_time_seconds, dsoc_heap_in_use_bytes and dsoc_heap_free_bytes, for the
-/// fields of `sample` that were read.
+/// process_start_time_seconds, dsoc_heap_allocator_info, dsoc_heap_in_use_bytes and
+/// dsoc_heap_free_bytes, for the fields of `sample` that were read.
 void write_process_metrics(PrometheusText& out, const ProcessSample& sample);
 
 /// dsoc_build_info{version="...",commit="..."} 1: the build that runs (commit empty

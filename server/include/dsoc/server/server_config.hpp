@@ -41,9 +41,11 @@ struct ServerConfig {
     /// honest clients (a NAT, a load generator): each sends two to connect, and retries
     /// every 250 ms while it waits. [Units: 1/s] [Limit: 1..1000000]
     int udp_handshake_rate = 100;
-    /// /metrics also gives dsoc_heap_in_use_bytes and dsoc_heap_free_bytes (glibc
-    /// mallinfo2, process_metrics.hpp): a diagnosis of resident memory that grows, off by
-    /// default because each scrape walks the allocator's free chunks under its locks.
+    /// /metrics also gives dsoc_heap_in_use_bytes and dsoc_heap_free_bytes on glibc's
+    /// malloc (mallinfo2, heap_stats.hpp): a diagnosis of resident memory that grows, off
+    /// by default because each scrape walks the allocator's free chunks under its locks.
+    /// On jemalloc (dsoc-server's allocator where the build found it) they are always
+    /// given: reading them costs nothing.
     bool heap_metrics = false;
     /// Simulation and snapshot rate. [Units: Hz] [Limit: 1..240]
     int tick_rate = visibility::DSOCConfig{}.tick_rate;
