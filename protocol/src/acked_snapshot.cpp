@@ -1,5 +1,7 @@
 #include "dsoc/protocol/acked_snapshot.hpp"
 
+#include "dsoc/protocol/buffer_room.hpp"
+
 #include "snapshot_rules.hpp"
 
 #include <algorithm>
@@ -174,7 +176,7 @@ std::size_t FrameRing::capacity() const {
 
 void AckedSnapshotEncoder::begin(std::uint64_t tick, std::optional<std::uint64_t> acked,
                                  pb::Snapshot& out, UpdateColumns* columns) {
-    out.Clear();
+    clear_to_need(out);
     out.set_server_tick(tick);
     columns_ = columns;
     if (columns_ != nullptr) {

@@ -1,5 +1,7 @@
 #include "dsoc/protocol/compact_snapshot.hpp"
 
+#include "dsoc/protocol/buffer_room.hpp"
+
 #include "snapshot_rules.hpp"
 
 #include <algorithm>
@@ -18,7 +20,7 @@ constexpr int kPrefetchAhead = 8;
 // --- encoder ---
 
 void SnapshotEncoder::begin(std::uint64_t tick, pb::Snapshot& out, UpdateColumns* columns) {
-    out.Clear();
+    clear_to_need(out);
     out.set_server_tick(tick);
     columns_ = columns;
     if (columns_ != nullptr) {

@@ -1,5 +1,7 @@
 #include "dsoc/protocol/update_columns.hpp"
 
+#include "dsoc/protocol/buffer_room.hpp"
+
 #include "dsoc/protocol/framing.hpp"
 
 #include <google/protobuf/io/coded_stream.h>
@@ -44,6 +46,14 @@ std::uint8_t* write_packed_field(int field_number, std::span<const std::uint8_t>
 } // namespace
 
 void UpdateColumns::clear() {
+    if (room_oversized(capacity_, count_, kSnapshotSlackEntries)) {
+        // buffer_room.hpp: room for more than twice the last snapshot's entries is given
+        // back; grow() makes room again from what the next snapshot adds.
+        capacity_ = 0;
+        for (Varints* column : {&heads_, &fields_, &values_}) {
+            std::vector<std::uint8_t>().swap(column->bytes);
+        }
+    }
     heads_.used = 0;
     fields_.used = 0;
     values_.used = 0;

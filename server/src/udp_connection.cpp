@@ -1,5 +1,6 @@
 #include "dsoc/server/udp_connection.hpp"
 
+#include "dsoc/protocol/buffer_room.hpp"
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/delta_frame.hpp"
 #include "dsoc/server/udp_endpoint.hpp"
@@ -18,6 +19,9 @@ using protocol::DatagramKind;
 namespace {
 
 constexpr std::size_t kTickBytes = 8;
+/// Room a snapshot's frame and datagram buffers keep beyond twice their last use
+/// (protocol/buffer_room.hpp). [Units: bytes]
+constexpr std::size_t kScratchSlackBytes = 4096;
 /// The first block of a thread's decoding arena: a client's messages are small.
 constexpr std::size_t kIncomingArenaBytes = 4 * 1024;
 
@@ -113,7 +117,7 @@ std::size_t UdpConnection::write_now(std::span<const std::uint8_t> frame) noexce
         return 0;
     }
     const std::uint64_t tick = get_u64(frame.data());
-    packed_.clear();
+    protocol::clear_to_need(packed_, kScratchSlackBytes);
     const std::size_t count = protocol::write_snapshot_datagrams(
         session_, next_sequence_, tick, frame.subspan(kTickBytes), packed_);
     if (count == 0) {
@@ -157,7 +161,7 @@ bool UdpConnection::finish_write_now(std::vector<std::uint8_t>& frame, std::size
                      protocol::kMaxSnapshotFragments, protocol::kMaxSnapshotBytes);
     }
     oversized_ = false;
-    frame.clear();
+    protocol::clear_to_need(frame, kScratchSlackBytes);
     if (next_sequence_ > kLastSequence && state_ == State::active) {
         disconnect(protocol::pb::DISCONNECT_REASON_PROTOCOL_ERROR,
                    "the session has used its sequence numbers; reconnect");

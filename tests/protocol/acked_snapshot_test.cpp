@@ -440,6 +440,29 @@ TEST(FrameRing, MemoryFollowsTheFramesDownAfterAPeak) {
     EXPECT_EQ(ring.start(2 * kAckedHistory + 1).entities.data(), forgotten);
 }
 
+TEST(AckedSnapshot, TheSnapshotMessageGivesBackAPeakOfEnters) {
+    // A first snapshot of 300 enters, then acknowledged snapshots in which nothing
+    // enters: the message keeps the enters' memory for one snapshot like the first,
+    // then gives it back (buffer_room.hpp) rather than holding the peak for the
+    // connection's life.
+    const QuantizationSettings settings;
+    AckedSnapshotEncoder encoder(settings);
+    std::vector<TruthEntity> world(300);
+    for (std::uint32_t i = 0; i < world.size(); ++i) {
+        world[i].id = i + 1;
+        world[i].pose.x = static_cast<float>(i);
+    }
+    pb::Snapshot out;
+    encode(encoder, 1, std::nullopt, world, out);
+    ASSERT_EQ(out.enter_size(), 300);
+    encode(encoder, 2, 1, world, out);
+    EXPECT_EQ(out.enter_size(), 0);
+    EXPECT_GE(out.enter().ClearedCount(), 300) << "kept after one snapshot";
+    encode(encoder, 3, 2, world, out);
+    EXPECT_EQ(out.enter_size(), 0);
+    EXPECT_EQ(out.enter().Capacity(), 0) << "then given back";
+}
+
 TEST(AckedSnapshot, AnAcknowledgementOlderThanTheHistoryGetsAFullSnapshot) {
     const QuantizationSettings settings;
     AckedSnapshotEncoder encoder(settings);

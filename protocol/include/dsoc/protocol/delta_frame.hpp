@@ -11,6 +11,7 @@
 //
 // Threading: none; one ring per connection end.
 
+#include "dsoc/protocol/buffer_room.hpp"
 #include "dsoc/protocol/quantization.hpp"
 
 #include <array>
@@ -118,10 +119,10 @@ void set_motion(FrameEntity& e, const QuantizedPose& from, std::uint64_t ticks,
 /// (500 clients' frames do not fit in cache, and writing a frame into cold memory was most
 /// of the codec's cost).
 ///
-/// Memory follows the frames' sizes: a buffer with room for more than twice the newest
-/// frame's entities (and kSlackEntities) is given back, not kept, so a connection whose
-/// set once peaked does not hold that peak's memory for the rest of its life (a
-/// ten-minute soak's RSS rose with every client's largest set so far).
+/// Memory follows the frames' sizes (buffer_room.hpp): a buffer with room for more than
+/// twice the newest frame's entities (and kSlackEntities) is given back, not kept, so a connection
+/// whose set once peaked does not hold that peak's memory for the rest of its life (a ten-minute
+/// soak's RSS rose with every client's largest set so far).
 class FrameRing {
 public:
     /// The frame of `tick`, or nullptr when it was never stored, has been replaced or
@@ -164,7 +165,7 @@ private:
     void keep_spare(std::vector<FrameEntity>&& memory, bool warm);
     /// Whether a buffer of `capacity` entities is more than the newest frame needs.
     [[nodiscard]] bool oversized(std::size_t capacity) const {
-        return capacity > 2 * newest_size_ + kSlackEntities;
+        return room_oversized(capacity, newest_size_, kSlackEntities);
     }
 
     std::array<Slot, kAckedHistory> slots_{};

@@ -58,8 +58,12 @@ struct UpdateEntry {
 
 class UpdateColumns {
 public:
-    /// Empties the columns; their memory is kept.
+    /// Empties the columns; their memory is kept, unless it has room for more than twice
+    /// the entries added since the last clear() (and kSnapshotSlackEntries,
+    /// buffer_room.hpp), when it is given back.
     void clear();
+    /// Entries the columns have room for before they grow again.
+    [[nodiscard]] std::size_t capacity() const { return capacity_; }
     /// Appends one update entry: its id step (from the previous entry's id, the first
     /// entry's: its id), its UpdateField bits (the head, and the mask apart when
     /// mask_apart()) and its values (at most kMaxValuesPerEntry).
