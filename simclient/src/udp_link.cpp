@@ -150,30 +150,56 @@ void UdpLink::transmit(std::span<const std::uint8_t> datagram) {
 }
 
 void UdpLink::receive_next() {
-    socket_.async_receive(
-        asio::buffer(buffer_),
-        [this, keep = owner_](const boost::system::error_code& ec, std::size_t n) {
-            if (closed_ || ec == asio::error::operation_aborted) {
-                return;
+    // Woken when the socket has something, then every datagram waiting is read, each with
+    // its arrival in the same system call (receive_time.hpp): a snapshot's datagrams come
+    // together, and an asio read apiece cost a read that found nothing before each wait.
+    // The reactor wakes on new data only (edge-triggered), so the socket is drained to
+    // EAGAIN before waiting again.
+    socket_.async_wait(asio::socket_base::wait_read,
+                       [this, keep = owner_](const boost::system::error_code& ec) {
+                           if (closed_ || ec == asio::error::operation_aborted) {
+                               return;
+                           }
+                           if (!ec && !drain()) {
+                               return; // the link moved to another address or was closed
+                           }
+                           if (!closed_) {
+                               receive_next();
+                           }
+                       });
+}
+
+bool UdpLink::drain() {
+    for (;;) {
+        const StampedRead read = receive_stamped(socket_.native_handle(), buffer_);
+        if (read.error == EAGAIN || read.error == EWOULDBLOCK) {
+            return true;
+        }
+        if (read.error == ECONNREFUSED) {
+            if (session_ != 0) {
+                continue; // a lost server shows as silence
             }
-            if (!ec) {
-                arrival_ = last_receive_time(socket_.native_handle());
-                on_datagram(n);
-            } else if (ec == asio::error::connection_refused && session_ == 0) {
-                // Nothing listens at this address: the next one the name resolved to, as a
-                // TCP connect tries each, or the owner's to decide.
-                std::string why;
-                if (next_server_ < servers_.size() && open_next(why)) {
-                    return; // receiving on the new socket
-                }
-                if (handlers_.on_refused) {
-                    handlers_.on_refused(ec); // the owner closes the link
-                }
+            // Nothing listens at this address: the next one the name resolved to, as a TCP
+            // connect tries each, or the owner's to decide.
+            std::string why;
+            if (next_server_ < servers_.size() && open_next(why)) {
+                return false; // receiving on the new socket
             }
-            if (!closed_) {
-                receive_next();
+            if (handlers_.on_refused) {
+                handlers_.on_refused(
+                    boost::system::error_code(ECONNREFUSED, boost::system::system_category()));
             }
-        });
+            return !closed_; // the owner closes the link
+        }
+        if (read.error != 0) {
+            return true; // another error of the socket (none expected): wait again
+        }
+        arrival_ = read.arrival;
+        on_datagram(read.bytes);
+        if (closed_) {
+            return false;
+        }
+    }
 }
 
 void UdpLink::on_datagram(std::size_t bytes) {

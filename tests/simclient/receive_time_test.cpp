@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cerrno>
 #include <chrono>
 #include <thread>
 
@@ -24,17 +25,27 @@ struct Loopback {
     asio::ip::udp::socket receiver{io, {asio::ip::address_v4::loopback(), 0}};
     asio::ip::udp::socket sender{io, {asio::ip::address_v4::loopback(), 0}};
     std::array<char, 4> payload{'p', 'i', 'n', 'g'};
-    std::array<char, 16> buffer{};
+    std::array<std::uint8_t, 16> buffer{};
 
     void send() { sender.send_to(asio::buffer(payload), receiver.local_endpoint()); }
-    std::size_t read() { return receiver.receive(asio::buffer(buffer)); }
+    /// Reads the datagram sent (waiting for it up to a second).
+    StampedRead read() {
+        for (int i = 0; i < 1000; ++i) {
+            const StampedRead r = receive_stamped(receiver.native_handle(), buffer);
+            if (r.error != EAGAIN) {
+                return r;
+            }
+            std::this_thread::sleep_for(1ms);
+        }
+        return {};
+    }
 };
 
 // A datagram read well after it arrived is stamped with its arrival, not its reading: the
 // difference a busy load generator's own delay makes to its figures.
 TEST(ReceiveTime, IsWhenTheDatagramArrivedNotWhenItWasRead) {
     Loopback link;
-    enable_receive_times(link.receiver.native_handle());
+    ASSERT_TRUE(enable_receive_times(link.receiver.native_handle()));
     // The kernel turns its receive timestamps on a moment after the first socket asks
     // (deferred work); until then a datagram carries none and reads as now. Probe until
     // one comes back stamped before its read.
@@ -42,38 +53,52 @@ TEST(ReceiveTime, IsWhenTheDatagramArrivedNotWhenItWasRead) {
     for (int i = 0; i < 200 && !stamped; ++i) {
         link.send();
         std::this_thread::sleep_for(5ms);
-        ASSERT_EQ(link.read(), link.payload.size());
-        stamped = ms(Clock::now() - last_receive_time(link.receiver.native_handle())) >= 4.0;
+        const StampedRead r = link.read();
+        ASSERT_EQ(r.bytes, link.payload.size());
+        stamped = ms(Clock::now() - r.arrival) >= 4.0;
     }
     ASSERT_TRUE(stamped) << "no datagram came with a receive timestamp";
 
     const auto sent_at = Clock::now();
     link.send();
     std::this_thread::sleep_for(60ms);
-    ASSERT_EQ(link.read(), link.payload.size());
+    const StampedRead first = link.read();
+    ASSERT_EQ(first.bytes, link.payload.size());
     const auto read_at = Clock::now();
-    const auto arrived = last_receive_time(link.receiver.native_handle());
+    const auto arrived = first.arrival;
     EXPECT_GE(ms(arrived - sent_at), -1.0); // not before the send
     EXPECT_LT(ms(arrived - sent_at), 30.0);
     EXPECT_GE(ms(read_at - arrived), 50.0);
 
-    // Each read gives its own datagram's time.
+    // Each read gives its own datagram's time, also when both waited to be read.
     std::this_thread::sleep_for(20ms);
     const auto second_sent_at = Clock::now();
     link.send();
-    ASSERT_EQ(link.read(), link.payload.size());
-    const auto second = last_receive_time(link.receiver.native_handle());
-    EXPECT_GE(ms(second - second_sent_at), -1.0);
-    EXPECT_GE(ms(second - arrived), 15.0);
+    std::this_thread::sleep_for(20ms);
+    link.send();
+    std::this_thread::sleep_for(20ms);
+    const StampedRead second = link.read();
+    const StampedRead third = link.read();
+    ASSERT_EQ(second.bytes, link.payload.size());
+    ASSERT_EQ(third.bytes, link.payload.size());
+    EXPECT_GE(ms(second.arrival - second_sent_at), -1.0);
+    EXPECT_GE(ms(second.arrival - arrived), 15.0);
+    EXPECT_GE(ms(third.arrival - second.arrival), 15.0);
+    EXPECT_GE(ms(Clock::now() - third.arrival), 15.0);
+    // Nothing left: a read that finds nothing says so and does not wait.
+    EXPECT_EQ(receive_stamped(link.receiver.native_handle(), link.buffer).error, EAGAIN);
 }
 
-// Without timestamps turned on there is nothing to give but the time of asking.
-TEST(ReceiveTime, WithoutTimestampsIsNow) {
+// Without timestamps turned on there is nothing to give but the time of reading.
+TEST(ReceiveTime, WithoutTimestampsIsWhenRead) {
     Loopback link;
+    link.send();
+    std::this_thread::sleep_for(30ms);
     const auto before = Clock::now();
-    const auto t = last_receive_time(link.receiver.native_handle());
-    EXPECT_GE(t, before);
-    EXPECT_LE(ms(t - before), 1000.0);
+    const StampedRead r = link.read();
+    ASSERT_EQ(r.bytes, link.payload.size());
+    EXPECT_GE(r.arrival, before);
+    EXPECT_LE(ms(r.arrival - before), 1000.0);
 }
 
 } // namespace

@@ -1,22 +1,39 @@
 #pragma once
-// When a datagram reached a client's socket: the kernel's receive timestamp, so a load
-// generator sharing the server's cores can tell when the server's snapshots arrived
-// from when it got round to them. Linux (SIOCGSTAMPNS).
+// Reading a datagram with the time it reached the socket: the kernel's receive timestamp
+// (SO_TIMESTAMPNS, carried beside the datagram by recvmsg()), so a load generator sharing
+// the server's cores can tell when the server's snapshots arrived from when it got round
+// to them, in the one system call that reads the datagram. Linux.
 //
-// Threading: any; the socket's reader only (the timestamp is of its last read).
+// Threading: any; the socket's reader only.
 
 #include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <span>
 
 namespace dsoc::simclient {
 
-/// Turns timestamps on for the datagram socket `fd`: call once, before its first read.
-void enable_receive_times(int fd);
+/// Turns receive timestamps on for the datagram socket `fd`: call once, before its first
+/// read. False when the socket refuses (every datagram then reads as arriving when read).
+bool enable_receive_times(int fd);
 
-/// When the kernel received the datagram last read from `fd`, on the steady clock (the
-/// kernel stamps the system clock; its distance from the system clock's now is carried
-/// over, so a step of the system clock between reads does not show); now, when it holds
-/// no timestamp (not enabled, nothing read since, not a datagram socket, or read in the
-/// moment before the kernel, asked by the first socket, turned them on).
-[[nodiscard]] std::chrono::steady_clock::time_point last_receive_time(int fd);
+/// One receive_stamped().
+struct StampedRead {
+    /// Bytes of the datagram read (a longer one is cut to the buffer's size); 0 with an
+    /// error or nothing to read.
+    std::size_t bytes = 0;
+    /// errno of a failed read: EAGAIN / EWOULDBLOCK when nothing is waiting, ECONNREFUSED
+    /// when the host said nothing listens at a connected socket's peer; 0 when one was read.
+    int error = 0;
+    /// When the kernel received it, on the steady clock (the kernel stamps the system
+    /// clock; its distance from the system clock's now is carried over, so a step of the
+    /// system clock does not show); when read, where the datagram holds no timestamp
+    /// (timestamps off, or turned on a moment after it arrived) or the system clock stepped
+    /// back since.
+    std::chrono::steady_clock::time_point arrival{};
+};
+
+/// Reads the next datagram of `fd` into `buffer` without waiting (MSG_DONTWAIT).
+[[nodiscard]] StampedRead receive_stamped(int fd, std::span<std::uint8_t> buffer);
 
 } // namespace dsoc::simclient

@@ -86,6 +86,9 @@ private:
     /// receiving and sends the request.
     bool open_next(std::string& error);
     void receive_next();
+    /// Reads every datagram waiting on the socket. False when the link no longer reads this
+    /// socket (closed, or moved to the next address).
+    bool drain();
     void on_datagram(std::size_t bytes);
     void process(std::span<const std::uint8_t> datagram);
     void retry_handshake();
