@@ -16,34 +16,50 @@ struct HalfPlane {
     double d;
 };
 
-/// Sutherland-Hodgman against one half-plane (keeps dot(n, p) <= d). False when the
-/// result would not fit a Polygon (the caller gives up: "not covered").
-bool clip(const Polygon& in, const HalfPlane& h, Polygon& out) {
-    out.n = 0;
+/// Sutherland-Hodgman against one half-plane, both sides in one pass: `inside` keeps
+/// dot(n, p) <= d, `outside` dot(n, p) >= d (each exactly what a clip against that side
+/// alone gives: a vertex on the line goes to both, a crossing's point is computed once).
+/// False when a result would not fit a Polygon (the caller gives up: "not covered").
+bool split(const Polygon& in, const HalfPlane& h, Polygon& inside, Polygon& outside) {
+    inside.n = 0;
+    outside.n = 0;
     if (in.n == 0) {
         return true;
     }
+    std::array<double, Polygon::kCapacity> distance;
     for (int i = 0; i < in.n; ++i) {
+        distance[static_cast<std::size_t>(i)] =
+            glm::dot(h.n, in.v[static_cast<std::size_t>(i)]) - h.d;
+    }
+    const auto put = [](Polygon& poly, const glm::dvec2& p) {
+        if (poly.n == Polygon::kCapacity) {
+            return false;
+        }
+        poly.v[static_cast<std::size_t>(poly.n++)] = p;
+        return true;
+    };
+    for (int i = 0; i < in.n; ++i) {
+        const int j = i + 1 == in.n ? 0 : i + 1;
         const glm::dvec2& p = in.v[static_cast<std::size_t>(i)];
-        const glm::dvec2& q = in.v[static_cast<std::size_t>((i + 1) % in.n)];
-        const double dp = glm::dot(h.n, p) - h.d;
-        const double dq = glm::dot(h.n, q) - h.d;
-        if (dp <= 0.0) {
-            if (out.n == Polygon::kCapacity) {
-                return false;
-            }
-            out.v[static_cast<std::size_t>(out.n++)] = p;
+        const glm::dvec2& q = in.v[static_cast<std::size_t>(j)];
+        const double dp = distance[static_cast<std::size_t>(i)];
+        const double dq = distance[static_cast<std::size_t>(j)];
+        if ((dp <= 0.0 && !put(inside, p)) || (dp >= 0.0 && !put(outside, p))) {
+            return false;
         }
         if ((dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0)) {
-            if (out.n == Polygon::kCapacity) {
+            const double t = dp / (dp - dq);
+            const glm::dvec2 crossing = p + (q - p) * t;
+            if (!put(inside, crossing) || !put(outside, crossing)) {
                 return false;
             }
-            const double t = dp / (dp - dq);
-            out.v[static_cast<std::size_t>(out.n++)] = p + (q - p) * t;
         }
     }
-    if (out.n < 3) {
-        out.n = 0;
+    if (inside.n < 3) {
+        inside.n = 0;
+    }
+    if (outside.n < 3) {
+        outside.n = 0;
     }
     return true;
 }
@@ -183,7 +199,6 @@ CutPlaneFusion::Coverage CutPlaneFusion::coverage(const Aabb& region, const Aabb
 
     Polygon rect;
     rect.n = 4;
-    rect.v = {};
     rect.v[0] = {lo.x, lo.y};
     rect.v[1] = {hi.x, lo.y};
     rect.v[2] = {hi.x, hi.y};
@@ -230,8 +245,7 @@ CutPlaneFusion::Coverage CutPlaneFusion::coverage(const Aabb& region, const Aabb
             // piece \ section = union over i of piece n (outside half i) n (inside halves < i).
             rest = piece;
             for (std::size_t i = 0; i < count && rest.n > 0; ++i) {
-                const HalfPlane flipped{-halves[i].n, -halves[i].d};
-                if (!clip(rest, flipped, outside) || !clip(rest, halves[i], inside)) {
+                if (!split(rest, halves[i], inside, outside)) {
                     return Coverage::undecided;
                 }
                 if (!negligible(outside)) {

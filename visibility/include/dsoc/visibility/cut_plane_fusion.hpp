@@ -25,6 +25,7 @@
 
 #include <glm/vec2.hpp>
 
+#include <algorithm>
 #include <array>
 #include <vector>
 
@@ -49,6 +50,16 @@ public:
         static constexpr int kCapacity = 40;
         std::array<glm::dvec2, kCapacity> v;
         int n = 0;
+
+        Polygon() = default;
+        // Copies carry the n vertices in use, not the whole capacity: the subtraction
+        // copies pieces of a few vertices many times per test.
+        Polygon(const Polygon& other) : n(other.n) { std::copy_n(other.v.begin(), n, v.begin()); }
+        Polygon& operator=(const Polygon& other) {
+            n = other.n;
+            std::copy_n(other.v.begin(), n, v.begin());
+            return *this;
+        }
     };
     /// Per-thread memory, reused between calls.
     struct Scratch {
