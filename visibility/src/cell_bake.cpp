@@ -253,12 +253,13 @@ void Baker::for_children(Node n, F&& f) const {
 
 bool Baker::segment_clear(Worker& w, glm::vec3 p, glm::vec3 q) const {
     const OccluderWorld& world = scene_.world;
+    const SegmentRay ray = SegmentRay::between(p, q);
     // The first blocker ends the walk: most segments between hidden pairs meet one
     // long before their end.
     return !scene_.grid->any_along_segment(p, q, w.segment, [&](OccluderId id) {
         const Aabb& solid = world.solid_box(id);
         return solid.is_empty() ? segment_blocked_by(p, q, world.solid_planes(id))
-                                : segment_through_box(p, q, solid);
+                                : segment_through_box(ray, solid);
     });
 }
 

@@ -30,34 +30,6 @@ bool segment_hits_box(glm::vec3 from, glm::vec3 inv, const Aabb& box) {
 
 } // namespace
 
-bool segment_through_box(glm::vec3 a, glm::vec3 b, const Aabb& solid) {
-    const glm::vec3 lo = solid.min + glm::vec3(kBoxShrink);
-    const glm::vec3 hi = solid.max - glm::vec3(kBoxShrink);
-    float t0 = 0.0f;
-    float t1 = 1.0f;
-    for (int axis = 0; axis < 3; ++axis) {
-        const float d = b[axis] - a[axis];
-        if (d == 0.0f) {
-            if (!(a[axis] > lo[axis] && a[axis] < hi[axis])) {
-                return false;
-            }
-            continue;
-        }
-        const float inv = 1.0f / d;
-        float ta = (lo[axis] - a[axis]) * inv;
-        float tb = (hi[axis] - a[axis]) * inv;
-        if (ta > tb) {
-            std::swap(ta, tb);
-        }
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-        if (t1 - t0 <= 1.0e-6f) {
-            return false;
-        }
-    }
-    return true;
-}
-
 bool shaft_blocked_by_box(const Aabb& region, const Aabb& box, const Aabb& solid) {
     if (region.is_empty() || box.is_empty() || solid.is_empty()) {
         return false;
@@ -272,8 +244,7 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     // Occluders that touch or cut into the region count too: the corner argument
     // holds for any convex solid (an eye inside a wall is no eye, and its segments
     // do pass through the wall's interior).
-    const glm::vec3 dir = to - from;
-    const glm::vec3 inv(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
+    const SegmentRay centre = SegmentRay::between(from, to);
     const auto add_plane = [&](OccluderId id, int axis) {
         const CutPlane plane = mid_plane(id, axis);
         if (separates(plane) && scratch.planes.size() < kMaxCutPlanes &&
@@ -285,7 +256,7 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     };
     for (const OccluderId id : scratch.grid.found) {
         const Aabb& ob = world_->occluder(id).bounds();
-        if (!segment_hits_box(from, inv, ob)) {
+        if (!segment_hits_box(from, centre.inv, ob)) {
             continue; // misses the occluder's bounds, so it cannot block the segment
         }
         const auto planes = world_->solid_planes(id);
@@ -296,7 +267,7 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
             break;
         }
         if (!(solid.is_empty() ? segment_blocked_by(from, to, planes)
-                               : segment_through_box(from, to, solid))) {
+                               : segment_through_box(centre, solid))) {
             continue;
         }
         if (!cheap_done && id != tried && blocks_shaft(id)) {

@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace dsoc::visibility {
@@ -34,14 +35,56 @@ namespace dsoc::visibility {
 /// rounding, so `true` also holds for the exact box). About 5x cheaper than the planes.
 [[nodiscard]] bool shaft_blocked_by_box(const Aabb& region, const Aabb& box, const Aabb& solid);
 
-/// True when the open segment a-b passes through the interior of `solid` shrunk by
-/// kBoxShrink (positive length inside; float). `true` implies segment_blocked_by() for
-/// the box's six planes.
-[[nodiscard]] bool segment_through_box(glm::vec3 a, glm::vec3 b, const Aabb& solid);
-
 /// How far the box fast path shrinks a solid box: float rounding at world coordinates
 /// up to 2^15 units stays below it. [Units: world units]
 inline constexpr float kBoxShrink = 1.0f / 64.0f;
+
+/// A segment a-b as the box tests read it: its start, b - a, and 1 / (b - a) per axis
+/// (infinite where b - a is 0, and then unused), worked out once for the many boxes one
+/// segment is tested against.
+struct SegmentRay {
+    glm::vec3 from{0.0f};
+    glm::vec3 dir{0.0f};
+    glm::vec3 inv{0.0f};
+    [[nodiscard]] static SegmentRay between(glm::vec3 a, glm::vec3 b) {
+        const glm::vec3 d = b - a;
+        return {a, d, glm::vec3(1.0f / d.x, 1.0f / d.y, 1.0f / d.z)};
+    }
+};
+
+/// True when the open segment `s` passes through the interior of `solid` shrunk by
+/// kBoxShrink (positive length inside; float). `true` implies segment_blocked_by() for
+/// the box's six planes.
+[[nodiscard]] inline bool segment_through_box(const SegmentRay& s, const Aabb& solid) {
+    const glm::vec3 lo = solid.min + glm::vec3(kBoxShrink);
+    const glm::vec3 hi = solid.max - glm::vec3(kBoxShrink);
+    float t0 = 0.0f;
+    float t1 = 1.0f;
+    for (int axis = 0; axis < 3; ++axis) {
+        if (s.dir[axis] == 0.0f) {
+            if (!(s.from[axis] > lo[axis] && s.from[axis] < hi[axis])) {
+                return false;
+            }
+            continue;
+        }
+        float ta = (lo[axis] - s.from[axis]) * s.inv[axis];
+        float tb = (hi[axis] - s.from[axis]) * s.inv[axis];
+        if (ta > tb) {
+            std::swap(ta, tb);
+        }
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t1 - t0 <= 1.0e-6f) {
+            return false;
+        }
+    }
+    return true;
+}
+
+/// segment_through_box() for the segment a-b.
+[[nodiscard]] inline bool segment_through_box(glm::vec3 a, glm::vec3 b, const Aabb& solid) {
+    return segment_through_box(SegmentRay::between(a, b), solid);
+}
 
 /// Shaft stage over a world: `occluded` when some single occluder blocks every
 /// segment from `region` to `box` (exact per occluder, see above) or, with fusion on,
