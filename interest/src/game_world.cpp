@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <string>
 
 namespace dsoc::interest {
 
@@ -150,7 +151,31 @@ void GameWorld::fire(std::uint32_t id) {
     }
 }
 
+void GameWorld::mirror(std::vector<Entity> entities, std::uint64_t frags, std::uint32_t next_id) {
+    std::uint32_t previous = 0;
+    for (const Entity& e : entities) {
+        if (e.id <= previous || e.id >= next_id) {
+            throw std::invalid_argument("GameWorld::mirror: entity id " + std::to_string(e.id) +
+                                        " after " + std::to_string(previous) +
+                                        " (ids must increase and stay below the next id " +
+                                        std::to_string(next_id) + ")");
+        }
+        previous = e.id;
+    }
+    entities_ = std::move(entities);
+    for (Entity& e : entities_) {
+        e.bot = -1; // a mirror has no brains: its entities move only by the next mirror()
+    }
+    frags_ = frags;
+    next_id_ = next_id;
+    mirrored_ = true;
+    rebuild_index();
+}
+
 void GameWorld::step(float dt, const ParallelFor& parallel) {
+    if (mirrored_) {
+        throw std::logic_error("GameWorld::step on a mirror: it moves only by mirror()");
+    }
     died_.assign(entities_.size(), 0);
     fired_.assign(entities_.size(), 0);
     const std::uint64_t step = steps_++;

@@ -28,6 +28,7 @@
 #include <memory>
 #include <optional>
 #include <random>
+#include <stdexcept>
 #include <unordered_map>
 #include <vector>
 
@@ -141,6 +142,17 @@ public:
     [[nodiscard]] const sim::SoundSettings& sound_settings() const { return sounds_; }
     /// Entities killed by shots since the world began.
     [[nodiscard]] std::uint64_t frags() const { return frags_; }
+    /// The id reserve_player() hands out next (every id below it was handed out).
+    [[nodiscard]] std::uint32_t next_id() const { return next_id_; }
+
+    /// Makes this world read as another world of the same map and settings does: its
+    /// entities (in increasing id order, ids in [1, next_id)), frags and next id
+    /// (scale-out: a gateway mirrors the world process's ticks). Entities keep no bot
+    /// brain, so a mirror is read, not stepped: step() after mirror() throws
+    /// std::logic_error. Throws std::invalid_argument, changing nothing, for ids out of
+    /// order or range (a decoder of outside bytes checks them before).
+    void mirror(std::vector<Entity> entities, std::uint64_t frags, std::uint32_t next_id);
+    [[nodiscard]] bool mirrored() const { return mirrored_; }
     [[nodiscard]] const maps::Map& map() const { return *map_; }
     [[nodiscard]] const std::shared_ptr<const maps::Map>& map_ptr() const { return map_; }
 
@@ -167,6 +179,7 @@ private:
     std::uint64_t seed_ = 0;
     std::uint64_t steps_ = 0; ///< step() calls so far: the bots' shot draws
     std::uint64_t frags_ = 0;
+    bool mirrored_ = false; ///< mirror() was called: no bot brains, never stepped
     /// step(), by index: players who touched a hazard and entities a shot killed; who
     /// fired while alive; the boxes shots may hit and which of them live.
     std::vector<std::uint8_t> died_;

@@ -1,0 +1,77 @@
+#pragma once
+// What gateways and the world process send each other besides ticks (docs/scale-out.md
+// has the layouts): blocks of reserved entity ids, batches of the clients' inputs, and
+// joins and leaves. Little-endian, fixed sizes; every decoder checks the magic, the
+// version, the length and every value, and never throws on bad bytes.
+
+#include "dsoc/maps/load_error.hpp"
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace dsoc::scaleout {
+
+inline constexpr std::uint16_t kWorldMessageVersion = 1;
+/// Inputs or leaves one message may carry at most. [Limit: entries]
+inline constexpr std::uint32_t kMaxBatchEntries = 1u << 16;
+
+/// Entity ids a gateway may give its new players: [first_id, first_id + count), reserved
+/// by the world for it (a "reserve" request's answer), so a hello is answered at once.
+struct IdBlock {
+    std::uint64_t world_key = 0;
+    std::uint32_t first_id = 0;
+    std::uint32_t count = 0;
+};
+/// Ids one reserve request may ask for at most. [Limit: ids]
+inline constexpr std::uint32_t kMaxIdBlock = 4096;
+
+/// One client's intent for the next world step (interest::GameWorld::set_player_input
+/// and fire).
+struct PlayerInput {
+    std::uint32_t entity_id = 0;
+    glm::vec3 wish{0.0f}; ///< horizontal; z ignored; finite, length <= 1 after clamping
+    bool jump = false;
+    bool fire = false;
+    float yaw_deg = 0.0f;   ///< finite
+    float pitch_deg = 0.0f; ///< finite
+};
+
+void encode_id_block(const IdBlock& block, std::vector<std::byte>& out);
+[[nodiscard]] maps::Result<IdBlock> decode_id_block(std::span<const std::byte> bytes,
+                                                    const std::string& source);
+/// A reserve request: how many ids the gateway asks for (1..kMaxIdBlock).
+void encode_reserve_request(std::uint32_t count, std::vector<std::byte>& out);
+[[nodiscard]] maps::Result<std::uint32_t> decode_reserve_request(std::span<const std::byte> bytes,
+                                                                 const std::string& source);
+
+/// A batch of entries from one gateway (`gateway`: its random id for the world's
+/// bookkeeping; never 0).
+template <typename Entry>
+struct Batch {
+    std::uint64_t gateway = 0;
+    std::vector<Entry> entries;
+};
+
+/// Sent every tick by every gateway, empty or not: it is also the gateway's heartbeat
+/// (a world forgets the players of a gateway it has not heard from for a while).
+void encode_inputs(std::uint64_t gateway, std::span<const PlayerInput> inputs,
+                   std::vector<std::byte>& out);
+/// Refuses the whole batch on any bad entry (non-finite numbers, |wish| components
+/// over 1, unknown flags, entity id 0).
+[[nodiscard]] maps::Result<Batch<PlayerInput>> decode_inputs(std::span<const std::byte> bytes,
+                                                             const std::string& source);
+
+/// Joins (players to spawn, ids from the gateway's blocks) and leaves: lists of entity
+/// ids, each kind with its own magic so that one is never read as the other.
+enum class IdBatchKind : std::uint8_t { join, leave };
+void encode_id_batch(IdBatchKind kind, std::uint64_t gateway,
+                     std::span<const std::uint32_t> entity_ids, std::vector<std::byte>& out);
+[[nodiscard]] maps::Result<Batch<std::uint32_t>>
+decode_id_batch(IdBatchKind kind, std::span<const std::byte> bytes, const std::string& source);
+
+} // namespace dsoc::scaleout

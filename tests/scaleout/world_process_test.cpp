@@ -1,0 +1,256 @@
+// The world process over a real nats-server (skipped, with the reason, where the
+// binary is absent): a gateway reserves ids, and a joined one appears at the next
+// tick; its inputs move that player and no other; a leave removes it; bad
+// messages and inputs for entities that are not joined players are counted, and the
+// world carries on publishing ticks a gateway can mirror.
+
+#include "dsoc/scaleout/world_process.hpp"
+#include "dsoc/scaleout/world_tick.hpp"
+#include "support/eventually.hpp"
+#include "support/nats_server.hpp"
+#include "support/test_maps.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstring>
+#include <limits>
+#include <mutex>
+#include <thread>
+
+namespace dsoc::scaleout {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::eventually;
+
+constexpr std::uint64_t kGateway = 0x6a7e;
+
+class WorldProcessTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        if (testing::nats_server_binary().empty()) {
+            GTEST_SKIP() << testing::kNoNatsServer;
+        }
+        server_ = std::make_unique<testing::NatsServer>();
+        NatsLinkOptions o;
+        o.url = server_->url();
+        world_link_ = std::make_unique<NatsLink>(o);
+        gateway_link_ = std::make_unique<NatsLink>(o);
+        settings_.bots = 10;
+        process_ = std::make_unique<WorldProcess>(testing::rooms_map(), settings_, 30, *world_link_,
+                                                  "t", gateway_timeout());
+        ticks_ = gateway_link_->subscribe(world_subject("t", "tick"), [this](const NatsMessage& m) {
+            auto tick = decode_world_tick(m.data, std::string(m.subject), process_->world_key());
+            ASSERT_TRUE(tick.ok()) << tick.error().message();
+            const std::lock_guard lock(mutex_);
+            newest_ = std::move(tick).value();
+        });
+        ASSERT_TRUE(world_link_->flush(2000ms));
+        ASSERT_TRUE(gateway_link_->flush(2000ms));
+    }
+    [[nodiscard]] virtual std::chrono::milliseconds gateway_timeout() const {
+        return WorldProcess::kDefaultGatewayTimeout;
+    }
+    /// Gateway `id`'s heartbeat: an empty input batch.
+    void beat(std::uint64_t id) {
+        std::vector<std::byte> bytes;
+        encode_inputs(id, {}, bytes);
+        send("input", bytes);
+    }
+    void TearDown() override {
+        ticks_.reset();
+        process_.reset();
+    }
+    /// Publishes `bytes` on the world's `what` subject and waits until it arrived.
+    void send(const std::string& what, const std::vector<std::byte>& bytes) {
+        const std::uint64_t before = process_->messages_received();
+        ASSERT_TRUE(gateway_link_->publish(world_subject("t", what), bytes));
+        ASSERT_TRUE(eventually([&] { return process_->messages_received() > before; }));
+    }
+    /// Runs one tick and waits for it to reach the gateway.
+    WorldTick tick() {
+        process_->tick();
+        const std::uint64_t want = process_->stats().ticks;
+        EXPECT_TRUE(eventually([&] {
+            const std::lock_guard lock(mutex_);
+            return newest_.tick == want;
+        }));
+        const std::lock_guard lock(mutex_);
+        return newest_;
+    }
+    static const interest::Entity* find(const WorldTick& tick, std::uint32_t id) {
+        for (const interest::Entity& e : tick.entities) {
+            if (e.id == id) {
+                return &e;
+            }
+        }
+        return nullptr;
+    }
+
+    std::unique_ptr<testing::NatsServer> server_;
+    std::unique_ptr<NatsLink> world_link_;
+    std::unique_ptr<NatsLink> gateway_link_;
+    interest::WorldSettings settings_;
+    std::unique_ptr<WorldProcess> process_;
+    std::unique_ptr<NatsSubscription> ticks_;
+    std::mutex mutex_;
+    WorldTick newest_;
+};
+
+TEST_F(WorldProcessTest, AJoinedPlayerMovesByItsInputsAndLeaves) {
+    const WorldTick first = tick();
+    EXPECT_EQ(first.entities.size(), 10u); // the bots
+
+    std::vector<std::byte> bytes;
+    encode_reserve_request(3, bytes);
+    const auto answer = gateway_link_->request(world_subject("t", "reserve"), bytes, 2000ms);
+    ASSERT_TRUE(answer.has_value());
+    auto block = decode_id_block(*answer, "reserve");
+    ASSERT_TRUE(block.ok()) << block.error().message();
+    EXPECT_EQ(block->world_key, process_->world_key());
+    EXPECT_EQ(block->count, 3u);
+    const std::uint32_t player = block->first_id + 1;
+    EXPECT_EQ(find(first, player), nullptr);
+    EXPECT_EQ(find(tick(), player), nullptr); // reserved is not joined
+
+    const std::uint32_t joins[] = {player, 999'999}; // the second was never reserved
+    encode_id_batch(IdBatchKind::join, kGateway, joins, bytes);
+    send("join", bytes);
+    EXPECT_EQ(process_->stats().for_strangers, 1u);
+    const WorldTick joined = tick();
+    const interest::Entity* spawned = find(joined, player);
+    ASSERT_NE(spawned, nullptr);
+    EXPECT_EQ(spawned->kind, interest::EntityKind::player);
+    const glm::vec3 start = spawned->move.position;
+
+    const PlayerInput forward{player, glm::vec3(1.0f, 0.0f, 0.0f), false, false, 0.0f, 0.0f};
+    encode_inputs(kGateway, std::span(&forward, 1), bytes);
+    send("input", bytes);
+    WorldTick moved;
+    for (int i = 0; i < 15; ++i) {
+        moved = tick();
+    }
+    const interest::Entity* after = find(moved, player);
+    ASSERT_NE(after, nullptr);
+    EXPECT_GT(glm::length(after->move.position - start), 20.0f); // half a second's walk
+
+    // An input for a bot is not the gateway's to give: counted, the bot left alone.
+    const PlayerInput steal{
+        first.entities[0].id, glm::vec3(0.0f, 1.0f, 0.0f), true, true, 0.0f, 0.0f};
+    encode_inputs(kGateway, std::span(&steal, 1), bytes);
+    send("input", bytes);
+    EXPECT_EQ(process_->stats().for_strangers, 2u);
+
+    const std::uint32_t ids[] = {player};
+    encode_id_batch(IdBatchKind::leave, kGateway, ids, bytes);
+    send("leave", bytes);
+    const WorldTick left = tick();
+    EXPECT_EQ(find(left, player), nullptr);
+    EXPECT_EQ(process_->stats().joins, 1u);
+    EXPECT_EQ(process_->stats().leaves, 1u);
+    EXPECT_EQ(process_->stats().inputs, 1u);
+}
+
+class ShortGatewayTimeout : public WorldProcessTest {
+protected:
+    [[nodiscard]] std::chrono::milliseconds gateway_timeout() const override { return 500ms; }
+};
+
+TEST_F(ShortGatewayTimeout, APlayerBelongsToItsGatewayAndLeavesWithIt) {
+    std::vector<std::byte> bytes;
+    encode_reserve_request(2, bytes);
+    const auto answer = gateway_link_->request(world_subject("t", "reserve"), bytes, 2000ms);
+    ASSERT_TRUE(answer.has_value());
+    const IdBlock block = decode_id_block(*answer, "reserve").value();
+    const std::uint32_t mine = block.first_id;
+    const std::uint32_t theirs = block.first_id + 1;
+    encode_id_batch(IdBatchKind::join, kGateway, std::span(&mine, 1), bytes);
+    send("join", bytes);
+    encode_id_batch(IdBatchKind::join, kGateway + 1, std::span(&theirs, 1), bytes);
+    send("join", bytes);
+    ASSERT_NE(find(tick(), mine), nullptr);
+
+    // Another gateway can neither steer nor remove this gateway's player.
+    const PlayerInput steer{mine, glm::vec3(1.0f, 0.0f, 0.0f), false, false, 0.0f, 0.0f};
+    encode_inputs(kGateway + 1, std::span(&steer, 1), bytes);
+    send("input", bytes);
+    encode_id_batch(IdBatchKind::leave, kGateway + 1, std::span(&mine, 1), bytes);
+    send("leave", bytes);
+    EXPECT_EQ(process_->stats().for_strangers, 2u);
+    beat(kGateway);
+    EXPECT_NE(find(tick(), mine), nullptr);
+
+    // Only the second gateway keeps sending (its heartbeat): past the timeout the first
+    // one's player is removed, the second one's stays.
+    const auto silent_since = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - silent_since < 800ms) {
+        beat(kGateway + 1);
+        std::this_thread::sleep_for(50ms);
+    }
+    const WorldTick after = tick();
+    EXPECT_EQ(find(after, mine), nullptr);
+    EXPECT_NE(find(after, theirs), nullptr);
+    EXPECT_EQ(process_->stats().gateways_lost, 1u);
+}
+
+TEST_F(WorldProcessTest, BadMessagesAreCountedAndTheWorldCarriesOn) {
+    const std::vector<std::byte> garbage(30, std::byte{0x41});
+    send("input", garbage);
+    send("leave", garbage);
+    send("join", garbage);
+    send("reserve", garbage);
+    const WorldProcessStats stats = process_->stats();
+    EXPECT_EQ(stats.bad_messages, 4u);
+    EXPECT_NE(stats.last_error.find("dsoc.t.reserve"), std::string::npos) << stats.last_error;
+    const WorldTick after = tick();
+    EXPECT_EQ(after.tick, 1u);
+    EXPECT_EQ(after.entities.size(), 10u);
+}
+
+TEST(WorldMessages, EachDecoderRefusesWhatItsEncoderCouldNotHaveWritten) {
+    std::vector<std::byte> bytes;
+    const PlayerInput in{7, glm::vec3(0.5f, -1.0f, 0.0f), true, true, 90.0f, -10.0f};
+    encode_inputs(kGateway, std::span(&in, 1), bytes);
+    auto decoded = decode_inputs(bytes, "s");
+    ASSERT_TRUE(decoded.ok());
+    EXPECT_EQ(decoded->gateway, kGateway);
+    ASSERT_EQ(decoded->entries.size(), 1u);
+    EXPECT_EQ(decoded->entries[0].entity_id, 7u);
+    EXPECT_TRUE(decoded->entries[0].jump && decoded->entries[0].fire);
+    EXPECT_EQ(decoded->entries[0].wish, glm::vec3(0.5f, -1.0f, 0.0f));
+    for (std::size_t n = 0; n < bytes.size(); ++n) {
+        EXPECT_FALSE(decode_inputs(std::span(bytes).first(n), "s").ok()) << n;
+    }
+    std::vector<std::byte> nan = bytes;
+    const float bad = std::numeric_limits<float>::quiet_NaN();
+    std::memcpy(nan.data() + 20 + 12, &bad, sizeof bad); // the yaw
+    EXPECT_NE(decode_inputs(nan, "s").error().message().find("input 0"), std::string::npos);
+    std::vector<std::byte> far = bytes;
+    const float two = 2.0f;
+    std::memcpy(far.data() + 20 + 4, &two, sizeof two); // wish x
+    EXPECT_FALSE(decode_inputs(far, "s").ok());
+    encode_inputs(0, std::span(&in, 1), bytes);
+    EXPECT_NE(decode_inputs(bytes, "s").error().message().find("gateway id 0"), std::string::npos);
+
+    const std::uint32_t ids[] = {3, 0};
+    encode_id_batch(IdBatchKind::leave, kGateway, ids, bytes);
+    EXPECT_NE(decode_id_batch(IdBatchKind::leave, bytes, "s").error().message().find("entry 1"),
+              std::string::npos);
+    EXPECT_FALSE(decode_id_batch(IdBatchKind::join, bytes, "s").ok()); // a leave is no join
+    encode_id_block({1, 0, 5}, bytes);
+    EXPECT_FALSE(decode_id_block(bytes, "s").ok()); // id 0
+    encode_id_block({1, 9, 5000}, bytes);
+    EXPECT_FALSE(decode_id_block(bytes, "s").ok()); // over kMaxIdBlock
+    encode_id_block({1, 9, 5}, bytes);
+    EXPECT_EQ(decode_id_block(bytes, "s")->first_id, 9u);
+    EXPECT_FALSE(decode_reserve_request(bytes, "s").ok()); // a block is no request
+    encode_reserve_request(0, bytes);
+    EXPECT_FALSE(decode_reserve_request(bytes, "s").ok());
+    encode_reserve_request(64, bytes);
+    EXPECT_EQ(decode_reserve_request(bytes, "s").value(), 64u);
+}
+
+} // namespace
+} // namespace dsoc::scaleout
