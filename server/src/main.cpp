@@ -21,6 +21,7 @@
 #include "dsoc/server/process_metrics.hpp"
 #include "dsoc/server/server.hpp"
 #include "dsoc/server/stats_report.hpp"
+#include "dsoc/server/world_role.hpp"
 
 #include "program_options.hpp"
 
@@ -29,6 +30,7 @@
 #include <boost/asio/signal_set.hpp>
 #include <spdlog/spdlog.h>
 
+#include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -72,6 +74,14 @@ void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
                  "Check the settings, the token key file and the map as a start would, "
                  "without serving; exit 0 when the server would start, 2 (naming every "
                  "problem) when not");
+    dsoc::cli::add_setting(app, "--role", config.role,
+                           "single (the whole game), world (the world of a scaled-out game, "
+                           "published on NATS) or gateway (clients and their interest, the "
+                           "world from NATS); docs/scale-out.md");
+    dsoc::cli::add_setting(app, "--nats-url", config.nats_url,
+                           "NATS server(s) of a world and its gateways (nats://host:port)");
+    dsoc::cli::add_setting(app, "--world-name", config.world_name,
+                           "The world's name: its NATS subjects are dsoc.<name>.*");
     dsoc::cli::add_setting(app, "--bind", config.bind_address, "Address to listen on");
     dsoc::cli::add_setting(app, "--port", config.port,
                            "TCP port (and UDP's, with --udp true); 0 picks a free one");
@@ -216,8 +226,8 @@ std::optional<int> read_settings(int argc, char** argv, ServerConfig& config,
 /// Whether the token key file can be read (Server::start() reads it again): a problem
 /// naming the file and why, or empty.
 std::string token_key_problem(const ServerConfig& config) {
-    if (config.insecure || config.token_key_file.empty()) {
-        return {}; // validate() names a missing key file
+    if (config.insecure || config.role == "world" || config.token_key_file.empty()) {
+        return {}; // no clients; or validate() names a missing key file
     }
     dsoc::protocol::TokenKey key;
     std::string error;
@@ -322,6 +332,49 @@ private:
     std::thread thread_;
 };
 
+/// Role world: the world process's tick loop on this thread, /metrics and the signals
+/// on `io`'s, until a signal or config.duration_s.
+int serve_world(const ServerConfig& config, const std::shared_ptr<const dsoc::maps::Map>& map,
+                boost::asio::io_context& io, dsoc::server::MetricsEndpoint& metrics,
+                std::atomic<dsoc::server::WorldRole*>& live) {
+    std::unique_ptr<dsoc::server::WorldRole> world;
+    try {
+        world = std::make_unique<dsoc::server::WorldRole>(config, map);
+    } catch (const dsoc::scaleout::NatsError& e) {
+        spdlog::error("cannot reach NATS for world '{}': {}", config.world_name, e.what());
+        return exit_failure;
+    }
+    live.store(world.get());
+    std::atomic<bool> stop{false};
+    boost::asio::signal_set signals(io, SIGINT, SIGTERM);
+    signals.async_wait([&](const boost::system::error_code& ec, int signal) {
+        if (!ec) {
+            spdlog::info("signal {} received", signal);
+            stop.store(true);
+        }
+    });
+    std::thread io_thread([&io] { io.run(); });
+    std::printf("world %s publishing on %s\n", config.world_name.c_str(),
+                dsoc::scaleout::world_subject(config.world_name, "tick").c_str());
+    std::fflush(stdout);
+    world->run(stop);
+    live.store(nullptr);
+    signals.cancel();
+    metrics.stop();
+    io.stop();
+    io_thread.join();
+    const auto s = world->stats();
+    std::printf("world %s: %llu ticks (%llu not published), %llu players joined, %llu left, "
+                "%llu inputs, %llu bad messages, %llu gateways lost\n",
+                config.world_name.c_str(), static_cast<unsigned long long>(s.ticks),
+                static_cast<unsigned long long>(s.ticks_not_published),
+                static_cast<unsigned long long>(s.joins), static_cast<unsigned long long>(s.leaves),
+                static_cast<unsigned long long>(s.inputs),
+                static_cast<unsigned long long>(s.bad_messages),
+                static_cast<unsigned long long>(s.gateways_lost));
+    return exit_ok;
+}
+
 /// The server, from the metrics endpoint to the end-of-run summary.
 int serve(const ServerConfig& config, const ProgramOptions& options) {
     dsoc::server::set_up_logging(config);
@@ -329,11 +382,15 @@ int serve(const ServerConfig& config, const ProgramOptions& options) {
 
     boost::asio::io_context io;
     dsoc::server::Server* live = nullptr; // the server, once it runs on this thread
+    std::atomic<dsoc::server::WorldRole*> world_live{nullptr}; // role world, once it runs
     const auto& build = dsoc::cli::build_info();
     dsoc::server::MetricsEndpoint metrics(
         io,
         [&] {
-            std::string text = live != nullptr ? live->render_metrics() : std::string();
+            dsoc::server::WorldRole* world = world_live.load();
+            std::string text = live != nullptr    ? live->render_metrics()
+                               : world != nullptr ? world->render_metrics()
+                                                  : std::string();
             dsoc::server::PrometheusText process;
             dsoc::server::write_build_info(process, build.version, build.commit);
             dsoc::server::write_process_metrics(
@@ -341,6 +398,11 @@ int serve(const ServerConfig& config, const ProgramOptions& options) {
             return text + process.text();
         },
         [&] {
+            if (dsoc::server::WorldRole* world = world_live.load(); world != nullptr) {
+                return world->stats().ticks > 0
+                           ? dsoc::server::Readiness{true, {}}
+                           : dsoc::server::Readiness{false, "waiting for the first tick"};
+            }
             return live != nullptr
                        ? live->readiness()
                        : dsoc::server::Readiness{false, "loading map '" + config.map + "'"};
@@ -363,6 +425,7 @@ int serve(const ServerConfig& config, const ProgramOptions& options) {
     // Before the server, which wakes it from its workers until it is destroyed.
     dsoc::server::IoLoop io_loop(io, std::chrono::microseconds(config.io_gather_us));
     std::unique_ptr<dsoc::server::Server> server;
+    std::shared_ptr<const dsoc::maps::Map> world_map; // role world: the map it runs on
     {
         const IoDuringStartup probes(io, config.metrics_port >= 0);
         const CheckedMap checked = load_checked_map(config);
@@ -384,14 +447,24 @@ int serve(const ServerConfig& config, const ProgramOptions& options) {
             "map {} loaded in {:.0f} ms: {} occluders, {} collision brushes, {} spawn points",
             checked.map->name, checked.load_ms, checked.map->occluders.size(),
             checked.map->collision_brushes.size(), checked.map->spawn_points.size());
-        // Builds the policy: loads the map's baked table from the cache, or bakes it.
-        server = std::make_unique<dsoc::server::Server>(io, config, checked.map);
+        if (config.role == "world") {
+            world_map = checked.map; // no policy, no table: the gateways hold those
+        } else {
+            // Builds the policy: loads the map's baked table from the cache, or bakes it.
+            server = std::make_unique<dsoc::server::Server>(io, config, checked.map);
+        }
+    }
+    if (world_map) {
+        return serve_world(config, world_map, io, metrics, world_live);
     }
     live = server.get();
     server->set_io_loop(&io_loop);
     std::uint16_t port = 0;
     try {
         port = server->start();
+    } catch (const dsoc::scaleout::NatsError& e) {
+        spdlog::error("cannot reach NATS for world '{}': {}", config.world_name, e.what());
+        return exit_failure;
     } catch (const std::exception& e) {
         spdlog::error("cannot start on {}:{}: {}", config.bind_address, config.port, e.what());
         return exit_failure;

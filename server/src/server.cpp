@@ -2,10 +2,13 @@
 
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/connect_token.hpp"
+#include "dsoc/scaleout/world_tick.hpp"
 #include "dsoc/server/interest_setup.hpp"
 
 #include <boost/asio/post.hpp>
 #include <spdlog/spdlog.h>
+
+#include <glm/common.hpp>
 
 #include <algorithm>
 
@@ -60,6 +63,13 @@ std::uint16_t Server::start() {
                  "threads={}",
                  config_.bind_address, port, config_.udp ? "tcp and udp" : "tcp", world_.map().name,
                  policy_->name(), config_.tick_rate, config_.bots, pool_.threads());
+    if (config_.role == "gateway") {
+        feed_ = std::make_unique<WorldFeed>(
+            io_, config_, scaleout::world_key(world_.map(), world_settings(config_)),
+            [this] { on_world_tick(); });
+        spdlog::info("gateway of world '{}' at {}: ticks come from the world process",
+                     config_.world_name, config_.nats_url);
+    }
     if (!config_.trace_file.empty()) {
         trace::TraceHeader header;
         header.map = world_.map().name;
@@ -82,7 +92,9 @@ std::uint16_t Server::start() {
     started_ = true;
     last_skip_log_ = Clock::now();
     schedule_ = TickSchedule(last_skip_log_, tick_period_);
-    schedule_tick();
+    if (!feed_) {
+        schedule_tick(); // a gateway's ticks start as the world's arrive
+    }
     return port;
 }
 
@@ -143,20 +155,38 @@ void Server::schedule_tick() {
     });
 }
 
+void Server::on_world_tick() {
+    if (started_ && !shutting_down_ && !phase_running_) {
+        start_tick(); // else the hand-over starts it
+    }
+}
+
 void Server::start_tick() {
     // Serial, on the I/O thread: nothing of the previous tick is in flight.
+    std::optional<scaleout::WorldTick> arrived;
+    if (feed_) {
+        arrived = feed_->take_newest();
+        if (!arrived) {
+            return; // taken by an earlier call: the next arrival starts the next tick
+        }
+    }
     tick_start_ = Clock::now();
-    if (schedule_.start_tick(tick_start_)) {
+    if (!feed_ && schedule_.start_tick(tick_start_)) {
         ++stats_.late_ticks;
     }
-    ++tick_;
+    tick_ = feed_ ? arrived->tick : tick_ + 1;
     apply_joins();
     apply_inputs();
-    const float dt = 1.0f / static_cast<float>(config_.tick_rate);
-    // The moves on the pool's threads (idle between phases); this thread waits.
-    world_.step(dt, [this](std::size_t count, const std::function<void(std::size_t)>& body) {
-        pool_.run(count, body);
-    });
+    if (feed_) {
+        tick_published_ns_ = arrived->published_ns;
+        scaleout::apply_world_tick(std::move(*arrived), world_);
+    } else {
+        const float dt = 1.0f / static_cast<float>(config_.tick_rate);
+        // The moves on the pool's threads (idle between phases); this thread waits.
+        world_.step(dt, [this](std::size_t count, const std::function<void(std::size_t)>& body) {
+            pool_.run(count, body);
+        });
+    }
     prepare_client_ticks(); // may disconnect slow clients
     culling_start_ = Clock::now();
     stats_.prepare_duration.observe(
@@ -195,6 +225,14 @@ void Server::finish_tick(Clock::time_point phase_end, std::exception_ptr error) 
         std::chrono::duration<double>(phase_end - culling_start_).count());
     stats_.cheapest_client_ticks += culling_budget_.cheapest.load(std::memory_order_relaxed);
     send_snapshots();
+    if (feed_ && tick_published_ns_ != 0) {
+        const double hop_s =
+            static_cast<double>(scaleout::monotonic_ns() - tick_published_ns_) * 1e-9;
+        stats_.world_hop.observe(hop_s);
+        if (stats_.world_hop_us.size() < kMaxTickSamples) {
+            stats_.world_hop_us.push_back(hop_s * 1e6);
+        }
+    }
     if (trace_ && !shutting_down_ && tick_ % static_cast<std::uint64_t>(config_.trace_every) == 0) {
         write_trace_tick();
     }
@@ -213,8 +251,10 @@ void Server::finish_tick(Clock::time_point phase_end, std::exception_ptr error) 
     }
     if (shutting_down_) {
         maybe_finish_shutdown();
-    } else {
+    } else if (!feed_) {
         schedule_tick();
+    } else if (feed_->tick_waiting()) {
+        asio::post(io_, [this] { on_world_tick(); }); // arrived during the phase
     }
 }
 
@@ -226,19 +266,38 @@ void Server::apply_joins() {
             continue; // left before its first tick: its id is never spawned
         }
         const std::uint32_t entity = it->second.session->entity_id();
-        world_.spawn_reserved(entity);
+        if (feed_) {
+            outgoing_ids_.push_back(entity); // spawned at the world's next step
+        } else {
+            world_.spawn_reserved(entity);
+        }
         policy_->add_viewer(id, entity);
         it->second.viewing = entity;
     }
     pending_joins_.clear();
+    if (feed_) {
+        feed_->send_joins(outgoing_ids_);
+        outgoing_ids_.clear();
+    }
 }
 
 void Server::apply_inputs() {
     // Each client's latest input since the last tick start (what the step would have
     // seen had it been applied on arrival).
     for (auto& [id, client] : clients_) {
+        const pb::ClientInput& input = client.input;
+        if (feed_ && (client.input_pending || client.fire_pending)) {
+            // For the world process, which applies it at its next step.
+            outgoing_inputs_.push_back(
+                {client.session->entity_id(),
+                 glm::clamp(glm::vec3(input.move_x(), input.move_y(), 0.0f), -1.0f, 1.0f),
+                 input.jump(), client.fire_pending, input.view_yaw(), input.view_pitch()});
+            client.watch = input.watch();
+            client.input_pending = false;
+            client.fire_pending = false;
+            continue;
+        }
         if (client.input_pending) {
-            const pb::ClientInput& input = client.input;
             world_.set_player_input(client.session->entity_id(),
                                     glm::vec3(input.move_x(), input.move_y(), input.move_z()),
                                     input.jump(), input.view_yaw(), input.view_pitch());
@@ -249,6 +308,10 @@ void Server::apply_inputs() {
             world_.fire(client.session->entity_id());
             client.fire_pending = false;
         }
+    }
+    if (feed_) {
+        feed_->send_inputs(outgoing_inputs_);
+        outgoing_inputs_.clear();
     }
 }
 
@@ -358,12 +421,19 @@ void Server::apply_leaves() {
         const auto it = sessions_.find(id);
         if (it != sessions_.end() && it->second->entity_id() != 0) {
             world_.remove(it->second->entity_id()); // not spawned yet: nothing to remove
+            if (feed_) {
+                outgoing_ids_.push_back(it->second->entity_id()); // and at the world
+            }
         }
         policy_->remove_viewer(id);
         clients_.erase(id);
         sessions_.erase(id);
     }
     pending_leaves_.clear();
+    if (feed_) {
+        feed_->send_leaves(outgoing_ids_);
+        outgoing_ids_.clear();
+    }
     maybe_finish_shutdown();
 }
 
@@ -443,7 +513,14 @@ void Server::on_hello(Connection& session, const pb::ClientHello& client_hello) 
     }
     // The entity is spawned (and the policy told) at the next tick start: a phase may
     // be reading the world now. The client learns its id at once.
-    const std::uint32_t entity = world_.reserve_player();
+    const std::uint32_t entity = feed_ ? feed_->take_entity_id() : world_.reserve_player();
+    if (entity == 0) {
+        session.disconnect(pb::DISCONNECT_REASON_SERVER_FULL,
+                           "the world process has reserved no entity ids for this gateway yet "
+                           "(is it running, at " +
+                               config_.nats_url + "?)");
+        return;
+    }
     session.set_entity_id(entity);
     pb::Envelope reply;
     auto& hello = *reply.mutable_server_hello();

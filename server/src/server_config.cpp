@@ -5,6 +5,7 @@
 #include "dsoc/visibility/shaft_occlusion.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -31,6 +32,20 @@ void check_range(std::vector<std::string>& problems, const char* field, std::int
 
 std::vector<std::string> validate(const ServerConfig& c) {
     std::vector<std::string> p;
+    check(p, c.role == "single" || c.role == "world" || c.role == "gateway", "role",
+          "must be one of single, world, gateway; got '" + c.role + "'");
+    check(p, c.role == "single" || !c.nats_url.empty(), "nats_url",
+          "must name a NATS server for role " + c.role);
+    check(p,
+          !c.world_name.empty() && c.world_name.size() <= 64 &&
+              std::all_of(c.world_name.begin(), c.world_name.end(),
+                          [](char ch) {
+                              return std::isalnum(static_cast<unsigned char>(ch)) != 0 ||
+                                     ch == '-' || ch == '_';
+                          }),
+          "world_name",
+          "must be 1..64 letters, digits, '-' or '_' (it is part of NATS subjects); got '" +
+              c.world_name + "'");
     check(p, !c.bind_address.empty(), "bind_address", "must not be empty");
     check_range(p, "tick_rate", c.tick_rate, 1, 240, " Hz");
     check_range(p, "bots", c.bots, 0, 100000);
@@ -99,7 +114,8 @@ std::vector<std::string> validate(const ServerConfig& c) {
           "must be at least tick_rate + 2 (an honest client sends one input per tick and a "
           "ping a second), got " +
               std::to_string(c.max_inputs_per_second));
-    check(p, c.insecure || !c.token_key_file.empty(), "token_key_file",
+    // The world role takes no clients, so it needs no key.
+    check(p, c.insecure || c.role == "world" || !c.token_key_file.empty(), "token_key_file",
           "required unless insecure = true (mint a key with dsoc-token keygen)");
     check(p, c.metrics_port >= -1 && c.metrics_port <= 65535, "metrics_port",
           "must be -1 (off), 0 (any free port) or 1..65535, got " + std::to_string(c.metrics_port));

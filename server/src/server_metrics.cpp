@@ -135,6 +135,36 @@ std::string Server::render_metrics() const {
         out.counter_family("dsoc_udp_datagrams_dropped_total",
                            "UDP datagrams dropped unanswered, by reason.", drops);
     }
+    if (feed_) {
+        const WorldFeedStats w = feed_->stats();
+        out.histogram("dsoc_gateway_world_hop_seconds",
+                      "Per tick, from the world process encoding the tick to this gateway handing "
+                      "its last snapshot to the kernel (one host's monotonic clock).",
+                      stats_.world_hop);
+        out.counter("dsoc_gateway_world_ticks_total",
+                    "World ticks received from the world process (decoded, for this world).",
+                    d(w.ticks_received));
+        out.counter("dsoc_gateway_world_ticks_skipped_total",
+                    "World ticks replaced by a newer one before they were served (the gateway "
+                    "fell behind and skipped to the newest).",
+                    d(w.ticks_skipped));
+        out.counter("dsoc_gateway_bad_messages_total",
+                    "Messages from NATS that did not decode, were of another world or went back "
+                    "in time.",
+                    d(w.bad_messages));
+        out.counter("dsoc_gateway_id_blocks_total",
+                    "Blocks of entity ids the world process reserved for this gateway.",
+                    d(w.id_blocks));
+        out.gauge("dsoc_gateway_ids_left", "Reserved entity ids not given to a player yet.",
+                  d(w.ids_left));
+        out.counter("dsoc_gateway_messages_not_sent_total",
+                    "Joins, inputs, leaves or reserve requests the NATS link refused.",
+                    d(w.not_sent));
+        out.counter("dsoc_gateway_nats_disconnects_total", "Connections to NATS lost.",
+                    d(w.nats_disconnects));
+        out.counter("dsoc_gateway_nats_reconnects_total", "Connections to NATS regained.",
+                    d(w.nats_reconnects));
+    }
     return out.text();
 }
 

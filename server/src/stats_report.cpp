@@ -27,6 +27,12 @@ std::string format_summary(const ServerStats& stats, const ServerConfig& config)
         out += fmt::format(" {}={}", reason, count);
     }
     out += "\n";
+    if (!stats.world_hop_us.empty()) {
+        const auto hop = common::summarize(stats.world_hop_us);
+        out += fmt::format("  world hop        p50 {:.1f} us  p99 {:.1f} us  max {:.1f} us  "
+                           "(world tick encoded -> snapshots sent)\n",
+                           hop.p50, hop.p99, hop.max);
+    }
     return out;
 }
 
@@ -51,6 +57,11 @@ std::string format_json(const ServerStats& stats, const ServerConfig& config) {
     j["entity_updates_sent"] = stats.entity_updates_sent;
     j["clients_accepted"] = stats.clients_accepted;
     j["disconnects"] = stats.disconnects;
+    if (!stats.world_hop_us.empty()) {
+        const auto hop = common::summarize(stats.world_hop_us);
+        j["world_hop_us"] = {
+            {"mean", hop.mean}, {"p50", hop.p50}, {"p99", hop.p99}, {"max", hop.max}};
+    }
     return j.dump(2);
 }
 

@@ -35,7 +35,9 @@ LoadReport summarize_sessions(const std::vector<std::shared_ptr<SimClient>>& ses
         group.clients += clients.emplace(group_name, c->setup().index).second ? 1 : 0;
         ++group.sessions;
         group.connected += s.hello_received ? 1 : 0;
-        group.failures += s.failure.empty() ? 0 : 1;
+        const bool failed = !s.failure.empty() && !s.failed_over;
+        group.failures += failed ? 1 : 0;
+        r.failovers += s.failed_over ? 1 : 0;
         if (s.hello_received) {
             ++r.connected;
             connect.add(s.connect_ms);
@@ -47,17 +49,17 @@ LoadReport summarize_sessions(const std::vector<std::shared_ptr<SimClient>>& ses
                 up_rate_sum += static_cast<double>(s.bytes_up) / s.active_seconds;
                 update_rate_sum += static_cast<double>(s.entity_updates) / s.active_seconds;
             }
-        } else if (!s.failure.empty()) {
+        } else if (failed) {
             ++r.connect_failures;
-        } else {
+        } else if (!s.failed_over) {
             ++r.cancelled_before_hello;
         }
-        if (!s.failure.empty()) {
+        if (failed) {
             ++r.failures;
             ++r.failures_by_reason[s.failure];
             r.failure_examples.try_emplace(s.failure, c->name() + ": " + s.failure_detail);
         }
-        r.unexpected_disconnects += s.unexpected_disconnect ? 1 : 0;
+        r.unexpected_disconnects += s.unexpected_disconnect && !s.failed_over ? 1 : 0;
         if (!s.disconnect_reason.empty()) {
             ++r.disconnect_reasons[s.disconnect_reason];
         }

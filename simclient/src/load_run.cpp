@@ -3,10 +3,13 @@
 #include "dsoc/simclient/failure_reason.hpp"
 
 #include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <memory>
+#include <tuple>
 
 namespace dsoc::simclient {
 
@@ -165,10 +168,53 @@ void LoadRun::follow(std::size_t g, int share, Clock::time_point now, double dt_
     }
 }
 
+namespace {
+/// Between a session lost with its server and its replacement at the next one.
+constexpr auto kFailoverPause = std::chrono::milliseconds(200);
+} // namespace
+
+std::pair<std::string, std::uint16_t> LoadRun::server_of(int index) const {
+    const std::size_t count = 1 + config_.more_servers.size();
+    const auto it = failovers_of_.find(index);
+    const std::size_t k = (static_cast<std::size_t>(index) +
+                           static_cast<std::size_t>(it == failovers_of_.end() ? 0 : it->second)) %
+                          count;
+    return k == 0 ? std::pair{config_.host, config_.port} : config_.more_servers[k - 1];
+}
+
+bool LoadRun::fails_over(const SimClient& client) const {
+    if (config_.more_servers.empty() || stopping_) {
+        return false;
+    }
+    // A client that keeps failing before its hello has tried every server twice: no
+    // server is up, and that is a failure, not a failover.
+    const auto it = failovers_of_.find(client.setup().index);
+    const std::size_t tried = it == failovers_of_.end() ? 0 : static_cast<std::size_t>(it->second);
+    if (!client.stats().hello_received && tried >= 2 * (1 + config_.more_servers.size())) {
+        return false;
+    }
+    const std::string& why = client.stats().failure;
+    return why == failure::refused || why == failure::timeout || why == failure::connection_lost ||
+           why == failure::connect_error || why == failure::server_shutdown;
+}
+
 void LoadRun::start_session(std::size_t g, int index) {
+    const std::shared_ptr<SimClient> client = start_client(g, index);
+    Slot slot{client, Clock::now(), false};
+    const ClientGroup& group = scenario_.groups[g];
+    if (group.behaviour == Behaviour::respawner) {
+        std::uniform_real_distribution<double> spread(0.5, 1.5);
+        slot.leave_at += std::chrono::microseconds(
+            static_cast<long>(group.respawn_every_s * spread(rng_) * 1e6));
+    }
+    groups_[g].slots.push_back(std::move(slot));
+}
+
+std::shared_ptr<SimClient> LoadRun::start_client(std::size_t g, int index) {
     SessionSetup setup;
     setup.group = &scenario_.groups[g];
     setup.index = index;
+    std::tie(setup.host, setup.port) = server_of(index);
     setup.session = clients_.size() * static_cast<std::size_t>(shard_.count) +
                     static_cast<std::size_t>(shard_.index);
     setup.connect_timeout_s = scenario_.connect_timeout_s;
@@ -178,20 +224,29 @@ void LoadRun::start_session(std::size_t g, int index) {
     setup.on_failure = [this](SimClient& c) { on_session_failure(c); };
     setup.on_closed = [this](SimClient& c) { on_session_closed(c); };
     auto client = std::make_shared<SimClient>(io_, config_, std::move(setup));
-    Slot slot{client, Clock::now(), false};
-    const ClientGroup& group = scenario_.groups[g];
-    if (group.behaviour == Behaviour::respawner) {
-        std::uniform_real_distribution<double> spread(0.5, 1.5);
-        slot.leave_at += std::chrono::microseconds(
-            static_cast<long>(group.respawn_every_s * spread(rng_) * 1e6));
-    }
     clients_.push_back(client);
-    groups_[g].slots.push_back(std::move(slot));
     client->start();
+    return client;
 }
 
 void LoadRun::on_session_failure(SimClient& client) {
     const ClientStats& s = client.stats();
+    if (fails_over(client)) {
+        // Replaced by a session of the same client at the next server once it closed.
+        client.mark_failed_over();
+        failing_over_.insert(&client);
+        ++failovers_;
+        const int index = client.setup().index;
+        ++failovers_of_[index];
+        if (config_.progress) {
+            const auto next = server_of(index);
+            std::fprintf(stderr, "[%5.1fs] %s lost %s:%u (%s), reconnecting to %s:%u\n",
+                         elapsed_s(), client.name().c_str(), client.setup().host.c_str(),
+                         static_cast<unsigned>(client.setup().port), s.failure.c_str(),
+                         next.first.c_str(), static_cast<unsigned>(next.second));
+        }
+        return;
+    }
     ++failures_;
     const std::uint64_t run_failures = ++shared_->failures;
     ++failures_by_reason_[s.failure];
@@ -220,6 +275,27 @@ void LoadRun::on_session_failure(SimClient& client) {
 }
 
 void LoadRun::on_session_closed(SimClient& client) {
+    if (failing_over_.erase(&client) != 0 && !stopping_) {
+        // The slot stays taken (the stages do not fill it with a new client) and gets a
+        // session of the same client at the next server after a pause: not under the
+        // closing session's own handler, and not in a tight loop while a server restarts.
+        auto timer = std::make_shared<asio::steady_timer>(io_, kFailoverPause);
+        timer->async_wait([this, lost = &client, timer](const boost::system::error_code& ec) {
+            if (ec || stopping_) {
+                maybe_finished();
+                return;
+            }
+            for (std::size_t g = 0; g < groups_.size(); ++g) {
+                for (Slot& slot : groups_[g].slots) {
+                    if (slot.client.get() == lost) { // still there: the stages kept it
+                        slot.client = start_client(g, lost->setup().index);
+                        return;
+                    }
+                }
+            }
+        });
+        return;
+    }
     if (!stopping_) {
         for (GroupState& gs : groups_) {
             for (auto it = gs.slots.begin(); it != gs.slots.end(); ++it) {

@@ -23,25 +23,35 @@ int usage_error(const std::string& what) {
     return dsoc::cli::exit_usage;
 }
 
-/// Splits HOST:PORT into `config`; false with `error` when malformed.
-bool parse_server(const std::string& server, dsoc::simclient::LoadConfig& config,
+/// Splits HOST:PORT[,HOST:PORT...] into `config` (the first as host and port, the
+/// others as more_servers); false with `error` when malformed.
+bool parse_server(const std::string& servers, dsoc::simclient::LoadConfig& config,
                   std::string& error) {
-    const auto colon = server.rfind(':');
-    if (colon == std::string::npos) {
-        error = "--server: expected HOST:PORT, got '" + server + "'";
-        return false;
-    }
-    config.host = server.substr(0, colon);
-    try {
-        const int port = std::stoi(server.substr(colon + 1));
-        if (port <= 0 || port > 65535) {
-            throw std::out_of_range("port");
+    std::vector<std::pair<std::string, std::uint16_t>> parsed;
+    std::size_t start = 0;
+    while (start <= servers.size()) {
+        const std::size_t comma = std::min(servers.find(',', start), servers.size());
+        const std::string server = servers.substr(start, comma - start);
+        start = comma + 1;
+        const auto colon = server.rfind(':');
+        if (colon == std::string::npos || colon == 0) {
+            error = "--server: expected HOST:PORT, got '" + server + "'";
+            return false;
         }
-        config.port = static_cast<std::uint16_t>(port);
-    } catch (const std::exception&) {
-        error = "--server: bad port in '" + server + "'";
-        return false;
+        try {
+            const int port = std::stoi(server.substr(colon + 1));
+            if (port <= 0 || port > 65535) {
+                throw std::out_of_range("port");
+            }
+            parsed.emplace_back(server.substr(0, colon), static_cast<std::uint16_t>(port));
+        } catch (const std::exception&) {
+            error = "--server: bad port in '" + server + "'";
+            return false;
+        }
     }
+    config.host = parsed.front().first;
+    config.port = parsed.front().second;
+    config.more_servers.assign(parsed.begin() + 1, parsed.end());
     return true;
 }
 
@@ -70,7 +80,10 @@ int main(int argc, char** argv) {
                  "for any reason, a protocol error, an unexpected server shutdown, a threshold "
                  "not met); 2 on a bad command line or scenario file."};
     dsoc::cli::set_up(app, kProgram);
-    dsoc::cli::add_setting(app, "--server", server, "Server address HOST:PORT");
+    dsoc::cli::add_setting(app, "--server", server,
+                           "Server address HOST:PORT; several, comma-separated, for the "
+                           "gateways of one world: clients are spread over them, and one that "
+                           "loses its server reconnects to the next (a failover)");
     auto* clients = dsoc::cli::add_setting(app, "--clients", config.clients, "Simulated clients")
                         ->check(CLI::Range(1, 100000));
     auto* duration = dsoc::cli::add_setting(app, "--duration", config.duration_s,
@@ -190,6 +203,11 @@ int main(int argc, char** argv) {
     }
     if (config.host == "localhost") {
         config.host = "127.0.0.1";
+    }
+    for (auto& [host, port] : config.more_servers) {
+        if (host == "localhost") {
+            host = "127.0.0.1";
+        }
     }
     config.progress = !quiet;
 

@@ -90,6 +90,11 @@ std::string format_summary(const LoadReport& r) {
     for (const auto& [reason, example] : r.failure_examples) {
         out += fmt::format("    {:<20} first: {}\n", reason, example);
     }
+    if (r.failovers > 0 || !r.config.more_servers.empty()) {
+        out += fmt::format("  failovers              {} (sessions that lost their server, each "
+                           "replaced at the next of {} servers)\n",
+                           r.failovers, 1 + r.config.more_servers.size());
+    }
     if (!r.groups.empty()) {
         out += "  groups                ";
         for (const auto& [name, g] : r.groups) {
@@ -141,6 +146,7 @@ std::string format_json(const LoadReport& r) {
     j["connect_failures"] = r.connect_failures;
     j["cancelled_before_hello"] = r.cancelled_before_hello;
     j["failures"] = r.failures;
+    j["failovers"] = r.failovers;
     j["failures_by_reason"] = r.failures_by_reason;
     j["failure_examples"] = r.failure_examples;
     j["failure_rate"] = r.failure_rate();

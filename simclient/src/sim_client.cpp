@@ -75,7 +75,7 @@ void SimClient::start() {
         self->close();
     });
     resolver_.async_resolve(
-        config_.host, std::to_string(config_.port),
+        setup_.host, std::to_string(setup_.port),
         [self = shared_from_this()](const boost::system::error_code& ec,
                                     const asio::ip::tcp::resolver::results_type& endpoints) {
             if (self->state_ != State::connecting) {
@@ -84,7 +84,7 @@ void SimClient::start() {
             if (ec) {
                 self->stats_.connect_failed = true;
                 self->fail(failure::of_connect_error(ec, true),
-                           "resolve " + self->config_.host + ": " + ec.message());
+                           "resolve " + self->setup_.host + ": " + ec.message());
                 self->close();
                 return;
             }
@@ -106,8 +106,8 @@ void SimClient::on_resolved(const asio::ip::tcp::resolver::results_type& endpoin
                             if (ec) {
                                 self->stats_.connect_failed = true;
                                 self->fail(failure::of_connect_error(ec, false),
-                                           fmt::format("connect to {}:{}: {}", self->config_.host,
-                                                       self->config_.port, ec.message()));
+                                           fmt::format("connect to {}:{}: {}", self->setup_.host,
+                                                       self->setup_.port, ec.message()));
                                 self->close();
                                 return;
                             }
@@ -168,8 +168,8 @@ void SimClient::connect_udp(const asio::ip::tcp::resolver::results_type& endpoin
     handlers.on_refused = [weak](const boost::system::error_code& ec) {
         if (auto self = weak.lock(); self && self->state_ != State::closed) {
             self->stats_.connect_failed = true;
-            self->fail(failure::refused, fmt::format("UDP to {}:{}: {}", self->config_.host,
-                                                     self->config_.port, ec.message()));
+            self->fail(failure::refused, fmt::format("UDP to {}:{}: {}", self->setup_.host,
+                                                     self->setup_.port, ec.message()));
             self->close();
         }
     };

@@ -11,6 +11,9 @@ namespace dsoc::server {
 /// server_config.hpp. `Config` is ServerConfig or const ServerConfig.
 template <class Config, class Visitor>
 void visit_config_fields(Config& config, Visitor&& visit) {
+    visit("role", config.role);
+    visit("nats_url", config.nats_url);
+    visit("world_name", config.world_name);
     visit("bind_address", config.bind_address);
     visit("port", config.port);
     visit("tick_rate", config.tick_rate);

@@ -26,6 +26,12 @@
 // per-client buffers until the hand-over (or at once when no phase runs). /metrics
 // reads only I/O-thread state (the TBV count is the one taken at the last hand-over).
 // One tick at a time: the next tick is scheduled at the hand-over.
+//
+// As an interest gateway (config.role "gateway", docs/scale-out.md) the server does not
+// move the world: a tick starts when the world process's next tick arrives over NATS
+// (the newest, when several did), the world is mirrored from it, and the joins,
+// inputs and leaves go to the world process instead of the world (they take effect
+// at its next step). Hellos are answered with ids the world reserved for this gateway.
 
 #include "dsoc/interest/game_world.hpp"
 #include "dsoc/interest/hearing.hpp"
@@ -41,6 +47,7 @@
 #include "dsoc/server/session.hpp"
 #include "dsoc/server/tick_schedule.hpp"
 #include "dsoc/server/udp_endpoint.hpp"
+#include "dsoc/server/world_feed.hpp"
 #include "dsoc/trace/trace_writer.hpp"
 
 #include <boost/asio/io_context.hpp>
@@ -117,6 +124,11 @@ struct ServerStats {
     std::uint64_t acked_snapshots_against_baseline = 0;
     std::uint64_t acked_snapshots_whole = 0;
     std::uint64_t acked_baseline_age_ticks = 0;
+    /// Role gateway, per tick: from the world process encoding the tick to this gateway
+    /// handing the tick's last snapshot to the kernel (both clocks CLOCK_MONOTONIC, so
+    /// meaningful when both run on one host). Microseconds, and as a histogram.
+    std::vector<double> world_hop_us;
+    DurationHistogram world_hop;
 };
 
 class Server final : private ConnectionHost {
@@ -151,6 +163,8 @@ public:
     [[nodiscard]] const UdpEndpoint* udp_endpoint() const { return udp_.get(); }
     [[nodiscard]] const ServerConfig& config() const { return config_; }
     [[nodiscard]] std::size_t session_count() const { return sessions_.size(); }
+    /// The world process's feed (role "gateway", after start()), else null.
+    [[nodiscard]] const WorldFeed* world_feed() const { return feed_.get(); }
     [[nodiscard]] std::uint64_t tick() const { return tick_; }
     /// Whether the server takes players, for /readyz: from the end of its first tick
     /// (start() ran, the tick loop runs) until shutdown() begins. Call on the io_context
@@ -180,6 +194,8 @@ private:
 
     void accept_next();
     void schedule_tick();
+    /// Role gateway: a world tick arrived (on the I/O thread).
+    void on_world_tick();
     void start_tick();
     void finish_tick(std::chrono::steady_clock::time_point phase_end, std::exception_ptr error);
     void apply_joins();
@@ -215,7 +231,11 @@ private:
     std::chrono::steady_clock::time_point last_skip_log_; // skips are logged every 10 s at most
     std::uint64_t skipped_since_log_ = 0;
     std::uint64_t tick_ = 0;
-    interest::GameWorld world_;
+    interest::GameWorld world_;           // role gateway: a mirror of the world process's
+    std::unique_ptr<WorldFeed> feed_;     // role gateway, from start()
+    std::uint64_t tick_published_ns_ = 0; // role gateway: this tick's WorldTick::published_ns
+    std::vector<scaleout::PlayerInput> outgoing_inputs_; // role gateway: this tick's inputs
+    std::vector<std::uint32_t> outgoing_ids_;            // role gateway: joins or leaves
     std::unique_ptr<interest::InterestPolicy> policy_;
     std::map<std::uint32_t, Client> clients_;                       // active (after hello)
     std::map<std::uint32_t, std::shared_ptr<Connection>> sessions_; // all open connections

@@ -24,6 +24,17 @@ struct DsocSetting {
 };
 
 struct ServerConfig {
+    /// What this process is (docs/scale-out.md): "single", the whole game in one
+    /// process; "world", the authoritative world of a scaled-out game (no clients: it
+    /// moves the entities and publishes each tick on NATS); "gateway", an interest
+    /// gateway (clients, their interest and snapshots; the world mirrored from NATS).
+    std::string role = "single";
+    /// The NATS server(s) a world and its gateways meet at ("nats://host:port",
+    /// comma-separated).
+    std::string nats_url = "nats://127.0.0.1:4222";
+    /// The world's name: its NATS subjects are dsoc.<world_name>.*.
+    /// [Limit: 1..64 of letters, digits, '-' and '_']
+    std::string world_name = "dsoc";
     /// Address to listen on. Loopback by default: expose deliberately.
     std::string bind_address = "127.0.0.1";
     /// TCP port, and UDP's with `udp`; 0 picks a free port (printed at start).

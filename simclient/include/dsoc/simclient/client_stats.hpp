@@ -21,6 +21,10 @@ struct ClientStats {
     /// refused").
     std::string failure;
     std::string failure_detail;
+    /// The session lost its server and another session of the same client took over at
+    /// the next server (LoadConfig::more_servers): `failure` says why, but the report
+    /// counts it as a failover, not as a failure or an unexpected disconnect.
+    bool failed_over = false;
     std::uint32_t entity_id = 0;
     std::uint64_t bytes_down = 0; ///< frame headers included
     std::uint64_t bytes_up = 0;

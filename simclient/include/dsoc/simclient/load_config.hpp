@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace dsoc::simclient {
@@ -17,6 +18,12 @@ namespace dsoc::simclient {
 struct LoadConfig {
     std::string host = "127.0.0.1";
     std::uint16_t port = 27960;
+    /// More servers of the same game beside host:port, e.g. the interest gateways of
+    /// one scaled-out world (docs/scale-out.md). Client i starts at server i modulo
+    /// their count (host:port first); a session that loses its server (refused, timed
+    /// out, connection lost or shut down before the run's end) is replaced at once by
+    /// one of the same client at the next server: a failover, counted, not a failure.
+    std::vector<std::pair<std::string, std::uint16_t>> more_servers;
     /// Simulated clients. [Limit: 1..100000]
     int clients = 32;
     /// Whole run, ramp-up included. [Units: s] [Limit: > 0]

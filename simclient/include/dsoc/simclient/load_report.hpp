@@ -41,6 +41,9 @@ struct LoadReport {
     /// unresolvable, unauthorized, version_mismatch, dropped_by_server, server_shutdown,
     /// connection_lost, connect_error, protocol_error); one reason per session.
     std::uint64_t failures = 0;
+    /// Sessions that lost their server and were replaced at the next one
+    /// (LoadConfig::more_servers); not failures.
+    std::uint64_t failovers = 0;
     std::map<std::string, std::uint64_t> failures_by_reason;
     /// The first failure of each reason: "sim-0: connect to 127.0.0.1:1: Connection refused".
     std::map<std::string, std::string> failure_examples;

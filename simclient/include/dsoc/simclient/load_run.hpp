@@ -133,8 +133,16 @@ private:
 
     void control();
     void follow(std::size_t group, int share, Clock::time_point now, double dt_s);
+    /// A new slot of `group` with a session of client `index`.
     void start_session(std::size_t group, int index);
+    /// A session of client `index` of `group`, started (for a slot of the caller's).
+    std::shared_ptr<SimClient> start_client(std::size_t group, int index);
     void on_session_failure(SimClient& client);
+    /// Whether `client`'s failure means its server is gone and the run has another to
+    /// try (LoadConfig::more_servers).
+    [[nodiscard]] bool fails_over(const SimClient& client) const;
+    /// The server client `index` uses now: its first, moved on by its failovers.
+    [[nodiscard]] std::pair<std::string, std::uint16_t> server_of(int index) const;
     void on_session_closed(SimClient& client);
     [[nodiscard]] ShardSecond count_second();
     void maybe_finished();
@@ -164,6 +172,9 @@ private:
     int peak_connected_ = 0;
     int connected_told_ = 0; ///< this shard's part of shared_->connected
     std::uint64_t failures_ = 0;
+    std::uint64_t failovers_ = 0;
+    std::map<int, int> failovers_of_;         ///< by client index
+    std::set<const SimClient*> failing_over_; ///< replaced once closed
     std::map<std::string, std::uint64_t> failures_by_reason_;
     // the current second
     std::uint64_t last_bytes_down_ = 0;

@@ -37,7 +37,10 @@ class SimClient;
 struct SessionSetup {
     /// Behaviour and network conditions; nullptr: a wanderer without added latency.
     const ClientGroup* group = nullptr;
-    int index = 0;                  ///< names the client (name_prefix + index) and its token id
+    int index = 0; ///< names the client (name_prefix + index) and its token id
+    /// The server this session connects to (one of LoadConfig's).
+    std::string host = "127.0.0.1";
+    std::uint16_t port = 27960;
     std::uint64_t session = 0;      ///< this session's number in the run (seeds its inputs)
     double connect_timeout_s = 5.0; ///< resolve + connect + hello
     /// A server shutdown announced before this fails the session; after it, it is the
@@ -59,6 +62,8 @@ public:
     void stop();
 
     [[nodiscard]] const ClientStats& stats() const { return stats_; }
+    /// Its run replaced it with a session at the next server (ClientStats::failed_over).
+    void mark_failed_over() { stats_.failed_over = true; }
     [[nodiscard]] const SessionSetup& setup() const { return setup_; }
     [[nodiscard]] std::string name() const;
     [[nodiscard]] bool connected() const { return state_ == State::active; }
