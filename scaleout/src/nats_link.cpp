@@ -52,6 +52,10 @@ void on_reconnected(natsConnection* /*nc*/, void* closure) {
     NatsLink::count_reconnect(closure);
 }
 
+void on_closed(natsConnection* /*nc*/, void* closure) {
+    NatsLink::mark_closed(closure);
+}
+
 } // namespace
 
 void NatsSubscription::deliver(void* closure, const NatsMessage& message) {
@@ -71,10 +75,11 @@ NatsSubscription::~NatsSubscription() {
         return;
     }
     // Unsubscribe, then wait until the client has returned from the last handler call
-    // (its completion callback); a closed connection has none left to make.
+    // (its completion callback, which the client makes for every closed asynchronous
+    // subscription): a handler still running must not find this object gone.
     if (natsSubscription_Unsubscribe(sub) == NATS_OK) {
         std::unique_lock lock(mutex_);
-        completed_.wait_for(lock, std::chrono::seconds(5), [this] { return complete_; });
+        completed_.wait(lock, [this] { return complete_; });
     }
     natsSubscription_Destroy(sub);
 }
@@ -93,6 +98,13 @@ void NatsLink::count_reconnect(void* closure) {
     ++static_cast<NatsLink*>(closure)->reconnects_;
 }
 
+void NatsLink::mark_closed(void* closure) {
+    auto* self = static_cast<NatsLink*>(closure);
+    const std::lock_guard lock(self->closed_mutex_);
+    self->closed_ = true;
+    self->closed_cv_.notify_all();
+}
+
 NatsLink::NatsLink(NatsLinkOptions options) : options_(std::move(options)) {
     const std::string& url = options_.url;
     Options o;
@@ -109,6 +121,7 @@ NatsLink::NatsLink(NatsLinkOptions options) : options_(std::move(options)) {
           "natsOptions_SetDisconnectedCB", url);
     check(natsOptions_SetReconnectedCB(o.p, on_reconnected, this), "natsOptions_SetReconnectedCB",
           url);
+    check(natsOptions_SetClosedCB(o.p, on_closed, this), "natsOptions_SetClosedCB", url);
     natsConnection* c = nullptr;
     check(natsConnection_Connect(&c, o.p), "connect", url);
     conn_ = c;
@@ -116,7 +129,13 @@ NatsLink::NatsLink(NatsLinkOptions options) : options_(std::move(options)) {
 
 NatsLink::~NatsLink() {
     if (conn_ != nullptr) {
+        // The client calls its disconnected callback, then the closed one, on a thread of
+        // its own after Close returns: both hold `this`, so wait for the last of them.
         natsConnection_Close(conn(conn_));
+        {
+            std::unique_lock lock(closed_mutex_);
+            closed_cv_.wait(lock, [this] { return closed_; });
+        }
         natsConnection_Destroy(conn(conn_));
     }
 }

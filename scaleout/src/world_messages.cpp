@@ -69,6 +69,22 @@ std::uint32_t batch_count(std::span<const std::byte> bytes, std::size_t entry_by
 
 } // namespace
 
+std::optional<GatewayMessage> gateway_message_of(std::span<const std::byte> bytes) {
+    if (bytes.size() < sizeof(std::uint32_t)) {
+        return std::nullopt;
+    }
+    switch (get<std::uint32_t>(bytes, 0)) {
+    case kJoinMagic:
+        return GatewayMessage::join;
+    case kInputMagic:
+        return GatewayMessage::input;
+    case kLeaveMagic:
+        return GatewayMessage::leave;
+    default:
+        return std::nullopt;
+    }
+}
+
 void encode_id_block(const IdBlock& block, std::vector<std::byte>& out) {
     out.clear();
     put_header(out, kBlockMagic);

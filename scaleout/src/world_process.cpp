@@ -16,22 +16,21 @@ WorldProcess::WorldProcess(std::shared_ptr<const maps::Map> map,
     : world_(settings, map), dt_(1.0f / static_cast<float>(tick_rate)), link_(link),
       name_(std::move(world_name)), key_(scaleout::world_key(*map, settings)),
       gateway_timeout_(gateway_timeout) {
-    reserve_sub_ = link_.subscribe(world_subject(name_, "reserve"),
-                                   [this](const NatsMessage& m) { on_reserve(m); });
-    join_sub_ =
-        link_.subscribe(world_subject(name_, "join"), [this](const NatsMessage& m) { on_join(m); });
-    input_sub_ = link_.subscribe(world_subject(name_, "input"),
-                                 [this](const NatsMessage& m) { on_input(m); });
-    leave_sub_ = link_.subscribe(world_subject(name_, "leave"),
-                                 [this](const NatsMessage& m) { on_leave(m); });
+    // messages_received() counts a message once its effects are in.
+    reserve_sub_ = link_.subscribe(world_subject(name_, "reserve"), [this](const NatsMessage& m) {
+        on_reserve(m);
+        ++received_;
+    });
+    gateway_sub_ = link_.subscribe(world_subject(name_, "gateway"), [this](const NatsMessage& m) {
+        on_gateway(m);
+        ++received_;
+    });
 }
 
 WorldProcess::~WorldProcess() {
     // No callback runs after these (NatsSubscription), so none touches a dead world.
     reserve_sub_.reset();
-    join_sub_.reset();
-    input_sub_.reset();
-    leave_sub_.reset();
+    gateway_sub_.reset();
 }
 
 void WorldProcess::refuse(const std::string& why) {
@@ -48,7 +47,6 @@ bool WorldProcess::accepted(const maps::Result<T>& decoded) {
 }
 
 void WorldProcess::on_reserve(const NatsMessage& message) {
-    ++received_;
     auto count = decode_reserve_request(message.data, std::string(message.subject));
     IdBlock block{key_, 0, 0};
     {
@@ -58,6 +56,12 @@ void WorldProcess::on_reserve(const NatsMessage& message) {
         }
         if (message.reply.empty()) {
             refuse(std::string(message.subject) + ": a reserve request without a reply subject");
+            return;
+        }
+        if (reserved_.size() + count.value() > kMaxReserved) {
+            refuse(std::string(message.subject) + ": " + std::to_string(reserved_.size()) +
+                   " ids reserved and not joined already (at most " + std::to_string(kMaxReserved) +
+                   ")");
             return;
         }
         // tick() steps under the same lock, so no step sees half a block.
@@ -89,8 +93,25 @@ bool WorldProcess::owns(std::uint64_t gateway, std::uint32_t id) {
     return false;
 }
 
+void WorldProcess::on_gateway(const NatsMessage& message) {
+    switch (gateway_message_of(message.data).value_or(static_cast<GatewayMessage>(255))) {
+    case GatewayMessage::join:
+        on_join(message);
+        break;
+    case GatewayMessage::input:
+        on_input(message);
+        break;
+    case GatewayMessage::leave:
+        on_leave(message);
+        break;
+    default: {
+        const std::lock_guard lock(mutex_);
+        refuse(std::string(message.subject) + ": not a join, input or leave batch");
+    }
+    }
+}
+
 void WorldProcess::on_join(const NatsMessage& message) {
-    ++received_;
     auto batch = decode_id_batch(IdBatchKind::join, message.data, std::string(message.subject));
     const std::lock_guard lock(mutex_);
     if (!accepted(batch)) {
@@ -110,7 +131,6 @@ void WorldProcess::on_join(const NatsMessage& message) {
 }
 
 void WorldProcess::on_input(const NatsMessage& message) {
-    ++received_;
     auto batch = decode_inputs(message.data, std::string(message.subject));
     const std::lock_guard lock(mutex_);
     if (!accepted(batch)) {
@@ -128,7 +148,6 @@ void WorldProcess::on_input(const NatsMessage& message) {
 }
 
 void WorldProcess::on_leave(const NatsMessage& message) {
-    ++received_;
     auto batch = decode_id_batch(IdBatchKind::leave, message.data, std::string(message.subject));
     const std::lock_guard lock(mutex_);
     if (!accepted(batch)) {
@@ -147,8 +166,16 @@ void WorldProcess::on_leave(const NatsMessage& message) {
 void WorldProcess::tick() {
     {
         const std::lock_guard lock(mutex_);
-        // Gateways silent past the timeout: their players leave with them.
+        // Gateways silent past the timeout: their players leave with them. After the
+        // world's own connection came back, every gateway gets a whole timeout again: it
+        // could not be heard meanwhile.
         const auto now = std::chrono::steady_clock::now();
+        if (const std::uint64_t reconnects = link_.reconnects(); reconnects != seen_reconnects_) {
+            seen_reconnects_ = reconnects;
+            for (auto& [id, gateway] : gateways_) {
+                gateway.last_heard = now;
+            }
+        }
         for (auto it = gateways_.begin(); it != gateways_.end();) {
             if (now - it->second.last_heard <= gateway_timeout_) {
                 ++it;

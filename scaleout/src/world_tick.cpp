@@ -147,6 +147,11 @@ std::uint64_t world_key(const maps::Map& map, const interest::WorldSettings& set
         h = mix(h, bits_of(spawn.yaw_degrees));
     }
     h = mix(h, map.hazards.size());
+    for (const maps::Hazard& hazard : map.hazards) {
+        for (int a = 0; a < 3; ++a) {
+            h = mix(h, bits_of(hazard.bounds.min[a]) << 32 | bits_of(hazard.bounds.max[a]));
+        }
+    }
     h = mix(h, bits_of(settings.max_speed));
     h = mix(h, static_cast<std::uint64_t>(settings.teams));
     h = mix(h, static_cast<std::uint64_t>(settings.respawn_delay_ticks));
@@ -310,8 +315,8 @@ maps::Result<WorldTick> decode_world_tick(std::span<const std::byte> bytes,
             if (const std::string problem = move_problem(respawn.arrival); !problem.empty()) {
                 return fail(part, "respawn arrival: " + problem);
             }
-            if (!(respawn.yaw_degrees >= -360.0f && respawn.yaw_degrees <= 360.0f)) {
-                return fail(part, "respawn yaw outside -360..360");
+            if (!(std::fabs(respawn.yaw_degrees) <= 1.0e6f)) { // a map's spawn yaw, unwrapped
+                return fail(part, "respawn yaw not finite or beyond 1e6 degrees");
             }
             if (respawn.ticks_left < 1 || respawn.ticks_left > kMaxRespawnTicks) {
                 return fail(part, "respawn ticks left " + std::to_string(respawn.ticks_left) +

@@ -66,7 +66,12 @@ std::uint16_t Server::start() {
     if (config_.role == "gateway") {
         feed_ = std::make_unique<WorldFeed>(
             io_, config_, scaleout::world_key(world_.map(), world_settings(config_)),
-            [this] { on_world_tick(); });
+            [this] { on_world_tick(); },
+            [this] {
+                if (io_loop_ != nullptr) { // set before start(), never changed after
+                    io_loop_->wake();
+                }
+            });
         spdlog::info("gateway of world '{}' at {}: ticks come from the world process",
                      config_.world_name, config_.nats_url);
     }
@@ -225,9 +230,10 @@ void Server::finish_tick(Clock::time_point phase_end, std::exception_ptr error) 
         std::chrono::duration<double>(phase_end - culling_start_).count());
     stats_.cheapest_client_ticks += culling_budget_.cheapest.load(std::memory_order_relaxed);
     send_snapshots();
-    if (feed_ && tick_published_ns_ != 0) {
-        const double hop_s =
-            static_cast<double>(scaleout::monotonic_ns() - tick_published_ns_) * 1e-9;
+    if (const std::uint64_t now = scaleout::monotonic_ns();
+        feed_ && tick_published_ns_ != 0 && now > tick_published_ns_) {
+        // Another host's clock can be ahead: only a later `now` is a hop.
+        const double hop_s = static_cast<double>(now - tick_published_ns_) * 1e-9;
         stats_.world_hop.observe(hop_s);
         if (stats_.world_hop_us.size() < kMaxTickSamples) {
             stats_.world_hop_us.push_back(hop_s * 1e6);

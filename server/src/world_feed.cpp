@@ -29,9 +29,10 @@ std::uint64_t random_gateway_id() {
 } // namespace
 
 WorldFeed::WorldFeed(boost::asio::io_context& io, const ServerConfig& config,
-                     std::uint64_t world_key, std::function<void()> on_tick)
+                     std::uint64_t world_key, std::function<void()> on_tick,
+                     std::function<void()> wake)
     : io_(io), world_name_(config.world_name), world_key_(world_key),
-      gateway_id_(random_gateway_id()), on_tick_(std::move(on_tick)) {
+      gateway_id_(random_gateway_id()), on_tick_(std::move(on_tick)), wake_(std::move(wake)) {
     scaleout::NatsLinkOptions options;
     options.url = config.nats_url;
     options.name = "dsoc-gateway:" + config.world_name;
@@ -72,6 +73,9 @@ void WorldFeed::on_tick_message(const scaleout::NatsMessage& message) {
         newest_ = std::move(tick).value();
     }
     boost::asio::post(io_, [this] { on_tick_(); });
+    if (wake_) {
+        wake_();
+    }
 }
 
 void WorldFeed::on_block_message(const scaleout::NatsMessage& message) {
@@ -143,21 +147,21 @@ void WorldFeed::send(const std::string& what, const std::vector<std::byte>& byte
 void WorldFeed::send_joins(std::span<const std::uint32_t> entity_ids) {
     if (!entity_ids.empty()) {
         scaleout::encode_id_batch(scaleout::IdBatchKind::join, gateway_id_, entity_ids, bytes_);
-        send("join", bytes_);
+        send("gateway", bytes_);
     }
 }
 
 void WorldFeed::send_inputs(std::span<const scaleout::PlayerInput> inputs) {
     // Empty or not: the world takes it as this gateway's heartbeat.
     scaleout::encode_inputs(gateway_id_, inputs, bytes_);
-    send("input", bytes_);
+    send("gateway", bytes_);
     maybe_reserve(); // also retries an unanswered reserve, once a tick at most
 }
 
 void WorldFeed::send_leaves(std::span<const std::uint32_t> entity_ids) {
     if (!entity_ids.empty()) {
         scaleout::encode_id_batch(scaleout::IdBatchKind::leave, gateway_id_, entity_ids, bytes_);
-        send("leave", bytes_);
+        send("gateway", bytes_);
     }
 }
 

@@ -186,11 +186,11 @@ bool LoadRun::fails_over(const SimClient& client) const {
     if (config_.more_servers.empty() || stopping_) {
         return false;
     }
-    // A client that keeps failing before its hello has tried every server twice: no
-    // server is up, and that is a failure, not a failover.
-    const auto it = failovers_of_.find(client.setup().index);
-    const std::size_t tried = it == failovers_of_.end() ? 0 : static_cast<std::size_t>(it->second);
-    if (!client.stats().hello_received && tried >= 2 * (1 + config_.more_servers.size())) {
+    // A client whose sessions failed before their hello at every server twice in a row:
+    // no server is up, and that is a failure, not a failover.
+    const auto it = unanswered_of_.find(client.setup().index);
+    const std::size_t in_a_row = it == unanswered_of_.end() ? 0 : it->second;
+    if (!client.stats().hello_received && in_a_row >= 2 * (1 + config_.more_servers.size())) {
         return false;
     }
     const std::string& why = client.stats().failure;
@@ -235,9 +235,10 @@ void LoadRun::on_session_failure(SimClient& client) {
         // Replaced by a session of the same client at the next server once it closed.
         client.mark_failed_over();
         failing_over_.insert(&client);
-        ++failovers_;
         const int index = client.setup().index;
         ++failovers_of_[index];
+        std::size_t& in_a_row = unanswered_of_[index];
+        in_a_row = s.hello_received ? 0 : in_a_row + 1;
         if (config_.progress) {
             const auto next = server_of(index);
             std::fprintf(stderr, "[%5.1fs] %s lost %s:%u (%s), reconnecting to %s:%u\n",

@@ -57,7 +57,7 @@ protected:
     void beat(std::uint64_t id) {
         std::vector<std::byte> bytes;
         encode_inputs(id, {}, bytes);
-        send("input", bytes);
+        send("gateway", bytes);
     }
     void TearDown() override {
         ticks_.reset();
@@ -117,7 +117,7 @@ TEST_F(WorldProcessTest, AJoinedPlayerMovesByItsInputsAndLeaves) {
 
     const std::uint32_t joins[] = {player, 999'999}; // the second was never reserved
     encode_id_batch(IdBatchKind::join, kGateway, joins, bytes);
-    send("join", bytes);
+    send("gateway", bytes);
     EXPECT_EQ(process_->stats().for_strangers, 1u);
     const WorldTick joined = tick();
     const interest::Entity* spawned = find(joined, player);
@@ -127,7 +127,7 @@ TEST_F(WorldProcessTest, AJoinedPlayerMovesByItsInputsAndLeaves) {
 
     const PlayerInput forward{player, glm::vec3(1.0f, 0.0f, 0.0f), false, false, 0.0f, 0.0f};
     encode_inputs(kGateway, std::span(&forward, 1), bytes);
-    send("input", bytes);
+    send("gateway", bytes);
     WorldTick moved;
     for (int i = 0; i < 15; ++i) {
         moved = tick();
@@ -140,12 +140,12 @@ TEST_F(WorldProcessTest, AJoinedPlayerMovesByItsInputsAndLeaves) {
     const PlayerInput steal{
         first.entities[0].id, glm::vec3(0.0f, 1.0f, 0.0f), true, true, 0.0f, 0.0f};
     encode_inputs(kGateway, std::span(&steal, 1), bytes);
-    send("input", bytes);
+    send("gateway", bytes);
     EXPECT_EQ(process_->stats().for_strangers, 2u);
 
     const std::uint32_t ids[] = {player};
     encode_id_batch(IdBatchKind::leave, kGateway, ids, bytes);
-    send("leave", bytes);
+    send("gateway", bytes);
     const WorldTick left = tick();
     EXPECT_EQ(find(left, player), nullptr);
     EXPECT_EQ(process_->stats().joins, 1u);
@@ -167,17 +167,17 @@ TEST_F(ShortGatewayTimeout, APlayerBelongsToItsGatewayAndLeavesWithIt) {
     const std::uint32_t mine = block.first_id;
     const std::uint32_t theirs = block.first_id + 1;
     encode_id_batch(IdBatchKind::join, kGateway, std::span(&mine, 1), bytes);
-    send("join", bytes);
+    send("gateway", bytes);
     encode_id_batch(IdBatchKind::join, kGateway + 1, std::span(&theirs, 1), bytes);
-    send("join", bytes);
+    send("gateway", bytes);
     ASSERT_NE(find(tick(), mine), nullptr);
 
     // Another gateway can neither steer nor remove this gateway's player.
     const PlayerInput steer{mine, glm::vec3(1.0f, 0.0f, 0.0f), false, false, 0.0f, 0.0f};
     encode_inputs(kGateway + 1, std::span(&steer, 1), bytes);
-    send("input", bytes);
+    send("gateway", bytes);
     encode_id_batch(IdBatchKind::leave, kGateway + 1, std::span(&mine, 1), bytes);
-    send("leave", bytes);
+    send("gateway", bytes);
     EXPECT_EQ(process_->stats().for_strangers, 2u);
     beat(kGateway);
     EXPECT_NE(find(tick(), mine), nullptr);
@@ -197,9 +197,14 @@ TEST_F(ShortGatewayTimeout, APlayerBelongsToItsGatewayAndLeavesWithIt) {
 
 TEST_F(WorldProcessTest, BadMessagesAreCountedAndTheWorldCarriesOn) {
     const std::vector<std::byte> garbage(30, std::byte{0x41});
-    send("input", garbage);
-    send("leave", garbage);
-    send("join", garbage);
+    send("gateway", garbage); // no magic of ours
+    std::vector<std::byte> bad_input;
+    encode_inputs(0, {}, bad_input); // gateway id 0
+    send("gateway", bad_input);
+    std::vector<std::byte> bad_leave;
+    encode_id_batch(IdBatchKind::leave, kGateway, {}, bad_leave);
+    bad_leave.pop_back(); // truncated
+    send("gateway", bad_leave);
     send("reserve", garbage);
     const WorldProcessStats stats = process_->stats();
     EXPECT_EQ(stats.bad_messages, 4u);

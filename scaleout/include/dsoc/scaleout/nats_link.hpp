@@ -120,12 +120,16 @@ public:
     /// For the client's callbacks (nats_link.cpp).
     static void count_disconnect(void* closure);
     static void count_reconnect(void* closure);
+    static void mark_closed(void* closure);
 
 private:
     NatsLinkOptions options_;
     void* conn_ = nullptr; ///< the client's natsConnection
     std::atomic<std::uint64_t> disconnects_{0};
     std::atomic<std::uint64_t> reconnects_{0};
+    std::mutex closed_mutex_; ///< the client's closed callback, awaited by the destructor
+    std::condition_variable closed_cv_;
+    bool closed_ = false;
 };
 
 } // namespace dsoc::scaleout

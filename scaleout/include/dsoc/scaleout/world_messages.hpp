@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -65,6 +66,12 @@ void encode_inputs(std::uint64_t gateway, std::span<const PlayerInput> inputs,
 /// over 1, unknown flags, entity id 0).
 [[nodiscard]] maps::Result<Batch<PlayerInput>> decode_inputs(std::span<const std::byte> bytes,
                                                              const std::string& source);
+
+/// What a message on a world's `gateway` subject is, by its magic: joins, inputs and
+/// leaves share one subject so that the world takes them in the order a gateway sent
+/// them (a leave never before its join). Nothing for another magic.
+enum class GatewayMessage : std::uint8_t { join, input, leave };
+[[nodiscard]] std::optional<GatewayMessage> gateway_message_of(std::span<const std::byte> bytes);
 
 /// Joins (players to spawn, ids from the gateway's blocks) and leaves: lists of entity
 /// ids, each kind with its own magic so that one is never read as the other.

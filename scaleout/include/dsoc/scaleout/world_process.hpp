@@ -8,10 +8,10 @@
 //   tick    - published after every step: the world tick;
 //   reserve - request (a count) -> IdBlock: entity ids the asking gateway gives its new
 //             players (so that a hello is answered at once, without a round trip);
-//   join    - ids from those blocks of players to spawn at the next step;
-//   input   - PlayerInput batches, applied at the next step (the newest per player);
-//             every gateway sends one each tick, empty or not: its heartbeat;
-//   leave   - ids of players who left, removed at the next step.
+//   gateway - a gateway's joins (ids from its blocks, spawned at the next step), input
+//             batches (applied at the next step, the newest per player; one each
+//             tick, empty or not: its heartbeat) and leaves (removed at the next
+//             step), on one subject so that they arrive in the order it sent them.
 // Each joined player belongs to the gateway that joined it: only that gateway's inputs
 // and leave touch it, and when a gateway has not been heard for `gateway_timeout` (it
 // was killed, or cut off) its players are removed at the next step and it is counted
@@ -63,6 +63,9 @@ public:
     /// How long a gateway may be silent before its players are removed: longer than a
     /// NATS restart, shorter than a client's patience for snapshots.
     static constexpr std::chrono::milliseconds kDefaultGatewayTimeout{3000};
+    /// Ids reserved and not joined, over all gateways, at most: reserve requests beyond
+    /// it are refused (counted), so no publisher can make the world hold ids without end.
+    static constexpr std::size_t kMaxReserved = 65'536;
     ~WorldProcess();
     WorldProcess(const WorldProcess&) = delete;
     WorldProcess& operator=(const WorldProcess&) = delete;
@@ -79,6 +82,8 @@ public:
 
 private:
     void on_reserve(const NatsMessage& message);
+    /// A message on the `gateway` subject, to the handler its magic names.
+    void on_gateway(const NatsMessage& message);
     void on_join(const NatsMessage& message);
     void on_input(const NatsMessage& message);
     void on_leave(const NatsMessage& message);
@@ -111,16 +116,15 @@ private:
     Gateway& heard_from(std::uint64_t id);
 
     std::chrono::milliseconds gateway_timeout_;
-    std::set<std::uint32_t> reserved_; ///< handed out in blocks, not joined yet
+    std::uint64_t seen_reconnects_ = 0; ///< the link's reconnections tick() has seen
+    std::set<std::uint32_t> reserved_;  ///< handed out in blocks, not joined yet
     std::unordered_map<std::uint32_t, std::uint64_t> owner_; ///< joined player -> its gateway
     std::unordered_map<std::uint64_t, Gateway> gateways_;
     WorldProcessStats stats_;
     std::atomic<std::uint64_t> received_{0};
 
     std::unique_ptr<NatsSubscription> reserve_sub_;
-    std::unique_ptr<NatsSubscription> join_sub_;
-    std::unique_ptr<NatsSubscription> input_sub_;
-    std::unique_ptr<NatsSubscription> leave_sub_;
+    std::unique_ptr<NatsSubscription> gateway_sub_;
 };
 
 } // namespace dsoc::scaleout

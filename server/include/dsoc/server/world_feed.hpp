@@ -43,11 +43,13 @@ struct WorldFeedStats {
 
 class WorldFeed {
 public:
-    /// `on_tick` runs on `io`'s thread after each tick arrives. Connects to
-    /// config.nats_url (throws scaleout::NatsError when no server answers), subscribes
-    /// and asks the world for a first block of ids.
+    /// `on_tick` runs on `io`'s thread after each tick arrives; `wake` (optional, any
+    /// thread) is called right after it is posted, for a loop that gathers events
+    /// (io_loop.hpp) to take it up at once. Connects to config.nats_url (throws
+    /// scaleout::NatsError when no server answers), subscribes and asks the world for a
+    /// first block of ids.
     WorldFeed(boost::asio::io_context& io, const ServerConfig& config, std::uint64_t world_key,
-              std::function<void()> on_tick);
+              std::function<void()> on_tick, std::function<void()> wake = {});
     ~WorldFeed();
     WorldFeed(const WorldFeed&) = delete;
     WorldFeed& operator=(const WorldFeed&) = delete;
@@ -79,6 +81,7 @@ private:
     std::uint64_t world_key_;
     std::uint64_t gateway_id_; ///< this gateway's id in its messages to the world
     std::function<void()> on_tick_;
+    std::function<void()> wake_;
     std::unique_ptr<scaleout::NatsLink> link_;
     std::string inbox_;
     std::vector<std::byte> bytes_;

@@ -172,9 +172,9 @@ private:
     int peak_connected_ = 0;
     int connected_told_ = 0; ///< this shard's part of shared_->connected
     std::uint64_t failures_ = 0;
-    std::uint64_t failovers_ = 0;
-    std::map<int, int> failovers_of_;         ///< by client index
-    std::set<const SimClient*> failing_over_; ///< replaced once closed
+    std::map<int, int> failovers_of_;          ///< by client index: moves it to the next server
+    std::map<int, std::size_t> unanswered_of_; ///< its failovers in a row before a hello
+    std::set<const SimClient*> failing_over_;  ///< replaced once closed
     std::map<std::string, std::uint64_t> failures_by_reason_;
     // the current second
     std::uint64_t last_bytes_down_ = 0;
