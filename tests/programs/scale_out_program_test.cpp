@@ -107,8 +107,7 @@ TEST(ScaleOut, GatewaysServeOneWorldThroughAKilledGatewayAndANatsRestart) {
         return sample(http_body(http_get(static_cast<std::uint16_t>(world_metrics), "/metrics")),
                       name);
     };
-    EXPECT_TRUE(eventually(
-        [&] { return world_sample("dsoc_world_leaves_total") == 9.0; }, 10s))
+    EXPECT_TRUE(eventually([&] { return world_sample("dsoc_world_leaves_total") == 9.0; }, 10s))
         << world_sample("dsoc_world_leaves_total");
     EXPECT_EQ(world_sample("dsoc_world_joins_total"), 9.0);
     EXPECT_EQ(world_sample("dsoc_world_gateways_lost_total"), 1.0);
