@@ -52,9 +52,10 @@ void world_tick(std::span<const std::byte> bytes) {
     const std::uint64_t key = tick->world_key;
     const std::uint64_t number = tick->tick;
     const std::uint64_t published = tick->published_ns;
+    const std::uint64_t instance = tick->instance;
     dsoc::scaleout::apply_world_tick(std::move(tick).value(), mirror());
     std::vector<std::byte> again;
-    dsoc::scaleout::encode_world_tick(mirror(), key, number, again, published);
+    dsoc::scaleout::encode_world_tick(mirror(), key, number, again, published, instance);
     same_or_abort(again, bytes);
 }
 
@@ -68,8 +69,8 @@ void other_message(std::uint8_t which, std::span<const std::byte> bytes) {
         }
         break;
     case 1:
-        if (auto count = dsoc::scaleout::decode_reserve_request(bytes, "fuzz"); count.ok()) {
-            dsoc::scaleout::encode_reserve_request(count.value(), again);
+        if (auto request = dsoc::scaleout::decode_reserve_request(bytes, "fuzz"); request.ok()) {
+            dsoc::scaleout::encode_reserve_request(request.value(), again);
             same_or_abort(again, bytes);
         }
         break;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <random>
 
 namespace dsoc::scaleout {
 
@@ -14,8 +15,8 @@ constexpr std::uint32_t kReserveMagic = 0x52575344u; // "DSWR"
 constexpr std::uint32_t kJoinMagic = 0x4a575344u;    // "DSWJ"
 constexpr std::uint32_t kInputMagic = 0x49575344u;   // "DSWI"
 constexpr std::uint32_t kLeaveMagic = 0x4c575344u;   // "DSWL"
-constexpr std::size_t kBlockBytes = 24;
-constexpr std::size_t kReserveBytes = 12;
+constexpr std::size_t kBlockBytes = 32;
+constexpr std::size_t kReserveBytes = 20;
 constexpr std::size_t kBatchHeaderBytes = 20;
 constexpr std::size_t kInputBytes = 24;
 constexpr std::uint8_t kJump = 1;
@@ -69,6 +70,15 @@ std::uint32_t batch_count(std::span<const std::byte> bytes, std::size_t entry_by
 
 } // namespace
 
+std::uint64_t random_id() {
+    std::random_device device;
+    std::uint64_t id = 0;
+    while (id == 0) {
+        id = (static_cast<std::uint64_t>(device()) << 32) ^ device();
+    }
+    return id;
+}
+
 std::optional<GatewayMessage> gateway_message_of(std::span<const std::byte> bytes) {
     if (bytes.size() < sizeof(std::uint32_t)) {
         return std::nullopt;
@@ -89,6 +99,7 @@ void encode_id_block(const IdBlock& block, std::vector<std::byte>& out) {
     out.clear();
     put_header(out, kBlockMagic);
     put(out, block.world_key);
+    put(out, block.instance);
     put(out, block.first_id);
     put(out, block.count);
 }
@@ -102,8 +113,11 @@ maps::Result<IdBlock> decode_id_block(std::span<const std::byte> bytes, const st
                                std::to_string(bytes.size()) + " bytes, an id block has " +
                                    std::to_string(kBlockBytes)};
     }
-    IdBlock block{get<std::uint64_t>(bytes, 8), get<std::uint32_t>(bytes, 16),
-                  get<std::uint32_t>(bytes, 20)};
+    IdBlock block{get<std::uint64_t>(bytes, 8), get<std::uint64_t>(bytes, 16),
+                  get<std::uint32_t>(bytes, 24), get<std::uint32_t>(bytes, 28)};
+    if (block.instance == 0) {
+        return maps::LoadError{source, "id block", "world instance 0"};
+    }
     if (block.first_id == 0 || block.count == 0 || block.count > kMaxIdBlock ||
         block.first_id > UINT32_MAX - block.count) {
         return maps::LoadError{source, "id block",
@@ -114,14 +128,15 @@ maps::Result<IdBlock> decode_id_block(std::span<const std::byte> bytes, const st
     return block;
 }
 
-void encode_reserve_request(std::uint32_t count, std::vector<std::byte>& out) {
+void encode_reserve_request(const ReserveRequest& request, std::vector<std::byte>& out) {
     out.clear();
     put_header(out, kReserveMagic);
-    put(out, count);
+    put(out, request.gateway);
+    put(out, request.count);
 }
 
-maps::Result<std::uint32_t> decode_reserve_request(std::span<const std::byte> bytes,
-                                                   const std::string& source) {
+maps::Result<ReserveRequest> decode_reserve_request(std::span<const std::byte> bytes,
+                                                    const std::string& source) {
     if (std::string problem = header_problem(bytes, kReserveMagic, "reserve request");
         !problem.empty()) {
         return maps::LoadError{source, "reserve request", problem};
@@ -131,12 +146,15 @@ maps::Result<std::uint32_t> decode_reserve_request(std::span<const std::byte> by
                                std::to_string(bytes.size()) + " bytes, a reserve request has " +
                                    std::to_string(kReserveBytes)};
     }
-    const auto count = get<std::uint32_t>(bytes, 8);
-    if (count == 0 || count > kMaxIdBlock) {
-        return maps::LoadError{source, "reserve request",
-                               std::to_string(count) + " ids asked for (1..4096)"};
+    const ReserveRequest request{get<std::uint64_t>(bytes, 8), get<std::uint32_t>(bytes, 16)};
+    if (request.gateway == 0) {
+        return maps::LoadError{source, "reserve request", "gateway id 0"};
     }
-    return count;
+    if (request.count == 0 || request.count > kMaxIdBlock) {
+        return maps::LoadError{source, "reserve request",
+                               std::to_string(request.count) + " ids asked for (1..4096)"};
+    }
+    return request;
 }
 
 void encode_inputs(std::uint64_t gateway, std::span<const PlayerInput> inputs,

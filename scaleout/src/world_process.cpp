@@ -15,7 +15,7 @@ WorldProcess::WorldProcess(std::shared_ptr<const maps::Map> map,
                            std::string world_name, std::chrono::milliseconds gateway_timeout)
     : world_(settings, map), dt_(1.0f / static_cast<float>(tick_rate)), link_(link),
       name_(std::move(world_name)), key_(scaleout::world_key(*map, settings)),
-      gateway_timeout_(gateway_timeout) {
+      instance_(random_id()), gateway_timeout_(gateway_timeout) {
     // messages_received() counts a message once its effects are in.
     reserve_sub_ = link_.subscribe(world_subject(name_, "reserve"), [this](const NatsMessage& m) {
         on_reserve(m);
@@ -46,51 +46,67 @@ bool WorldProcess::accepted(const maps::Result<T>& decoded) {
     return decoded.ok();
 }
 
+WorldProcess::Gateway& WorldProcess::heard_from(std::uint64_t id) {
+    Gateway& gateway = gateways_[id];
+    gateway.last_heard = std::chrono::steady_clock::now();
+    if (gateway.lost != 0) {
+        gateway.lost = 0;
+        ++stats_.gateways_back;
+    }
+    return gateway;
+}
+
+bool WorldProcess::make_room(std::size_t count) {
+    while (reserved_ + count > kMaxReserved) {
+        auto longest_lost = gateways_.end();
+        for (auto it = gateways_.begin(); it != gateways_.end(); ++it) {
+            if (it->second.lost != 0 &&
+                (longest_lost == gateways_.end() || it->second.lost < longest_lost->second.lost)) {
+                longest_lost = it;
+            }
+        }
+        if (longest_lost == gateways_.end()) {
+            return false;
+        }
+        reserved_ -= longest_lost->second.reserved.size();
+        gateways_.erase(longest_lost);
+        ++stats_.gateways_forgotten;
+    }
+    return true;
+}
+
 void WorldProcess::on_reserve(const NatsMessage& message) {
-    auto count = decode_reserve_request(message.data, std::string(message.subject));
-    IdBlock block{key_, 0, 0};
+    auto request = decode_reserve_request(message.data, std::string(message.subject));
+    IdBlock block{key_, instance_, 0, 0};
     {
         const std::lock_guard lock(mutex_);
-        if (!accepted(count)) {
+        if (!accepted(request)) {
             return;
         }
         if (message.reply.empty()) {
             refuse(std::string(message.subject) + ": a reserve request without a reply subject");
             return;
         }
-        if (reserved_.size() + count.value() > kMaxReserved) {
-            refuse(std::string(message.subject) + ": " + std::to_string(reserved_.size()) +
+        Gateway& gateway = heard_from(request->gateway);
+        if (!make_room(request->count)) {
+            refuse(std::string(message.subject) + ": " + std::to_string(reserved_) +
                    " ids reserved and not joined already (at most " + std::to_string(kMaxReserved) +
                    ")");
             return;
         }
         // tick() steps under the same lock, so no step sees half a block.
-        block.count = count.value();
+        block.count = request->count;
         block.first_id = world_.reserve_player();
-        reserved_.insert(block.first_id);
+        gateway.reserved.insert(block.first_id);
         for (std::uint32_t i = 1; i < block.count; ++i) {
-            reserved_.insert(world_.reserve_player()); // consecutive: reserve_player counts up
+            gateway.reserved.insert(world_.reserve_player()); // consecutive: it counts up
         }
+        reserved_ += block.count;
         stats_.ids_reserved += block.count;
     }
     std::vector<std::byte> bytes;
     encode_id_block(block, bytes);
     (void)link_.publish(message.reply, bytes); // lost: the gateway asks again, ids stay unused
-}
-
-WorldProcess::Gateway& WorldProcess::heard_from(std::uint64_t id) {
-    Gateway& gateway = gateways_[id];
-    gateway.last_heard = std::chrono::steady_clock::now();
-    return gateway;
-}
-
-bool WorldProcess::owns(std::uint64_t gateway, std::uint32_t id) {
-    const auto owner = owner_.find(id);
-    if (owner != owner_.end() && owner->second == gateway) {
-        return true;
-    }
-    ++stats_.for_strangers; // a bot, a stranger, another gateway's or a player who left
-    return false;
 }
 
 void WorldProcess::on_gateway(const NatsMessage& message) {
@@ -119,14 +135,16 @@ void WorldProcess::on_join(const NatsMessage& message) {
     }
     Gateway& gateway = heard_from(batch->gateway);
     for (const std::uint32_t id : batch->entries) {
-        if (reserved_.erase(id) == 0) {
-            ++stats_.for_strangers; // never reserved, or joined already
-            continue;
+        if (gateway.players.count(id) != 0) {
+            ++stats_.repeated; // a re-sent join that had arrived after all
+        } else if (gateway.reserved.erase(id) != 0) {
+            --reserved_;
+            gateway.players.insert(id);
+            joining_.emplace_back(batch->gateway, id);
+            ++stats_.joins;
+        } else {
+            ++stats_.for_strangers; // never reserved for this gateway
         }
-        joining_.push_back(id);
-        owner_[id] = batch->gateway;
-        gateway.players.insert(id);
-        ++stats_.joins;
     }
 }
 
@@ -136,14 +154,16 @@ void WorldProcess::on_input(const NatsMessage& message) {
     if (!accepted(batch)) {
         return;
     }
-    heard_from(batch->gateway);
+    const Gateway& gateway = heard_from(batch->gateway);
     for (const PlayerInput& in : batch->entries) {
-        if (owns(batch->gateway, in.entity_id)) {
+        if (gateway.players.count(in.entity_id) != 0) {
             PlayerInput& newest = inputs_[in.entity_id];
             const bool fired = newest.fire; // a shot is never lost to a newer input
             newest = in;
             newest.fire = newest.fire || fired;
-        }
+        } else if (gateway.reserved.count(in.entity_id) == 0) {
+            ++stats_.for_strangers; // a bot, another gateway's, a player who left
+        }                           // else its player, removed while it was lost, not re-joined yet
     }
 }
 
@@ -155,10 +175,38 @@ void WorldProcess::on_leave(const NatsMessage& message) {
     }
     Gateway& gateway = heard_from(batch->gateway);
     for (const std::uint32_t id : batch->entries) {
-        if (owns(batch->gateway, id)) {
-            owner_.erase(id);
-            gateway.players.erase(id);
+        if (gateway.players.erase(id) != 0) {
             leaving_.push_back(id);
+        } else if (gateway.reserved.erase(id) != 0) {
+            --reserved_; // its join never arrived, or it left while its gateway was lost
+        } else if (world_.find(id) == nullptr ||
+                   std::find(leaving_.begin(), leaving_.end(), id) != leaving_.end()) {
+            ++stats_.repeated; // a re-sent leave: gone already, or going at the next step
+        } else {
+            ++stats_.for_strangers; // a bot, another gateway's player
+        }
+    }
+}
+
+void WorldProcess::lose_silent_gateways(std::chrono::steady_clock::time_point now) {
+    for (auto it = gateways_.begin(); it != gateways_.end();) {
+        Gateway& gateway = it->second;
+        if (gateway.lost != 0 || now - gateway.last_heard <= gateway_timeout_) {
+            ++it;
+            continue;
+        }
+        for (const std::uint32_t id : gateway.players) {
+            leaving_.push_back(id);
+            gateway.reserved.insert(id); // for its re-join, should it come back
+        }
+        reserved_ += gateway.players.size();
+        gateway.players.clear();
+        gateway.lost = ++losses_;
+        ++stats_.gateways_lost;
+        if (gateway.reserved.empty()) {
+            it = gateways_.erase(it); // nothing to keep for it
+        } else {
+            ++it;
         }
     }
 }
@@ -166,9 +214,8 @@ void WorldProcess::on_leave(const NatsMessage& message) {
 void WorldProcess::tick() {
     {
         const std::lock_guard lock(mutex_);
-        // Gateways silent past the timeout: their players leave with them. After the
-        // world's own connection came back, every gateway gets a whole timeout again: it
-        // could not be heard meanwhile.
+        // After the world's own connection came back, every gateway gets a whole
+        // timeout again: it could not be heard meanwhile.
         const auto now = std::chrono::steady_clock::now();
         if (const std::uint64_t reconnects = link_.reconnects(); reconnects != seen_reconnects_) {
             seen_reconnects_ = reconnects;
@@ -176,23 +223,15 @@ void WorldProcess::tick() {
                 gateway.last_heard = now;
             }
         }
-        for (auto it = gateways_.begin(); it != gateways_.end();) {
-            if (now - it->second.last_heard <= gateway_timeout_) {
-                ++it;
-                continue;
-            }
-            for (const std::uint32_t id : it->second.players) {
-                owner_.erase(id);
-                leaving_.push_back(id);
-            }
-            ++stats_.gateways_lost;
-            it = gateways_.erase(it);
-        }
+        lose_silent_gateways(now);
         // In id order, as the single-process server spawns them (GameWorld keeps
         // entities in id order whatever the order; the spawn points are dealt in turn).
-        std::sort(joining_.begin(), joining_.end());
-        for (const std::uint32_t id : joining_) {
-            if (owner_.count(id) != 0) { // not left before its first tick
+        std::sort(joining_.begin(), joining_.end(),
+                  [](const auto& a, const auto& b) { return a.second < b.second; });
+        for (const auto& [gateway, id] : joining_) {
+            const auto it = gateways_.find(gateway);
+            if (it != gateways_.end() && it->second.players.count(id) != 0 &&
+                world_.find(id) == nullptr) { // not left (or lost) before its first step
                 world_.spawn_reserved(id);
             }
         }
@@ -216,7 +255,7 @@ void WorldProcess::tick() {
         world_.step(dt_);
         ++tick_;
         ++stats_.ticks;
-        encode_world_tick(world_, key_, tick_, bytes_, monotonic_ns());
+        encode_world_tick(world_, key_, tick_, bytes_, monotonic_ns(), instance_);
     }
     if (!link_.publish(world_subject(name_, "tick"), bytes_)) {
         const std::lock_guard lock(mutex_);

@@ -15,7 +15,7 @@ namespace dsoc::scaleout {
 
 namespace {
 
-constexpr std::size_t kHeaderBytes = 48;
+constexpr std::size_t kHeaderBytes = 56;
 constexpr std::size_t kEntityBytes = 68;
 constexpr std::size_t kRespawnBytes = 48;
 
@@ -172,8 +172,8 @@ std::uint64_t monotonic_ns() {
 }
 
 void encode_world_tick(const interest::GameWorld& world, std::uint64_t world_key,
-                       std::uint64_t tick, std::vector<std::byte>& out,
-                       std::uint64_t published_ns) {
+                       std::uint64_t tick, std::vector<std::byte>& out, std::uint64_t published_ns,
+                       std::uint64_t instance) {
     out.clear();
     out.reserve(kHeaderBytes + world.entities().size() * kEntityBytes);
     Writer w(out);
@@ -181,6 +181,7 @@ void encode_world_tick(const interest::GameWorld& world, std::uint64_t world_key
     w.put(kWorldTickVersion);
     w.put(std::uint16_t{0});
     w.put(world_key);
+    w.put(instance);
     w.put(tick);
     w.put(world.frags());
     w.put(published_ns);
@@ -238,6 +239,10 @@ maps::Result<WorldTick> decode_world_tick(std::span<const std::byte> bytes,
         return fail("header", "a tick of another world (map or settings differ: key " +
                                   std::to_string(tick.world_key) + ", expected " +
                                   std::to_string(*expected_key) + ")");
+    }
+    tick.instance = r.get<std::uint64_t>();
+    if (tick.instance == 0) {
+        return fail("header", "world instance 0 (a world process picks one that is not)");
     }
     tick.tick = r.get<std::uint64_t>();
     tick.frags = r.get<std::uint64_t>();

@@ -365,13 +365,14 @@ int serve_world(const ServerConfig& config, const std::shared_ptr<const dsoc::ma
     io_thread.join();
     const auto s = world->stats();
     std::printf("world %s: %llu ticks (%llu not published), %llu players joined, %llu left, "
-                "%llu inputs, %llu bad messages, %llu gateways lost\n",
+                "%llu inputs, %llu bad messages, %llu gateways lost (%llu back)\n",
                 config.world_name.c_str(), static_cast<unsigned long long>(s.ticks),
                 static_cast<unsigned long long>(s.ticks_not_published),
                 static_cast<unsigned long long>(s.joins), static_cast<unsigned long long>(s.leaves),
                 static_cast<unsigned long long>(s.inputs),
                 static_cast<unsigned long long>(s.bad_messages),
-                static_cast<unsigned long long>(s.gateways_lost));
+                static_cast<unsigned long long>(s.gateways_lost),
+                static_cast<unsigned long long>(s.gateways_back));
     return exit_ok;
 }
 

@@ -6,6 +6,7 @@
 #include "dsoc/server/interest_setup.hpp"
 
 #include <boost/asio/post.hpp>
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <glm/common.hpp>
@@ -168,23 +169,26 @@ void Server::on_world_tick() {
 
 void Server::start_tick() {
     // Serial, on the I/O thread: nothing of the previous tick is in flight.
-    std::optional<scaleout::WorldTick> arrived;
+    std::optional<TakenTick> arrived;
     if (feed_) {
         arrived = feed_->take_newest();
         if (!arrived) {
             return; // taken by an earlier call: the next arrival starts the next tick
+        }
+        if (arrived->restart) {
+            end_sessions_of_a_past_world(*arrived->restart);
         }
     }
     tick_start_ = Clock::now();
     if (!feed_ && schedule_.start_tick(tick_start_)) {
         ++stats_.late_ticks;
     }
-    tick_ = feed_ ? arrived->tick : tick_ + 1;
+    tick_ = feed_ ? world_tick_base_ + arrived->tick.tick : tick_ + 1;
     apply_joins();
     apply_inputs();
     if (feed_) {
-        tick_published_ns_ = arrived->published_ns;
-        scaleout::apply_world_tick(std::move(*arrived), world_);
+        tick_published_ns_ = arrived->tick.published_ns;
+        scaleout::apply_world_tick(std::move(arrived->tick), world_);
     } else {
         const float dt = 1.0f / static_cast<float>(config_.tick_rate);
         // The moves on the pool's threads (idle between phases); this thread waits.
@@ -264,6 +268,27 @@ void Server::finish_tick(Clock::time_point phase_end, std::exception_ptr error) 
     }
 }
 
+void Server::end_sessions_of_a_past_world(const WorldRestart& restart) {
+    world_tick_base_ = tick_; // the new world counts from 1
+    std::vector<std::shared_ptr<Connection>> ending;
+    for (auto& [id, client] : clients_) {
+        if (client.session->entity_id() != 0) {
+            client.session->set_entity_id(0);
+            ending.push_back(client.session);
+        }
+    }
+    // Not while iterating: a disconnect may close the session at once.
+    const std::string why = fmt::format("the world process restarted (instance {:016x} after "
+                                        "{:016x}): your player is gone; connect again",
+                                        restart.new_instance, restart.old_instance);
+    for (const auto& session : ending) {
+        session->disconnect(pb::DISCONNECT_REASON_WORLD_RESTARTED, why);
+    }
+    spdlog::warn("world '{}' restarted (instance {:016x} after {:016x}): {} client session(s) "
+                 "ended with world_restarted, their entity ids void in the new world",
+                 config_.world_name, restart.new_instance, restart.old_instance, ending.size());
+}
+
 void Server::apply_joins() {
     // In hello order, so entity ids (reserved at hello) stay increasing in the world.
     for (const std::uint32_t id : pending_joins_) {
@@ -292,6 +317,9 @@ void Server::apply_inputs() {
     // seen had it been applied on arrival).
     for (auto& [id, client] : clients_) {
         const pb::ClientInput& input = client.input;
+        if (feed_ && !client.session->active()) {
+            continue; // leaving; after a world restart its id is another's
+        }
         if (feed_ && (client.input_pending || client.fire_pending)) {
             // For the world process, which applies it at its next step.
             outgoing_inputs_.push_back(
@@ -426,9 +454,11 @@ void Server::apply_leaves() {
     for (const std::uint32_t id : pending_leaves_) {
         const auto it = sessions_.find(id);
         if (it != sessions_.end() && it->second->entity_id() != 0) {
-            world_.remove(it->second->entity_id()); // not spawned yet: nothing to remove
             if (feed_) {
-                outgoing_ids_.push_back(it->second->entity_id()); // and at the world
+                // Removed at the world's next step; the mirror follows its next tick.
+                outgoing_ids_.push_back(it->second->entity_id());
+            } else {
+                world_.remove(it->second->entity_id()); // not spawned yet: nothing to remove
             }
         }
         policy_->remove_viewer(id);

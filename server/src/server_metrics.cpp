@@ -157,6 +157,23 @@ std::string Server::render_metrics() const {
                     d(w.id_blocks));
         out.gauge("dsoc_gateway_ids_left", "Reserved entity ids not given to a player yet.",
                   d(w.ids_left));
+        out.counter("dsoc_gateway_joins_resent_total",
+                    "Joins sent again: a world tick lacked the player a second after its join "
+                    "was sent (lost, or the world had removed this gateway's players).",
+                    d(w.joins_resent));
+        out.counter("dsoc_gateway_leaves_resent_total",
+                    "Leaves sent again: a world tick still showed the player a second after its "
+                    "leave was sent.",
+                    d(w.leaves_resent));
+        out.counter("dsoc_gateway_world_restarts_total",
+                    "New world process instances followed (the world restarted): every session "
+                    "then ended with world_restarted.",
+                    d(w.world_restarts));
+        out.counter("dsoc_gateway_other_instance_total",
+                    "World ticks and id blocks of another world instance, refused while the one "
+                    "followed was live (a restarted world's first; steadily: a second world "
+                    "process on this world name).",
+                    d(w.other_instance));
         out.counter("dsoc_gateway_messages_not_sent_total",
                     "Joins, inputs, leaves or reserve requests the NATS link refused.",
                     d(w.not_sent));

@@ -37,8 +37,9 @@ void WorldRole::run(const std::atomic<bool>& stop) {
                          : Clock::time_point::max();
     TickSchedule schedule(start, period);
     auto last_log = start;
-    spdlog::info("world '{}' on {}: {} Hz, publishing on {}", config_.world_name, config_.nats_url,
-                 config_.tick_rate, scaleout::world_subject(config_.world_name, "tick"));
+    spdlog::info("world '{}' (instance {:016x}) on {}: {} Hz, publishing on {}", config_.world_name,
+                 process_.instance(), config_.nats_url, config_.tick_rate,
+                 scaleout::world_subject(config_.world_name, "tick"));
     while (!stop.load() && Clock::now() < end) {
         std::this_thread::sleep_until(std::min(schedule.next_due(), end));
         if (stop.load() || Clock::now() >= end) {
@@ -80,10 +81,21 @@ std::string WorldRole::render_metrics() const {
     out.counter("dsoc_world_bad_messages_total", "Gateway messages that did not decode.",
                 d(s.bad_messages));
     out.counter("dsoc_world_for_strangers_total",
-                "Joins, inputs and leaves for ids that are not reserved or joined players.",
+                "Joins of ids not reserved for the sender, inputs and leaves for entities that "
+                "are not its players.",
                 d(s.for_strangers));
+    out.counter("dsoc_world_repeated_total",
+                "Joins of players already joined and leaves of players already gone (a "
+                "gateway's re-sends): nothing changed.",
+                d(s.repeated));
     out.counter("dsoc_world_gateways_lost_total",
                 "Gateways silent past the timeout, their players removed.", d(s.gateways_lost));
+    out.counter("dsoc_world_gateways_back_total",
+                "Lost gateways heard again (their re-joins bring their players back).",
+                d(s.gateways_back));
+    out.counter("dsoc_world_gateways_forgotten_total",
+                "Lost gateways whose reserved ids were released to make room for others.",
+                d(s.gateways_forgotten));
     out.counter("dsoc_world_nats_disconnects_total", "Connections to NATS lost.",
                 d(link_.disconnects()));
     out.counter("dsoc_world_nats_reconnects_total", "Connections to NATS regained.",

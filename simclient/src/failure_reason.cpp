@@ -35,6 +35,8 @@ std::string_view of_disconnect(pb::DisconnectReason reason) {
         return version_mismatch;
     case pb::DISCONNECT_REASON_SERVER_SHUTDOWN:
         return server_shutdown;
+    case pb::DISCONNECT_REASON_WORLD_RESTARTED:
+        return world_restarted;
     default:
         return dropped_by_server;
     }

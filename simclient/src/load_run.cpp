@@ -183,7 +183,10 @@ std::pair<std::string, std::uint16_t> LoadRun::server_of(int index) const {
 }
 
 bool LoadRun::fails_over(const SimClient& client) const {
-    if (config_.more_servers.empty() || stopping_) {
+    const std::string& why = client.stats().failure;
+    // A restarted world's gateway asks its clients to connect again: with one server,
+    // to the same one.
+    if (stopping_ || (config_.more_servers.empty() && why != failure::world_restarted)) {
         return false;
     }
     // A client whose sessions failed before their hello at every server twice in a row:
@@ -193,9 +196,9 @@ bool LoadRun::fails_over(const SimClient& client) const {
     if (!client.stats().hello_received && in_a_row >= 2 * (1 + config_.more_servers.size())) {
         return false;
     }
-    const std::string& why = client.stats().failure;
     return why == failure::refused || why == failure::timeout || why == failure::connection_lost ||
-           why == failure::connect_error || why == failure::server_shutdown;
+           why == failure::connect_error || why == failure::server_shutdown ||
+           why == failure::world_restarted;
 }
 
 void LoadRun::start_session(std::size_t g, int index) {

@@ -3,6 +3,8 @@
 // over both gateways, all child processes on loopback. Mid-run one gateway is killed
 // (its clients reconnect to the other: failovers, not failures) and NATS restarts (the
 // world and the gateway reconnect and carry on: the clients see a gap, not an error).
+// And the world process killed and started again: the gateways follow the new one,
+// ending each session once (world_restarted), and the clients come back as new players.
 // Skipped, with the reason, where nats-server is absent (scripts/setup installs it).
 
 #include "program_paths.hpp"
@@ -17,6 +19,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <memory>
 #include <regex>
 #include <string>
 #include <thread>
@@ -46,6 +49,31 @@ double sample(const std::string& metrics, const std::string& name) {
     return -1.0;
 }
 
+/// How many times `needle` occurs in `text`.
+std::size_t occurrences(const std::string& text, const std::string& needle) {
+    std::size_t count = 0;
+    for (auto at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) {
+        ++count;
+    }
+    return count;
+}
+
+std::vector<std::string> world_process(const std::string& nats) {
+    return {program("dsoc-server"),
+            "--role",
+            "world",
+            "--nats-url",
+            nats,
+            "--world-name",
+            "e2e",
+            "--map",
+            "gen:rooms:1",
+            "--bots",
+            "4",
+            "--metrics-port",
+            "0"};
+}
+
 std::vector<std::string> gateway(const std::string& nats) {
     return light_server(
         {"--role", "gateway", "--nats-url", nats, "--world-name", "e2e", "--metrics-port", "0"});
@@ -56,9 +84,7 @@ TEST(ScaleOut, GatewaysServeOneWorldThroughAKilledGatewayAndANatsRestart) {
         GTEST_SKIP() << kNoNatsServer;
     }
     NatsServer nats;
-    ChildProcess world({program("dsoc-server"), "--role", "world", "--nats-url", nats.url(),
-                        "--world-name", "e2e", "--map", "gen:rooms:1", "--bots", "4",
-                        "--metrics-port", "0"});
+    ChildProcess world(world_process(nats.url()));
     ASSERT_TRUE(world.wait_for_output("publishing on dsoc.e2e.tick")) << world.err();
     ChildProcess first(gateway(nats.url()));
     ChildProcess second(gateway(nats.url()));
@@ -116,6 +142,73 @@ TEST(ScaleOut, GatewaysServeOneWorldThroughAKilledGatewayAndANatsRestart) {
     world.signal(SIGTERM);
     EXPECT_EQ(world.wait(10s), 0) << world.err();
     EXPECT_NE(world.out().find("9 players joined, 9 left"), std::string::npos) << world.out();
+}
+
+TEST(ScaleOut, ARestartedWorldEndsEachSessionOnceAndTheClientsComeBack) {
+    if (nats_server_binary().empty()) {
+        GTEST_SKIP() << kNoNatsServer;
+    }
+    NatsServer nats;
+    auto world = std::make_unique<ChildProcess>(world_process(nats.url()));
+    ASSERT_TRUE(world->wait_for_output("publishing on dsoc.e2e.tick")) << world->err();
+    ChildProcess first(gateway(nats.url()));
+    ChildProcess second(gateway(nats.url()));
+    ASSERT_TRUE(first.wait_for_output("metrics on port")) << first.err();
+    ASSERT_TRUE(second.wait_for_output("metrics on port")) << second.err();
+    ASSERT_TRUE(first.wait_for_output("listening on port")) << first.err();
+    ASSERT_TRUE(second.wait_for_output("listening on port")) << second.err();
+
+    const TempDir files("dsoc-scale-out-restart");
+    ChildProcess clients(
+        {program("dsoc-simclient"), "--quiet", "--report", files.path("report.json"), "--server",
+         "127.0.0.1:" + std::to_string(number_after(first.out(), "listening on port")) +
+             ",127.0.0.1:" + std::to_string(number_after(second.out(), "listening on port")),
+         "--clients", "6", "--ramp-up", "0.5", "--duration", "7"});
+    std::this_thread::sleep_for(2500ms);
+    world->signal(SIGKILL); // no leave, no goodbye: its ticks stop
+    (void)world->wait(5s);
+    world = std::make_unique<ChildProcess>(world_process(nats.url())); // ticks from 1 again
+    ASSERT_TRUE(world->wait_for_output("publishing on dsoc.e2e.tick")) << world->err();
+
+    EXPECT_EQ(clients.wait(30s), 0) << clients.out() << clients.err();
+    std::ifstream in(files.path("report.json"));
+    const json report = json::parse(in, nullptr, false);
+    ASSERT_TRUE(report.is_object()) << clients.out();
+    EXPECT_EQ(report["failovers"], 6) << report.dump(1); // every session once
+    EXPECT_EQ(report["failures"], 0) << report.dump(1);
+    EXPECT_EQ(report["unexpected_disconnects"], 0);
+    EXPECT_EQ(report["protocol_errors"], 0);
+    EXPECT_EQ(report["missing_own_entity"], 0);
+    EXPECT_GT(report["audited_poses"].get<int>(), 0); // the new world's poses, audited
+
+    for (ChildProcess* g : {&first, &second}) {
+        const std::string metrics = http_body(http_get(
+            static_cast<std::uint16_t>(number_after(g->out(), "metrics on port")), "/metrics"));
+        EXPECT_EQ(sample(metrics, "dsoc_gateway_world_restarts_total"), 1.0) << metrics;
+        EXPECT_EQ(sample(metrics, "dsoc_gateway_bad_messages_total"), 0.0) << metrics;
+        EXPECT_EQ(sample(metrics, R"(dsoc_disconnects_total\{reason="world_restarted"\})"), 3.0)
+            << metrics;
+        EXPECT_EQ(occurrences(g->err(), "world 'e2e' restarted"), 1u) << g->err(); // logged once
+    }
+    // The new world saw six players join through the gateways, and nothing of the old
+    // world's sessions (no input or leave under an id it had not handed out).
+    const long world_metrics = number_after(world->out(), "metrics on port");
+    ASSERT_GT(world_metrics, 0) << world->out();
+    const std::string metrics =
+        http_body(http_get(static_cast<std::uint16_t>(world_metrics), "/metrics"));
+    EXPECT_EQ(sample(metrics, "dsoc_world_joins_total"), 6.0) << metrics;
+    EXPECT_EQ(sample(metrics, "dsoc_world_for_strangers_total"), 0.0) << metrics;
+    first.signal(SIGTERM);
+    second.signal(SIGTERM);
+    EXPECT_EQ(first.wait(10s), 0) << first.err();
+    EXPECT_EQ(second.wait(10s), 0) << second.err();
+    EXPECT_TRUE(eventually([&] {
+        return sample(http_body(http_get(static_cast<std::uint16_t>(world_metrics), "/metrics")),
+                      "dsoc_world_leaves_total") == 6.0;
+    }));
+    world->signal(SIGTERM);
+    EXPECT_EQ(world->wait(10s), 0) << world->err();
+    EXPECT_NE(world->out().find("6 players joined, 6 left"), std::string::npos) << world->out();
 }
 
 } // namespace

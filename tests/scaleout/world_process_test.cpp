@@ -1,8 +1,10 @@
 // The world process over a real nats-server (skipped, with the reason, where the
 // binary is absent): a gateway reserves ids, and a joined one appears at the next
-// tick; its inputs move that player and no other; a leave removes it; bad
-// messages and inputs for entities that are not joined players are counted, and the
-// world carries on publishing ticks a gateway can mirror.
+// tick; its inputs move that player and no other; a leave removes it; a join or leave
+// sent again changes nothing; a gateway lost past its timeout gets its players back by
+// re-joining them, and its ids are released once others need the room; bad messages and
+// inputs for entities that are not joined players are counted, and the world carries
+// on publishing ticks a gateway can mirror.
 
 #include "dsoc/scaleout/world_process.hpp"
 #include "dsoc/scaleout/world_tick.hpp"
@@ -69,6 +71,25 @@ protected:
         ASSERT_TRUE(gateway_link_->publish(world_subject("t", what), bytes));
         ASSERT_TRUE(eventually([&] { return process_->messages_received() > before; }));
     }
+    /// A block of `count` ids reserved for `gateway`.
+    IdBlock reserve(std::uint64_t gateway, std::uint32_t count) {
+        std::vector<std::byte> bytes;
+        encode_reserve_request({gateway, count}, bytes);
+        const auto answer = gateway_link_->request(world_subject("t", "reserve"), bytes, 2000ms);
+        if (!answer) {
+            ADD_FAILURE() << "no answer to a reserve request";
+            return {};
+        }
+        auto block = decode_id_block(*answer, "reserve");
+        EXPECT_TRUE(block.ok()) << block.error().message();
+        return block.ok() ? block.value() : IdBlock{};
+    }
+    /// Gateway `gateway`'s joins (leaves) of `ids`, waited for.
+    void send_ids(IdBatchKind kind, std::uint64_t gateway, std::vector<std::uint32_t> ids) {
+        std::vector<std::byte> bytes;
+        encode_id_batch(kind, gateway, ids, bytes);
+        send("gateway", bytes);
+    }
     /// Runs one tick and waits for it to reach the gateway.
     WorldTick tick() {
         process_->tick();
@@ -104,12 +125,14 @@ TEST_F(WorldProcessTest, AJoinedPlayerMovesByItsInputsAndLeaves) {
     EXPECT_EQ(first.entities.size(), 10u); // the bots
 
     std::vector<std::byte> bytes;
-    encode_reserve_request(3, bytes);
+    encode_reserve_request({kGateway, 3}, bytes);
     const auto answer = gateway_link_->request(world_subject("t", "reserve"), bytes, 2000ms);
     ASSERT_TRUE(answer.has_value());
     auto block = decode_id_block(*answer, "reserve");
     ASSERT_TRUE(block.ok()) << block.error().message();
     EXPECT_EQ(block->world_key, process_->world_key());
+    EXPECT_EQ(block->instance, process_->instance());
+    EXPECT_EQ(first.instance, process_->instance());
     EXPECT_EQ(block->count, 3u);
     const std::uint32_t player = block->first_id + 1;
     EXPECT_EQ(find(first, player), nullptr);
@@ -159,26 +182,22 @@ protected:
 };
 
 TEST_F(ShortGatewayTimeout, APlayerBelongsToItsGatewayAndLeavesWithIt) {
-    std::vector<std::byte> bytes;
-    encode_reserve_request(2, bytes);
-    const auto answer = gateway_link_->request(world_subject("t", "reserve"), bytes, 2000ms);
-    ASSERT_TRUE(answer.has_value());
-    const IdBlock block = decode_id_block(*answer, "reserve").value();
-    const std::uint32_t mine = block.first_id;
-    const std::uint32_t theirs = block.first_id + 1;
-    encode_id_batch(IdBatchKind::join, kGateway, std::span(&mine, 1), bytes);
-    send("gateway", bytes);
-    encode_id_batch(IdBatchKind::join, kGateway + 1, std::span(&theirs, 1), bytes);
-    send("gateway", bytes);
+    const std::uint32_t mine = reserve(kGateway, 1).first_id;
+    const std::uint32_t theirs = reserve(kGateway + 1, 1).first_id;
+    // An id reserved for one gateway is not another's to join.
+    send_ids(IdBatchKind::join, kGateway + 1, {mine});
+    EXPECT_EQ(process_->stats().for_strangers, 1u);
+    send_ids(IdBatchKind::join, kGateway, {mine});
+    send_ids(IdBatchKind::join, kGateway + 1, {theirs});
     ASSERT_NE(find(tick(), mine), nullptr);
 
     // Another gateway can neither steer nor remove this gateway's player.
+    std::vector<std::byte> bytes;
     const PlayerInput steer{mine, glm::vec3(1.0f, 0.0f, 0.0f), false, false, 0.0f, 0.0f};
     encode_inputs(kGateway + 1, std::span(&steer, 1), bytes);
     send("gateway", bytes);
-    encode_id_batch(IdBatchKind::leave, kGateway + 1, std::span(&mine, 1), bytes);
-    send("gateway", bytes);
-    EXPECT_EQ(process_->stats().for_strangers, 2u);
+    send_ids(IdBatchKind::leave, kGateway + 1, {mine});
+    EXPECT_EQ(process_->stats().for_strangers, 3u);
     beat(kGateway);
     EXPECT_NE(find(tick(), mine), nullptr);
 
@@ -193,6 +212,80 @@ TEST_F(ShortGatewayTimeout, APlayerBelongsToItsGatewayAndLeavesWithIt) {
     EXPECT_EQ(find(after, mine), nullptr);
     EXPECT_NE(find(after, theirs), nullptr);
     EXPECT_EQ(process_->stats().gateways_lost, 1u);
+}
+
+TEST_F(WorldProcessTest, ARepeatedJoinOrLeaveChangesNothing) {
+    const std::uint32_t id = reserve(kGateway, 1).first_id;
+    send_ids(IdBatchKind::join, kGateway, {id});
+    send_ids(IdBatchKind::join, kGateway, {id}); // a re-send that crossed the first
+    const WorldTick joined = tick();
+    ASSERT_NE(find(joined, id), nullptr);
+    EXPECT_EQ(joined.entities.size(), 11u);      // the bots, and the player once
+    send_ids(IdBatchKind::join, kGateway, {id}); // and one after its spawn
+    EXPECT_EQ(tick().entities.size(), 11u);
+
+    send_ids(IdBatchKind::leave, kGateway, {id});
+    send_ids(IdBatchKind::leave, kGateway, {id}); // before the step that removes it
+    EXPECT_EQ(find(tick(), id), nullptr);
+    send_ids(IdBatchKind::leave, kGateway, {id}); // and after
+    send_ids(IdBatchKind::join, kGateway, {id});  // a left player does not come back
+    EXPECT_EQ(find(tick(), id), nullptr);
+    const WorldProcessStats stats = process_->stats();
+    EXPECT_EQ(stats.joins, 1u);
+    EXPECT_EQ(stats.leaves, 1u);
+    EXPECT_EQ(stats.repeated, 4u);
+    EXPECT_EQ(stats.for_strangers, 1u); // the join after its leave
+}
+
+TEST_F(ShortGatewayTimeout, ALostGatewayThatComesBackGetsItsPlayersBack) {
+    const IdBlock block = reserve(kGateway, 3);
+    const std::uint32_t stays = block.first_id;
+    const std::uint32_t leaves = block.first_id + 1;
+    send_ids(IdBatchKind::join, kGateway, {stays, leaves});
+    ASSERT_NE(find(tick(), stays), nullptr);
+
+    // Cut off past the timeout: its players are removed.
+    std::this_thread::sleep_for(700ms);
+    const WorldTick lost = tick();
+    EXPECT_EQ(find(lost, stays), nullptr);
+    EXPECT_EQ(find(lost, leaves), nullptr);
+    EXPECT_EQ(process_->stats().gateways_lost, 1u);
+
+    // Back: what it sent while cut off (one client left; the other's input, before its
+    // re-join) and then the re-join of the players it still has.
+    send_ids(IdBatchKind::leave, kGateway, {leaves});
+    const PlayerInput early{stays, glm::vec3(1.0f, 0.0f, 0.0f), false, false, 0.0f, 0.0f};
+    std::vector<std::byte> bytes;
+    encode_inputs(kGateway, std::span(&early, 1), bytes);
+    send("gateway", bytes);
+    send_ids(IdBatchKind::join, kGateway, {stays});
+    send_ids(IdBatchKind::join, kGateway, {leaves}); // left: its id was released
+    const WorldTick back = tick();
+    EXPECT_NE(find(back, stays), nullptr);
+    EXPECT_EQ(find(back, leaves), nullptr);
+    const WorldProcessStats stats = process_->stats();
+    EXPECT_EQ(stats.gateways_back, 1u);
+    EXPECT_EQ(stats.joins, 3u);         // two, and one again
+    EXPECT_EQ(stats.for_strangers, 1u); // the released id's join; not the early input
+}
+
+TEST_F(ShortGatewayTimeout, LostGatewaysAreForgottenWhenTheirIdsAreNeeded) {
+    for (std::size_t reserved = 0; reserved < WorldProcess::kMaxReserved; reserved += kMaxIdBlock) {
+        ASSERT_EQ(reserve(kGateway, kMaxIdBlock).count, kMaxIdBlock);
+    }
+    // Full: another gateway's request is refused while the first is alive...
+    std::vector<std::byte> bytes;
+    encode_reserve_request({kGateway + 1, 1}, bytes);
+    EXPECT_FALSE(gateway_link_->request(world_subject("t", "reserve"), bytes, 300ms).has_value());
+    EXPECT_NE(process_->stats().last_error.find("reserved and not joined"), std::string::npos)
+        << process_->stats().last_error;
+    // ...and answered once it was lost, its ids released.
+    std::this_thread::sleep_for(700ms);
+    beat(kGateway + 1);
+    (void)tick();
+    EXPECT_EQ(process_->stats().gateways_lost, 1u);
+    EXPECT_EQ(reserve(kGateway + 1, 1).count, 1u);
+    EXPECT_EQ(process_->stats().gateways_forgotten, 1u);
 }
 
 TEST_F(WorldProcessTest, BadMessagesAreCountedAndTheWorldCarriesOn) {
@@ -244,17 +337,23 @@ TEST(WorldMessages, EachDecoderRefusesWhatItsEncoderCouldNotHaveWritten) {
     EXPECT_NE(decode_id_batch(IdBatchKind::leave, bytes, "s").error().message().find("entry 1"),
               std::string::npos);
     EXPECT_FALSE(decode_id_batch(IdBatchKind::join, bytes, "s").ok()); // a leave is no join
-    encode_id_block({1, 0, 5}, bytes);
+    encode_id_block({1, 7, 0, 5}, bytes);
     EXPECT_FALSE(decode_id_block(bytes, "s").ok()); // id 0
-    encode_id_block({1, 9, 5000}, bytes);
+    encode_id_block({1, 7, 9, 5000}, bytes);
     EXPECT_FALSE(decode_id_block(bytes, "s").ok()); // over kMaxIdBlock
-    encode_id_block({1, 9, 5}, bytes);
+    encode_id_block({1, 0, 9, 5}, bytes);
+    EXPECT_FALSE(decode_id_block(bytes, "s").ok()); // instance 0
+    encode_id_block({1, 7, 9, 5}, bytes);
     EXPECT_EQ(decode_id_block(bytes, "s")->first_id, 9u);
+    EXPECT_EQ(decode_id_block(bytes, "s")->instance, 7u);
     EXPECT_FALSE(decode_reserve_request(bytes, "s").ok()); // a block is no request
-    encode_reserve_request(0, bytes);
+    encode_reserve_request({kGateway, 0}, bytes);
     EXPECT_FALSE(decode_reserve_request(bytes, "s").ok());
-    encode_reserve_request(64, bytes);
-    EXPECT_EQ(decode_reserve_request(bytes, "s").value(), 64u);
+    encode_reserve_request({0, 64}, bytes);
+    EXPECT_FALSE(decode_reserve_request(bytes, "s").ok()); // gateway 0
+    encode_reserve_request({kGateway, 64}, bytes);
+    EXPECT_EQ(decode_reserve_request(bytes, "s")->count, 64u);
+    EXPECT_EQ(decode_reserve_request(bytes, "s")->gateway, kGateway);
 }
 
 } // namespace

@@ -2,7 +2,11 @@
 // with the reason, where the binary is absent): a gateway that falls behind serves the
 // newest tick and counts the ones it skipped; a tick that goes back in time, bad bytes
 // and a tick of another world are refused and counted; ids come in blocks reserved by
-// the world.
+// the world. And the faults it repairs, each made for real by cutting one process's
+// connection to NATS (a TCP proxy between it and the server): a join or a leave lost
+// while the world was cut off is sent again until the ticks show it taken; a world
+// process replaced by a new one is followed from its own tick 1; a gateway the world
+// took for lost gets its players back once it is heard again.
 
 #include "dsoc/scaleout/world_process.hpp"
 #include "dsoc/scaleout/world_tick.hpp"
@@ -10,13 +14,16 @@
 #include "dsoc/server/world_feed.hpp"
 #include "support/eventually.hpp"
 #include "support/nats_server.hpp"
+#include "support/tcp_proxy.hpp"
 #include "support/test_maps.hpp"
 
 #include <gtest/gtest.h>
 
 #include <boost/asio/io_context.hpp>
 
+#include <algorithm>
 #include <chrono>
+#include <span>
 #include <thread>
 
 namespace dsoc::server {
@@ -40,6 +47,7 @@ TEST(WorldFeed, AGatewayBehindServesTheNewestTickAndCountsTheRest) {
     options.url = nats.url();
     scaleout::NatsLink world_link(options);
     scaleout::WorldProcess world(map, world_settings(config), 30, world_link, "feed");
+    ASSERT_TRUE(world_link.flush(2000ms)); // subscribed before the feed asks for ids
 
     boost::asio::io_context io; // not run: the ticks pile up as behind a busy gateway
     int posted = 0;
@@ -53,7 +61,8 @@ TEST(WorldFeed, AGatewayBehindServesTheNewestTickAndCountsTheRest) {
     ASSERT_TRUE(eventually([&] { return feed.stats().ticks_received == 3; }));
     const auto newest = feed.take_newest();
     ASSERT_TRUE(newest.has_value());
-    EXPECT_EQ(newest->tick, 3u);
+    EXPECT_EQ(newest->tick.tick, 3u);
+    EXPECT_FALSE(newest->restart.has_value());
     EXPECT_EQ(feed.stats().ticks_skipped, 2u);
     EXPECT_FALSE(feed.take_newest().has_value()); // nothing new since
     // One wake-up per arrival (the last may still be on its way to the queue).
@@ -68,14 +77,206 @@ TEST(WorldFeed, AGatewayBehindServesTheNewestTickAndCountsTheRest) {
     ASSERT_TRUE(world_link.publish("dsoc.feed.tick", bytes));
     scaleout::encode_world_tick(world.world(), world.world_key() + 1, 9, bytes);
     ASSERT_TRUE(world_link.publish("dsoc.feed.tick", bytes));
-    scaleout::encode_world_tick(world.world(), world.world_key(), 2, bytes);
+    scaleout::encode_world_tick(world.world(), world.world_key(), 2, bytes, 0, world.instance());
     ASSERT_TRUE(world_link.publish("dsoc.feed.tick", bytes));
     ASSERT_TRUE(eventually([&] { return feed.stats().bad_messages == 3; }));
     EXPECT_NE(feed.stats().last_error.find("world tick 2 after 3"), std::string::npos)
         << feed.stats().last_error;
     world.tick();
     ASSERT_TRUE(eventually([&] { return feed.stats().ticks_received == 4; }));
-    EXPECT_EQ(feed.take_newest()->tick, 4u); // and the good ones still come
+    EXPECT_EQ(feed.take_newest()->tick.tick, 4u); // and the good ones still come
+}
+
+/// A world process and one gateway's feed on a real nats-server, each through a proxy
+/// that can cut it off.
+class WorldFeedFaults : public ::testing::Test {
+protected:
+    void SetUp() override {
+        if (testing::nats_server_binary().empty()) {
+            GTEST_SKIP() << testing::kNoNatsServer;
+        }
+        nats_ = std::make_unique<testing::NatsServer>();
+        world_proxy_ = std::make_unique<testing::TcpProxy>(nats_->port());
+        gateway_proxy_ = std::make_unique<testing::TcpProxy>(nats_->port());
+        config_.role = "gateway";
+        config_.nats_url = gateway_proxy_->url();
+        config_.world_name = "faults";
+        config_.bots = 3;
+        scaleout::NatsLinkOptions options;
+        options.url = world_proxy_->url();
+        world_link_ = std::make_unique<scaleout::NatsLink>(options);
+        start_world();
+        feed_ = std::make_unique<WorldFeed>(io_, config_, world_->world_key(), [] {});
+        ASSERT_TRUE(eventually([&] { return feed_->stats().id_blocks == 1; }));
+        ASSERT_TRUE(step().has_value()); // the feed follows the world
+    }
+    void TearDown() override {
+        feed_.reset();
+        world_.reset();
+    }
+    [[nodiscard]] virtual std::chrono::milliseconds gateway_timeout() const {
+        return scaleout::WorldProcess::kDefaultGatewayTimeout;
+    }
+    /// A world process (a new instance each time) on the world's link.
+    void start_world() {
+        world_.reset(); // unsubscribes first
+        world_ =
+            std::make_unique<scaleout::WorldProcess>(testing::rooms_map(), world_settings(config_),
+                                                     30, *world_link_, "faults", gateway_timeout());
+        ASSERT_TRUE(world_link_->flush(2000ms));
+    }
+    /// One world step and one gateway tick, as a gateway runs them: the world steps and
+    /// publishes; the feed takes the tick (re-sending what it shows lost) and sends its
+    /// heartbeat. Nothing when the tick does not arrive within a second.
+    std::optional<TakenTick> step() {
+        const std::uint64_t before = feed_->stats().ticks_received;
+        world_->tick();
+        if (!eventually([&] { return feed_->stats().ticks_received > before; }, 1s)) {
+            return std::nullopt;
+        }
+        auto taken = feed_->take_newest();
+        feed_->send_inputs({});
+        return taken;
+    }
+    /// Steps about 30 times a second until a taken tick satisfies `done`; false after
+    /// `timeout`.
+    template <typename F>
+    bool step_until(F done, std::chrono::milliseconds timeout = 5s) {
+        const auto deadline = std::chrono::steady_clock::now() + timeout;
+        while (std::chrono::steady_clock::now() < deadline) {
+            if (const auto taken = step(); taken && done(taken->tick)) {
+                return true;
+            }
+            std::this_thread::sleep_for(30ms);
+        }
+        return false;
+    }
+    static bool has(const scaleout::WorldTick& tick, std::uint32_t id) {
+        return std::any_of(tick.entities.begin(), tick.entities.end(),
+                           [&](const interest::Entity& e) { return e.id == id; });
+    }
+    /// A new player of the gateway's, joined and seen in a tick.
+    std::uint32_t joined_player() {
+        const std::uint32_t id = feed_->take_entity_id();
+        EXPECT_NE(id, 0u);
+        feed_->send_joins(std::span(&id, 1));
+        EXPECT_TRUE(step_until([&](const scaleout::WorldTick& t) { return has(t, id); }));
+        return id;
+    }
+    /// Cuts the world process off NATS, runs `meanwhile`, and lets it back.
+    template <typename F>
+    void with_world_cut_off(F meanwhile) {
+        world_proxy_->cut();
+        ASSERT_TRUE(eventually([&] { return !world_link_->connected(); }));
+        meanwhile();
+        std::this_thread::sleep_for(200ms); // delivered to no one by now
+        world_proxy_->restore();
+        ASSERT_TRUE(eventually([&] { return world_link_->connected(); }));
+        ASSERT_TRUE(world_link_->flush(2000ms)); // subscribed again
+    }
+
+    std::unique_ptr<testing::NatsServer> nats_;
+    std::unique_ptr<testing::TcpProxy> world_proxy_;
+    std::unique_ptr<testing::TcpProxy> gateway_proxy_;
+    ServerConfig config_;
+    std::unique_ptr<scaleout::NatsLink> world_link_;
+    std::unique_ptr<scaleout::WorldProcess> world_;
+    boost::asio::io_context io_; // not run: the tests take the ticks themselves
+    std::unique_ptr<WorldFeed> feed_;
+};
+
+TEST_F(WorldFeedFaults, AJoinLostWhileTheWorldWasCutOffIsSentAgain) {
+    const std::uint32_t id = feed_->take_entity_id();
+    ASSERT_NE(id, 0u);
+    // Published while no world is subscribed: NATS drops it.
+    with_world_cut_off([&] { feed_->send_joins(std::span(&id, 1)); });
+    EXPECT_TRUE(step_until([&](const scaleout::WorldTick& t) { return has(t, id); }))
+        << "the player never spawned";
+    EXPECT_EQ(feed_->stats().joins_resent, 1u);
+    EXPECT_EQ(world_->stats().joins, 1u);
+    EXPECT_EQ(world_->stats().for_strangers, 0u);
+}
+
+TEST_F(WorldFeedFaults, ALeaveLostWhileTheWorldWasCutOffIsSentAgain) {
+    const std::uint32_t id = joined_player();
+    with_world_cut_off([&] { feed_->send_leaves(std::span(&id, 1)); });
+    EXPECT_TRUE(step_until([&](const scaleout::WorldTick& t) { return !has(t, id); }))
+        << "a ghost stays";
+    EXPECT_EQ(feed_->stats().leaves_resent, 1u);
+    EXPECT_EQ(world_->stats().leaves, 1u);
+    EXPECT_EQ(feed_->stats().joins_resent, 0u); // nothing else was sent again
+}
+
+TEST_F(WorldFeedFaults, ARestartedWorldIsFollowedFromItsFirstTick) {
+    for (int i = 0; i < 5; ++i) {
+        ASSERT_TRUE(step().has_value());
+    }
+    const std::uint32_t id = joined_player();
+    const std::uint64_t old_instance = world_->instance();
+    start_world(); // the world process restarted: its ticks count from 1 again
+
+    // While the old instance may be live (a second world process on the same name),
+    // the new one is not followed.
+    world_->tick();
+    ASSERT_TRUE(eventually([&] { return feed_->stats().other_instance == 1; }));
+    std::this_thread::sleep_for(WorldFeed::kWorldSilence);
+    // Before, this tick was refused as going back in time, and every later one too.
+    const auto taken = step();
+    ASSERT_TRUE(taken.has_value()) << feed_->stats().last_error;
+    EXPECT_EQ(taken->tick.tick, 2u);
+    ASSERT_TRUE(taken->restart.has_value());
+    EXPECT_EQ(taken->restart->old_instance, old_instance);
+    EXPECT_EQ(taken->restart->new_instance, world_->instance());
+    EXPECT_EQ(feed_->stats().world_restarts, 1u);
+    EXPECT_EQ(feed_->stats().bad_messages, 0u);
+    EXPECT_FALSE(has(taken->tick, id)); // and the old world's players are not re-joined
+    ASSERT_TRUE(eventually([&] { return feed_->stats().id_blocks == 2; })); // fresh ids
+
+    // The new world hands this gateway the same numbers again: a leave of the old
+    // world's player is void (sent, it would release the new block's first id), and the
+    // same number joins a new player.
+    feed_->send_leaves(std::span(&id, 1));
+    EXPECT_EQ(joined_player(), id);
+    EXPECT_EQ(world_->stats().for_strangers, 0u);
+
+    // The old instance's ticks are refused while the new one is live, whatever their
+    // number.
+    std::vector<std::byte> bytes;
+    scaleout::encode_world_tick(world_->world(), world_->world_key(), 1000, bytes, 0, old_instance);
+    ASSERT_TRUE(world_link_->publish("dsoc.faults.tick", bytes));
+    ASSERT_TRUE(eventually([&] { return feed_->stats().other_instance == 2; }));
+    const auto next = step();
+    ASSERT_TRUE(next.has_value());
+    EXPECT_FALSE(next->restart.has_value());
+    EXPECT_EQ(feed_->stats().world_restarts, 1u);
+    EXPECT_EQ(feed_->stats().bad_messages, 0u);
+}
+
+class WorldFeedShortTimeout : public WorldFeedFaults {
+protected:
+    [[nodiscard]] std::chrono::milliseconds gateway_timeout() const override { return 500ms; }
+};
+
+TEST_F(WorldFeedShortTimeout, AGatewayTheWorldTookForLostGetsItsPlayersBack) {
+    const std::uint32_t id = joined_player();
+    gateway_proxy_->cut();
+    ASSERT_TRUE(eventually([&] { return feed_->stats().nats_disconnects == 1; }));
+    for (int i = 0; i < 30; ++i) { // a second of steps the gateway does not see
+        world_->tick();
+        std::this_thread::sleep_for(30ms);
+    }
+    EXPECT_EQ(world_->stats().gateways_lost, 1u);
+    EXPECT_EQ(world_->world().find(id), nullptr);
+    gateway_proxy_->restore();
+    ASSERT_TRUE(eventually([&] { return feed_->stats().nats_reconnects == 1; }));
+
+    // Before, the world refused the re-join (not reserved): the client kept a session
+    // without its entity.
+    EXPECT_TRUE(step_until([&](const scaleout::WorldTick& t) { return has(t, id); }))
+        << "the player never came back";
+    EXPECT_EQ(world_->stats().gateways_back, 1u);
+    EXPECT_EQ(feed_->stats().joins_resent, 1u);
+    EXPECT_EQ(world_->stats().for_strangers, 0u);
 }
 
 } // namespace

@@ -17,19 +17,31 @@
 
 namespace dsoc::scaleout {
 
-inline constexpr std::uint16_t kWorldMessageVersion = 1;
+inline constexpr std::uint16_t kWorldMessageVersion = 2;
 /// Inputs or leaves one message may carry at most. [Limit: entries]
 inline constexpr std::uint32_t kMaxBatchEntries = 1u << 16;
+
+/// A random id, never 0: a gateway's in its messages, a world process's instance.
+[[nodiscard]] std::uint64_t random_id();
 
 /// Entity ids a gateway may give its new players: [first_id, first_id + count), reserved
 /// by the world for it (a "reserve" request's answer), so a hello is answered at once.
 struct IdBlock {
     std::uint64_t world_key = 0;
+    /// The world process that reserved them (WorldProcess::instance(), never 0): another
+    /// instance of the world, a restarted one, knows nothing of them.
+    std::uint64_t instance = 0;
     std::uint32_t first_id = 0;
     std::uint32_t count = 0;
 };
 /// Ids one reserve request may ask for at most. [Limit: ids]
 inline constexpr std::uint32_t kMaxIdBlock = 4096;
+
+/// A gateway's request for a block of ids, reserved for that gateway alone.
+struct ReserveRequest {
+    std::uint64_t gateway = 0; ///< the asking gateway's id (as in its batches; never 0)
+    std::uint32_t count = 0;   ///< 1..kMaxIdBlock
+};
 
 /// One client's intent for the next world step (interest::GameWorld::set_player_input
 /// and fire).
@@ -45,10 +57,9 @@ struct PlayerInput {
 void encode_id_block(const IdBlock& block, std::vector<std::byte>& out);
 [[nodiscard]] maps::Result<IdBlock> decode_id_block(std::span<const std::byte> bytes,
                                                     const std::string& source);
-/// A reserve request: how many ids the gateway asks for (1..kMaxIdBlock).
-void encode_reserve_request(std::uint32_t count, std::vector<std::byte>& out);
-[[nodiscard]] maps::Result<std::uint32_t> decode_reserve_request(std::span<const std::byte> bytes,
-                                                                 const std::string& source);
+void encode_reserve_request(const ReserveRequest& request, std::vector<std::byte>& out);
+[[nodiscard]] maps::Result<ReserveRequest> decode_reserve_request(std::span<const std::byte> bytes,
+                                                                  const std::string& source);
 
 /// A batch of entries from one gateway (`gateway`: its random id for the world's
 /// bookkeeping; never 0).

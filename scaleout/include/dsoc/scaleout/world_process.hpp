@@ -5,20 +5,26 @@
 // and no socket: gateways hold those.
 //
 // Subjects, under "dsoc.<world name>.":
-//   tick    - published after every step: the world tick;
-//   reserve - request (a count) -> IdBlock: entity ids the asking gateway gives its new
-//             players (so that a hello is answered at once, without a round trip);
+//   tick    - published after every step: the world tick, stamped with this process's
+//             instance (random at every start: gateways tell a restarted world by it);
+//   reserve - request (a gateway and a count) -> IdBlock: entity ids reserved for that
+//             gateway, which it gives its new players (so that a hello is answered at
+//             once, without a round trip);
 //   gateway - a gateway's joins (ids from its blocks, spawned at the next step), input
 //             batches (applied at the next step, the newest per player; one each
 //             tick, empty or not: its heartbeat) and leaves (removed at the next
 //             step), on one subject so that they arrive in the order it sent them.
 // Each joined player belongs to the gateway that joined it: only that gateway's inputs
-// and leave touch it, and when a gateway has not been heard for `gateway_timeout` (it
-// was killed, or cut off) its players are removed at the next step and it is counted
-// as lost: its clients come back through another gateway as new players.
-// Messages that do not decode, and joins, inputs or leaves for ids that are not
-// reserved or joined players, are dropped and counted by reason (stats()); the world
-// carries on.
+// and leave touch it. When a gateway has not been heard for `gateway_timeout` (it was
+// killed, or cut off) its players are removed at the next step and it is counted as
+// lost; their ids stay reserved for it, so that a gateway that comes back re-joins them
+// (its clients' sessions carry on), until room is needed for other gateways' ids.
+// Joins and leaves may come more than once (a gateway re-sends what the ticks show
+// lost: NATS delivers at most once): a join of a player its gateway has joined already
+// and a leave of a player gone already change nothing.
+// Messages that do not decode, and joins, inputs or leaves for ids that are neither
+// the sender's players nor reserved for it, are dropped and counted by reason
+// (stats()); the world carries on.
 
 #include "dsoc/interest/game_world.hpp"
 #include "dsoc/scaleout/nats_link.hpp"
@@ -47,11 +53,20 @@ struct WorldProcessStats {
     std::uint64_t leaves = 0;
     std::uint64_t inputs = 0;       ///< applied
     std::uint64_t bad_messages = 0; ///< did not decode (logged by the caller)
-    /// Joins of ids not reserved (or joined already), inputs and leaves for entities
-    /// that are not joined players (bots, strangers, players who left).
+    /// Joins of ids not reserved for the sender, inputs for entities that are not its
+    /// players (bots, another gateway's, players who left), leaves of entities in the
+    /// world that are not its players.
     std::uint64_t for_strangers = 0;
+    /// Joins of players their gateway had joined already and leaves of players gone (or
+    /// going at the next step) already: a gateway's re-sends; nothing changes.
+    std::uint64_t repeated = 0;
     std::uint64_t gateways_lost = 0; ///< silent past the timeout: their players removed
-    std::string last_error;          ///< why the last bad message was refused
+    /// Lost gateways heard again: their re-joins bring their players back.
+    std::uint64_t gateways_back = 0;
+    /// Lost gateways whose ids were released to make room for other reservations: their
+    /// re-joins, should they come back, are refused (as strangers').
+    std::uint64_t gateways_forgotten = 0;
+    std::string last_error; ///< why the last bad message was refused
 };
 
 class WorldProcess {
@@ -63,8 +78,10 @@ public:
     /// How long a gateway may be silent before its players are removed: longer than a
     /// NATS restart, shorter than a client's patience for snapshots.
     static constexpr std::chrono::milliseconds kDefaultGatewayTimeout{3000};
-    /// Ids reserved and not joined, over all gateways, at most: reserve requests beyond
-    /// it are refused (counted), so no publisher can make the world hold ids without end.
+    /// Ids reserved and not joined, over all gateways (lost ones' included), at most: a
+    /// reserve request beyond it first forgets lost gateways, the longest lost first, and
+    /// is refused (counted) if that is not enough, so no publisher can make the world
+    /// hold ids without end.
     static constexpr std::size_t kMaxReserved = 65'536;
     ~WorldProcess();
     WorldProcess(const WorldProcess&) = delete;
@@ -76,6 +93,8 @@ public:
 
     [[nodiscard]] WorldProcessStats stats() const;
     [[nodiscard]] std::uint64_t world_key() const { return key_; }
+    /// This process's instance: random, never 0, in every tick and id block.
+    [[nodiscard]] std::uint64_t instance() const { return instance_; }
     /// Messages of any kind received so far (tests wait on it).
     [[nodiscard]] std::uint64_t messages_received() const { return received_.load(); }
     [[nodiscard]] const interest::GameWorld& world() const { return world_; }
@@ -87,39 +106,52 @@ private:
     void on_join(const NatsMessage& message);
     void on_input(const NatsMessage& message);
     void on_leave(const NatsMessage& message);
-    /// Counts a message that did not decode, and why (under mutex_, as the next two).
+    /// Counts a message that did not decode, and why (under mutex_, as what follows).
     void refuse(const std::string& why);
     /// Whether `decoded` decoded; refuses it when not.
     template <typename T>
     bool accepted(const maps::Result<T>& decoded);
-    /// Whether player `id` belongs to `gateway`; counted as a stranger's when not.
-    bool owns(std::uint64_t gateway, std::uint32_t id);
+
+    /// A gateway as the world knows it.
+    struct Gateway {
+        std::chrono::steady_clock::time_point last_heard;
+        std::set<std::uint32_t> players; ///< joined: spawned at the next step, or since
+        /// Reserved for it and not joined: ids of its blocks, and its players removed
+        /// while it was lost (a re-join brings them back).
+        std::set<std::uint32_t> reserved;
+        /// 0 while heard within the timeout; once lost, the order of its loss (the
+        /// longest lost is forgotten first).
+        std::uint64_t lost = 0;
+    };
+    /// The gateway `id`, now heard from: created when new, back when it was lost.
+    Gateway& heard_from(std::uint64_t id);
+    /// Whether `count` more ids fit under kMaxReserved, forgetting lost gateways (the
+    /// longest lost first) as far as needed.
+    bool make_room(std::size_t count);
+    /// Removes the players of every gateway silent past the timeout at `now`, keeping
+    /// their ids reserved for it.
+    void lose_silent_gateways(std::chrono::steady_clock::time_point now);
 
     interest::GameWorld world_;
     float dt_;
     NatsLink& link_;
     std::string name_;
     std::uint64_t key_;
+    std::uint64_t instance_;
     std::uint64_t tick_ = 0;
     std::vector<std::byte> bytes_;
 
     mutable std::mutex mutex_; ///< what the callbacks hand to tick(), and the stats
-    std::vector<std::uint32_t> joining_;
+    /// Joined since the last step: (gateway, id).
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> joining_;
     std::unordered_map<std::uint32_t, PlayerInput> inputs_; ///< newest per entity
     std::vector<std::uint32_t> leaving_;
-    /// A gateway as the world knows it: when it was last heard and its players.
-    struct Gateway {
-        std::chrono::steady_clock::time_point last_heard;
-        std::set<std::uint32_t> players;
-    };
-    /// The gateway `id`, now heard from (created when new).
-    Gateway& heard_from(std::uint64_t id);
 
     std::chrono::milliseconds gateway_timeout_;
     std::uint64_t seen_reconnects_ = 0; ///< the link's reconnections tick() has seen
-    std::set<std::uint32_t> reserved_;  ///< handed out in blocks, not joined yet
-    std::unordered_map<std::uint32_t, std::uint64_t> owner_; ///< joined player -> its gateway
     std::unordered_map<std::uint64_t, Gateway> gateways_;
+    std::size_t reserved_ = 0; ///< ids in every gateway's `reserved`
+    std::uint64_t losses_ = 0; ///< gateways lost so far: the next one's Gateway::lost
     WorldProcessStats stats_;
     std::atomic<std::uint64_t> received_{0};
 

@@ -18,13 +18,16 @@ namespace dsoc::scaleout {
 
 /// "DSWT": the first four bytes of a world tick.
 inline constexpr std::uint32_t kWorldTickMagic = 0x54575344u;
-inline constexpr std::uint16_t kWorldTickVersion = 1;
+inline constexpr std::uint16_t kWorldTickVersion = 2;
 /// Entities a tick may carry at most (a decoder allocates no more). [Limit: entities]
 inline constexpr std::uint32_t kMaxWorldTickEntities = 1u << 20;
 
 struct WorldTick {
     /// world_key() of the publishing world: a gateway of another map or settings refuses it.
     std::uint64_t world_key = 0;
+    /// The publishing world process's instance (WorldProcess::instance(): random, never
+    /// 0, new at every start). Tick numbers are comparable within one instance only.
+    std::uint64_t instance = 0;
     /// The world's step count when it was taken (1 after the first step). [Units: ticks]
     std::uint64_t tick = 0;
     std::uint64_t frags = 0;
@@ -44,17 +47,21 @@ struct WorldTick {
 [[nodiscard]] std::uint64_t world_key(const maps::Map& map,
                                       const interest::WorldSettings& settings);
 
-/// The bytes of `world`'s state at step `tick`, stamped `published_ns`.
+/// The instance a tick carries when no world process published it (benchmarks, tests).
+inline constexpr std::uint64_t kNoProcessInstance = 1;
+
+/// The bytes of `world`'s state at step `tick` of world process `instance` (never 0),
+/// stamped `published_ns`.
 void encode_world_tick(const interest::GameWorld& world, std::uint64_t world_key,
                        std::uint64_t tick, std::vector<std::byte>& out,
-                       std::uint64_t published_ns = 0);
+                       std::uint64_t published_ns = 0, std::uint64_t instance = kNoProcessInstance);
 /// steady_clock now in nanoseconds: a WorldTick::published_ns.
 [[nodiscard]] std::uint64_t monotonic_ns();
 
-/// Parses `bytes` (from `source`, for messages): magic, version, sizes, every entity's
-/// fields (ids increasing and below next_id, known kinds and flags, finite numbers,
-/// health and respawn countdowns in range), nothing left over. With `expected_key`, a
-/// tick of another world is refused. Never throws on bad bytes.
+/// Parses `bytes` (from `source`, for messages): magic, version, instance (not 0),
+/// sizes, every entity's fields (ids increasing and below next_id, known kinds and
+/// flags, finite numbers, health and respawn countdowns in range), nothing left over.
+/// With `expected_key`, a tick of another world is refused. Never throws on bad bytes.
 [[nodiscard]] maps::Result<WorldTick>
 decode_world_tick(std::span<const std::byte> bytes, const std::string& source,
                   std::optional<std::uint64_t> expected_key = std::nullopt);

@@ -32,6 +32,9 @@
 // (the newest, when several did), the world is mirrored from it, and the joins,
 // inputs and leaves go to the world process instead of the world (they take effect
 // at its next step). Hellos are answered with ids the world reserved for this gateway.
+// When the world process restarts, every session that holds an entity id ends with
+// `world_restarted` (the new world hands the same ids to others); its clients connect
+// again. The server's tick numbers keep increasing across such restarts.
 
 #include "dsoc/interest/game_world.hpp"
 #include "dsoc/interest/hearing.hpp"
@@ -198,6 +201,10 @@ private:
     void on_world_tick();
     void start_tick();
     void finish_tick(std::chrono::steady_clock::time_point phase_end, std::exception_ptr error);
+    /// Role gateway, when the world process restarted: every client's entity id is void,
+    /// so each session ends with world_restarted and loses its id at once (nothing of it,
+    /// no input and no leave, reaches the new world, where that id is another's).
+    void end_sessions_of_a_past_world(const WorldRestart& restart);
     void apply_joins();
     void apply_inputs();
     void prepare_client_ticks();
@@ -234,6 +241,9 @@ private:
     interest::GameWorld world_;           // role gateway: a mirror of the world process's
     std::unique_ptr<WorldFeed> feed_;     // role gateway, from start()
     std::uint64_t tick_published_ns_ = 0; // role gateway: this tick's WorldTick::published_ns
+    // Role gateway: added to the world's tick numbers so that this server's keep
+    // increasing across world restarts (the last tick served before the latest one).
+    std::uint64_t world_tick_base_ = 0;
     std::vector<scaleout::PlayerInput> outgoing_inputs_; // role gateway: this tick's inputs
     std::vector<std::uint32_t> outgoing_ids_;            // role gateway: joins or leaves
     std::unique_ptr<interest::InterestPolicy> policy_;

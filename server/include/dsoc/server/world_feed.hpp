@@ -8,17 +8,27 @@
 // A tick is taken newest first: when several arrived since the last one was taken (the
 // gateway fell behind), only the newest is served and the others are counted as
 // skipped, so clients get the present world late rather than a backlog of past ones.
+//
+// Faults it repairs (GatewayIds has the rules): a taken tick is checked against this
+// gateway's players, and joins and leaves it shows lost are sent again. A tick or id
+// block of another world instance than the one followed is refused while that one is
+// live (heard within kWorldSilence: a second world process on the same name does not
+// take the gateway over, nor a stray message); once it is silent, the other instance
+// is followed from its own tick 1 (the world process restarted): the ids of the old
+// one are forgotten, the server is told to end every session that holds one
+// (take_newest()), and fresh ids are reserved.
 
 #include "dsoc/scaleout/nats_link.hpp"
 #include "dsoc/scaleout/world_messages.hpp"
 #include "dsoc/scaleout/world_tick.hpp"
+#include "dsoc/server/gateway_ids.hpp"
 #include "dsoc/server/server_config.hpp"
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/steady_timer.hpp>
 
+#include <chrono>
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -32,13 +42,35 @@ namespace dsoc::server {
 struct WorldFeedStats {
     std::uint64_t ticks_received = 0; ///< decoded and for this world
     std::uint64_t ticks_skipped = 0;  ///< replaced by a newer one before they were served
-    std::uint64_t bad_messages = 0; ///< ticks or id blocks that did not decode, or of another world
-    std::uint64_t id_blocks = 0;    ///< blocks of entity ids the world reserved for us
-    std::uint64_t ids_left = 0;     ///< of those, not given to a player yet
-    std::uint64_t not_sent = 0;     ///< joins, inputs or leaves the NATS link refused
+    /// Ticks or id blocks that did not decode, were of another world or went back in time.
+    std::uint64_t bad_messages = 0;
+    std::uint64_t id_blocks = 0;      ///< blocks of entity ids the world reserved for us
+    std::uint64_t ids_left = 0;       ///< of those, not given to a player yet
+    std::uint64_t not_sent = 0;       ///< joins, inputs or leaves the NATS link refused
+    std::uint64_t joins_resent = 0;   ///< players a tick lacked after their join was sent
+    std::uint64_t leaves_resent = 0;  ///< left players a tick still showed
+    std::uint64_t world_restarts = 0; ///< new world instances followed after a first one
+    /// Ticks and id blocks of another world instance, refused while the one followed was
+    /// live (a restarted world's first ones; steadily: a second world on this name).
+    std::uint64_t other_instance = 0;
     std::uint64_t nats_disconnects = 0;
     std::uint64_t nats_reconnects = 0;
     std::string last_error; ///< why the last bad message was refused
+};
+
+/// The world process restarted: the instance that replaced the one the gateway followed.
+struct WorldRestart {
+    std::uint64_t old_instance = 0;
+    std::uint64_t new_instance = 0;
+};
+
+/// A world tick as the server takes it.
+struct TakenTick {
+    scaleout::WorldTick tick;
+    /// Set on the first tick taken after the world process restarted: every entity id the
+    /// gateway gave out before is void (the new world hands the same numbers to others),
+    /// so every session holding one must end.
+    std::optional<WorldRestart> restart;
 };
 
 class WorldFeed {
@@ -54,27 +86,44 @@ public:
     WorldFeed(const WorldFeed&) = delete;
     WorldFeed& operator=(const WorldFeed&) = delete;
 
-    /// The newest tick not served yet (nothing when none arrived since the last call).
-    [[nodiscard]] std::optional<scaleout::WorldTick> take_newest();
+    /// The newest tick not served yet (nothing when none arrived since the last call),
+    /// after sending again the joins and leaves it shows lost (GatewayIds::check).
+    [[nodiscard]] std::optional<TakenTick> take_newest();
     /// Whether a tick waits to be taken.
     [[nodiscard]] bool tick_waiting() const;
     /// An entity id for a new player, or 0 when the world has not reserved any for us
-    /// (unreachable, or not answered yet). Asks for more before they run out.
+    /// (unreachable, or not answered yet) or a restart of the world has not been taken
+    /// yet. Asks for more before they run out.
     [[nodiscard]] std::uint32_t take_entity_id();
 
+    /// Sends the joins (leaves) of those of `entity_ids` that take_entity_id() gave out
+    /// since the world instance followed now was first heard of (any other is void:
+    /// nothing is sent for it).
     void send_joins(std::span<const std::uint32_t> entity_ids);
     void send_inputs(std::span<const scaleout::PlayerInput> inputs);
     void send_leaves(std::span<const std::uint32_t> entity_ids);
 
     [[nodiscard]] WorldFeedStats stats() const;
 
+    /// How long the world instance followed must have been silent before another one is
+    /// followed: far longer than a live world's period, short beside a restart. [Units: ms]
+    static constexpr std::chrono::milliseconds kWorldSilence{1000};
+
 private:
     void on_tick_message(const scaleout::NatsMessage& message);
     void on_block_message(const scaleout::NatsMessage& message);
+    /// Whether a message of world `instance` is to be taken (under mutex_): one of the
+    /// instance followed, or of another once that one is silent (followed from now on; a
+    /// restart when one was followed before: its ids are forgotten).
+    bool follow(std::uint64_t instance);
     /// Asks for a block when fewer than half a block are left and none was asked for
     /// within the last second.
     void maybe_reserve();
     void send(const std::string& what, const std::vector<std::byte>& bytes);
+    /// A join (leave) batch of `entity_ids`, when there are any.
+    void send_batch(scaleout::IdBatchKind kind, std::span<const std::uint32_t> entity_ids);
+    /// Records `entity_ids` as joined (left) in ids_ and sends those given out.
+    void send_ids(scaleout::IdBatchKind kind, std::span<const std::uint32_t> entity_ids);
 
     boost::asio::io_context& io_;
     std::string world_name_;
@@ -88,8 +137,11 @@ private:
 
     mutable std::mutex mutex_; ///< the NATS threads' hand-over
     std::optional<scaleout::WorldTick> newest_;
-    std::uint64_t last_tick_ = 0;   ///< the newest tick accepted; older ones are refused
-    std::deque<std::uint32_t> ids_; ///< reserved for us, not given out
+    std::uint64_t instance_ = 0; ///< the world instance followed (0: none heard of yet)
+    std::chrono::steady_clock::time_point heard_{}; ///< its last tick or block
+    std::uint64_t last_tick_ = 0; ///< the newest tick of it accepted; older ones are refused
+    std::optional<WorldRestart> restart_; ///< not taken by the server yet
+    GatewayIds ids_;                      ///< of the instance followed
     WorldFeedStats stats_;
     std::chrono::steady_clock::time_point last_reserve_{};
     bool reserve_pending_ = false;

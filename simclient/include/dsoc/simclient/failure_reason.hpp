@@ -20,6 +20,8 @@ inline constexpr std::string_view unauthorized = "unauthorized";   ///< the toke
 inline constexpr std::string_view version_mismatch = "version_mismatch";
 /// The server shut down before the scenario's end.
 inline constexpr std::string_view server_shutdown = "server_shutdown";
+/// A gateway's world process restarted: the session's player is gone; connect again.
+inline constexpr std::string_view world_restarted = "world_restarted";
 /// The server ended the session for another reason (server_full, too_slow,
 /// handshake_timeout, input_flood, ...; the reason is in disconnect_reasons).
 inline constexpr std::string_view dropped_by_server = "dropped_by_server";
