@@ -47,9 +47,9 @@ void run_one(const interest::GameWorld& world, interest::InterestPolicy& policy,
     }
     if (job.build && job.replication->acked()) {
         protocol::UpdateColumns* columns = job.frame != nullptr ? job.columns : nullptr;
-        job.replication->build_acked_snapshot(world, interest, tick, job.acked_tick, job.audit,
-                                              *job.envelope->mutable_snapshot(), job.poses,
-                                              columns);
+        job.replication->build_acked_snapshot(world, interest, job.viewer.eye, tick, job.acked_tick,
+                                              job.audit, *job.envelope->mutable_snapshot(),
+                                              job.poses, columns);
         if (job.frame != nullptr) {
             snapshot_frame(tick, *job.envelope, columns, *job.frame);
         }

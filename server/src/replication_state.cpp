@@ -2,6 +2,7 @@
 
 #include "dsoc/protocol/interest_merge.hpp"
 
+#include <algorithm>
 #include <cassert>
 
 namespace dsoc::server {
@@ -113,19 +114,70 @@ void ReplicationState::build_snapshot(const interest::GameWorld& world,
                     (columns != nullptr ? columns->count() : snapshot.update_head_size());
 }
 
+void ReplicationState::choose_enters(const interest::GameWorld& world,
+                                     std::span<const interest::Interest> interest, glm::vec3 eye,
+                                     const protocol::DeltaFrame* baseline) {
+    enter_allowed_.clear();
+    if (interest.size() <= protocol::kMaxEntersPerSnapshot) {
+        return; // fewer wanted than may enter: no choice to make (the usual case)
+    }
+    // The entities the baseline lacks (both lists in increasing id order).
+    candidates_.clear();
+    const std::vector<interest::Entity>& entities = world.entities();
+    std::size_t at_base = 0;
+    std::size_t at_world = 0;
+    for (std::size_t i = 0; i < interest.size(); ++i) {
+        const std::uint32_t id = interest[i].id;
+        if (baseline != nullptr) {
+            while (at_base < baseline->entities.size() && baseline->entities[at_base].id < id) {
+                ++at_base;
+            }
+            if (at_base < baseline->entities.size() && baseline->entities[at_base].id == id) {
+                continue; // carried, not entered
+            }
+        }
+        while (at_world < entities.size() && entities[at_world].id < id) {
+            ++at_world;
+        }
+        const glm::vec3 d = at_world < entities.size() && entities[at_world].id == id
+                                ? entities[at_world].move.position - eye
+                                : glm::vec3(0.0f); // not in the world: skipped when built
+        candidates_.push_back(
+            {interest[i].tier, d.x * d.x + d.y * d.y + d.z * d.z, static_cast<std::uint32_t>(i)});
+    }
+    if (candidates_.size() <= protocol::kMaxEntersPerSnapshot) {
+        return;
+    }
+    const auto first = [](const EnterCandidate& a, const EnterCandidate& b) {
+        return a.tier != b.tier             ? a.tier < b.tier
+               : a.distance2 != b.distance2 ? a.distance2 < b.distance2
+                                            : a.index < b.index;
+    };
+    const auto cut =
+        candidates_.begin() + static_cast<std::ptrdiff_t>(protocol::kMaxEntersPerSnapshot);
+    std::nth_element(candidates_.begin(), cut, candidates_.end(), first);
+    enter_allowed_.assign(interest.size(), 1);
+    for (auto it = cut; it != candidates_.end(); ++it) {
+        enter_allowed_[it->index] = 0;
+    }
+}
+
 void ReplicationState::build_acked_snapshot(
-    const interest::GameWorld& world, std::span<const interest::Interest> interest,
+    const interest::GameWorld& world, std::span<const interest::Interest> interest, glm::vec3 eye,
     std::uint64_t tick, std::optional<std::uint64_t> acked_tick, bool audit,
     protocol::pb::Snapshot& snapshot, const SharedPoses* poses, protocol::UpdateColumns* columns) {
     assert(acked_encoder_ != nullptr);
     protocol::AckedSnapshotEncoder& encoder = *acked_encoder_;
     encoder.begin(tick, acked_tick, snapshot, columns);
+    choose_enters(world, interest, eye, encoder.baseline());
     known_.clear();
+    last_deferred_ = 0;
     const std::vector<interest::Entity>& entities = world.entities();
     const std::uint32_t* ids = poses != nullptr ? poses->ids().data() : nullptr;
     std::size_t next_entity = 0;
     const auto id_at = [&](std::size_t k) { return ids != nullptr ? ids[k] : entities[k].id; };
-    for (const interest::Interest& wanted : interest) { // increasing ids, as the world's
+    for (std::size_t i = 0; i < interest.size(); ++i) { // increasing ids, as the world's
+        const interest::Interest& wanted = interest[i];
         while (next_entity < entities.size() && id_at(next_entity) < wanted.id) {
             ++next_entity;
         }
@@ -137,6 +189,10 @@ void ReplicationState::build_acked_snapshot(
             poses != nullptr ? poses->at(next_entity, wanted.tier)
                              : protocol::quantize(pose_of(e), encoder.settings(), wanted.tier);
         if (!encoder.carry(wanted.id, pose, wanted.tier, snapshot)) {
+            if (!enter_allowed_.empty() && enter_allowed_[i] == 0) {
+                ++last_deferred_; // no room this snapshot: it enters in a later one
+                continue;
+            }
             const glm::vec3 half = world.box_of(e).half_extents();
             encoder.enter(wanted.id, pose, wanted.tier, static_cast<std::uint32_t>(e.kind),
                           {half.x, half.y, half.z}, snapshot);

@@ -427,6 +427,7 @@ void Server::send_snapshots() {
             ++(coded.coded_against_baseline ? stats_.acked_snapshots_against_baseline
                                             : stats_.acked_snapshots_whole);
             stats_.acked_baseline_age_ticks += coded.baseline_age;
+            stats_.acked_enters_deferred += client.replication.last_deferred();
         }
         if (client.session->writable_now()) {
             direct_writes_.push_back(&client);

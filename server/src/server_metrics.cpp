@@ -124,6 +124,11 @@ std::string Server::render_metrics() const {
                     "Ticks from the baseline to the snapshot, summed over the snapshots coded "
                     "against one: divided by their count, how late acknowledgements arrive.",
                     d(stats_.acked_baseline_age_ticks));
+        out.counter("dsoc_udp_enters_deferred_total",
+                    "Entities left out of a snapshot for want of room: more wanted to enter "
+                    "than one snapshot takes (a crowd comes into view); they enter later, "
+                    "nearest first.",
+                    d(stats_.acked_enters_deferred));
         out.counter("dsoc_udp_challenges_sent_total",
                     "UDP handshake challenges sent (one per request within its address's budget).",
                     d(udp_->challenges_sent()));

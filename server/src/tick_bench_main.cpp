@@ -174,7 +174,10 @@ int main(int argc, char** argv) {
     std::uint64_t updates = 0;
     std::uint64_t bytes = 0;
     std::uint64_t decode_problems = 0;
-    std::uint64_t fragments = 0;                  // datagrams (--udp)
+    std::uint64_t fragments = 0; // datagrams (--udp)
+    std::uint64_t oversized =
+        0;                      // snapshots over kMaxSnapshotBytes: not sent, as the server (--udp)
+    std::uint64_t deferred = 0; // entities left to enter in a later snapshot (--udp)
     std::vector<std::uint8_t> datagrams;          // one snapshot's (--udp)
     protocol::EnvelopeArena incoming(256 * 1024); // as the simulated clients decode
     for (int t = 1; t <= warm_up + ticks; ++t) {
@@ -236,8 +239,8 @@ int main(int argc, char** argv) {
                 const auto delay = static_cast<std::uint64_t>(ack_delay);
                 const std::optional<std::uint64_t> acked =
                     newest && *newest > delay ? std::optional(*newest - delay) : std::nullopt;
-                c->replication.build_acked_snapshot(world, c->interest, tick, acked, false,
-                                                    *c->envelope.mutable_snapshot(), &poses,
+                c->replication.build_acked_snapshot(world, c->interest, viewer.eye, tick, acked,
+                                                    false, *c->envelope.mutable_snapshot(), &poses,
                                                     &c->columns);
                 lap(p.snapshot);
                 // As the server: the frame on the pool, its datagrams in write_now().
@@ -247,8 +250,10 @@ int main(int argc, char** argv) {
                     1, 1, tick, std::span(c->frame).subspan(8), datagrams);
                 lap(p.encode);
                 const protocol::pb::Envelope* received = nullptr;
-                if (count == 0 || incoming.decode(std::span(c->frame).subspan(8), received) !=
-                                      protocol::DecodeError::none) {
+                if (count == 0) {
+                    oversized += measured ? 1 : 0; // the client never sees nor acknowledges it
+                } else if (incoming.decode(std::span(c->frame).subspan(8), received) !=
+                           protocol::DecodeError::none) {
                     ++decode_problems;
                 } else {
                     decode_problems += c->acked_decoder.apply(received->snapshot()).size();
@@ -258,6 +263,7 @@ int main(int argc, char** argv) {
                     updates += c->replication.last_updates();
                     bytes += datagrams.size() - 2 * count; // without the length prefixes
                     fragments += count;
+                    deferred += c->replication.last_deferred();
                 }
                 continue;
             }
@@ -330,6 +336,12 @@ int main(int argc, char** argv) {
     if (udp) {
         fmt::print("  datagrams            {:.3f} per snapshot\n",
                    static_cast<double>(fragments) / client_tick);
+        fmt::print("  oversized            {} snapshots over {} bytes, not sent (the server drops "
+                   "them too; docs/protocol.md)\n",
+                   oversized, protocol::kMaxSnapshotBytes);
+        fmt::print("  deferred enters      {:.2f} per client-tick (over {} entering one snapshot: "
+                   "the rest enter later, nearest first)\n",
+                   static_cast<double>(deferred) / client_tick, protocol::kMaxEntersPerSnapshot);
     }
     return decode_problems == 0 ? cli::exit_ok : cli::exit_failure;
 }

@@ -1,4 +1,6 @@
+#include "dsoc/protocol/acked_snapshot.hpp"
 #include "dsoc/protocol/compact_snapshot.hpp"
+#include "dsoc/protocol/datagram.hpp"
 #include "dsoc/server/interest_setup.hpp"
 #include "dsoc/server/replication_state.hpp"
 #include "support/test_maps.hpp"
@@ -149,6 +151,81 @@ TEST(ReplicationState, RandomSequencesKeepTheDecodedReplicaExact) {
         }
     }
     EXPECT_GT(audited, 300u * 10u); // most known entities are current on most ticks
+}
+
+TEST(ReplicationState, ACrowdEntersOverSeveralSnapshotsSeenAndNearestFirst) {
+    // More entities come into view at once than one acknowledged-delta snapshot enters:
+    // the seen ones nearest the eye enter first, the rest in the next snapshots, and no
+    // snapshot grows past what the datagrams carry.
+    constexpr std::size_t kCrowd = protocol::kMaxEntersPerSnapshot + 600;
+    interest::GameWorld world(world_settings(config_with_bots(static_cast<int>(kCrowd))),
+                              testing::rooms_map());
+    std::mt19937 rng(5);
+    for (int i = 0; i < 20; ++i) {
+        world.step(1.0f / 30.0f); // spread out from the spawn points
+    }
+    std::vector<interest::Interest> all;
+    for (const interest::Entity& e : world.entities()) {
+        all.push_back({e.id, rng() % 4 == 0 ? interest::kHeardTier : std::uint8_t{0}});
+    }
+    ASSERT_EQ(all.size(), kCrowd);
+    const glm::vec3 eye = world.entities().front().move.position;
+    const auto distance = [&](std::uint32_t id) {
+        return glm::length(world.find(id)->move.position - eye);
+    };
+    const protocol::QuantizationSettings quantization;
+    ReplicationState state(quantization, true);
+    protocol::AckedSnapshotDecoder client(quantization);
+    protocol::pb::Snapshot snap;
+
+    state.build_acked_snapshot(world, all, eye, 1, std::nullopt, false, snap);
+    EXPECT_EQ(state.last_acked().enters, protocol::kMaxEntersPerSnapshot);
+    EXPECT_EQ(state.last_deferred(), kCrowd - protocol::kMaxEntersPerSnapshot);
+    EXPECT_LE(snap.ByteSizeLong(), protocol::kMaxSnapshotBytes);
+    // Every seen entity that entered is nearer than every seen one left out, and a heard
+    // one entered only if every seen one did.
+    std::vector<std::uint32_t> known = state.known();
+    float farthest_in = 0.0f;
+    float nearest_out = 1e30f;
+    std::size_t heard_in = 0;
+    std::size_t seen_out = 0;
+    for (const interest::Interest& i : all) {
+        const bool in = std::binary_search(known.begin(), known.end(), i.id);
+        if (i.tier == interest::kHeardTier) {
+            heard_in += in ? 1 : 0;
+        } else if (in) {
+            farthest_in = std::max(farthest_in, distance(i.id));
+        } else {
+            nearest_out = std::min(nearest_out, distance(i.id));
+            ++seen_out;
+        }
+    }
+    EXPECT_GT(seen_out, 0u); // the test's crowd has more seen entities than one snapshot takes
+    EXPECT_EQ(heard_in, 0u);
+    EXPECT_LE(farthest_in, nearest_out);
+    protocol::pb::Snapshot wire;
+    ASSERT_TRUE(wire.ParseFromString(snap.SerializeAsString()));
+    auto problems = client.apply(wire);
+    ASSERT_TRUE(problems.empty()) << problems.front().kind << ": " << problems.front().detail;
+    ASSERT_NE(client.newest(), nullptr);
+    EXPECT_EQ(client.newest()->entities.size(), protocol::kMaxEntersPerSnapshot);
+
+    // Acknowledged: the rest enter, and the client knows the whole crowd.
+    world.step(1.0f / 30.0f);
+    state.build_acked_snapshot(world, all, eye, 2, 1, false, snap);
+    EXPECT_EQ(state.last_acked().enters, kCrowd - protocol::kMaxEntersPerSnapshot);
+    EXPECT_EQ(state.last_deferred(), 0u);
+    ASSERT_TRUE(wire.ParseFromString(snap.SerializeAsString()));
+    problems = client.apply(wire);
+    ASSERT_TRUE(problems.empty()) << problems.front().kind << ": " << problems.front().detail;
+    EXPECT_EQ(client.newest()->entities.size(), kCrowd);
+
+    // Fewer than the limit wanted: nothing is deferred (the usual case, no choice made).
+    ReplicationState small(quantization, true);
+    const std::vector<interest::Interest> some(all.begin(), all.begin() + 100);
+    small.build_acked_snapshot(world, some, eye, 1, std::nullopt, false, snap);
+    EXPECT_EQ(small.last_acked().enters, 100u);
+    EXPECT_EQ(small.last_deferred(), 0u);
 }
 
 } // namespace

@@ -26,6 +26,14 @@
 
 namespace dsoc::protocol {
 
+/// The most entities one acknowledged-delta snapshot enters (the sender's rule; a
+/// receiver takes any number). An enter carries an entity's whole state, several times
+/// the bytes of a carried one, so a client that comes into view of a crowd (its first
+/// snapshot, a teleport) gets the crowd over a few round trips instead of a snapshot too
+/// large to send (datagram.hpp's kMaxSnapshotBytes) that would be dropped again every
+/// tick. [Units: entities]
+inline constexpr std::size_t kMaxEntersPerSnapshot = 1024;
+
 /// What one acknowledged-delta snapshot holds.
 struct AckedSnapshotCounts {
     std::uint32_t enters = 0;
@@ -65,8 +73,9 @@ public:
              const std::array<float, 3>& half_extents, pb::Snapshot& out);
     /// add() in two steps, for a caller whose kind and size of an entity cost a lookup
     /// that only an enter needs: carry() adds the entity when the baseline holds it and
-    /// returns true; otherwise it writes nothing for it and returns false, and enter()
-    /// (same id, pose and tier) must follow before the next entity.
+    /// returns true; otherwise it writes nothing for it and returns false, and either
+    /// enter() (same id, pose and tier) follows before the next entity, or the entity is
+    /// left out of this snapshot (not in its frame: the client does not know it).
     [[nodiscard]] bool carry(std::uint32_t id, const QuantizedPose& pose, std::uint8_t tier,
                              pb::Snapshot& out);
     void enter(std::uint32_t id, const QuantizedPose& pose, std::uint8_t tier, std::uint32_t kind,
@@ -78,6 +87,9 @@ public:
     /// this encoder keeps it (not once a newer tick is acknowledged).
     [[nodiscard]] const DeltaFrame* frame(std::uint64_t tick) const { return frames_.find(tick); }
     [[nodiscard]] const QuantizationSettings& settings() const { return settings_; }
+    /// Between begin() and finish(): the frame this snapshot is coded against (its
+    /// entities in increasing id order), or nullptr when coded against nothing.
+    [[nodiscard]] const DeltaFrame* baseline() const { return base_; }
 
 private:
     void leave_baseline_below(std::uint32_t id, pb::Snapshot& out);

@@ -89,26 +89,48 @@ public:
     /// exact pose of every tier-0 entity (those are updated every tick). `poses`, `columns`: as
     /// build_snapshot()'s (frame with snapshot_frame() given the same columns). Only when
     /// acked().
+    /// At most protocol::kMaxEntersPerSnapshot entities enter: when more want to, those on
+    /// the lowest tier (seen before heard) and, within a tier, nearest `eye` enter, and the
+    /// rest are left for later snapshots (last_deferred()); the client then knows
+    /// `interest` less those.
     void build_acked_snapshot(const interest::GameWorld& world,
-                              std::span<const interest::Interest> interest, std::uint64_t tick,
-                              std::optional<std::uint64_t> acked_tick, bool audit,
-                              protocol::pb::Snapshot& snapshot, const SharedPoses* poses = nullptr,
+                              std::span<const interest::Interest> interest, glm::vec3 eye,
+                              std::uint64_t tick, std::optional<std::uint64_t> acked_tick,
+                              bool audit, protocol::pb::Snapshot& snapshot,
+                              const SharedPoses* poses = nullptr,
                               protocol::UpdateColumns* columns = nullptr);
 
     /// Enters and update entries the last snapshot built holds.
     [[nodiscard]] std::size_t last_updates() const { return last_updates_; }
     /// What the last build_acked_snapshot() coded against.
     [[nodiscard]] const protocol::AckedSnapshotCounts& last_acked() const { return last_acked_; }
+    /// Entities of the last build_acked_snapshot()'s interest that did not enter for want of
+    /// room (protocol::kMaxEntersPerSnapshot).
+    [[nodiscard]] std::size_t last_deferred() const { return last_deferred_; }
     [[nodiscard]] std::size_t known_count() const { return known_.size(); }
     [[nodiscard]] const std::vector<std::uint32_t>& known() const { return known_; }
 
 private:
+    /// Fills enter_allowed_ (one flag per entry of `interest`) when more entities want to
+    /// enter than a snapshot takes; leaves it empty (all may enter) otherwise.
+    void choose_enters(const interest::GameWorld& world,
+                       std::span<const interest::Interest> interest, glm::vec3 eye,
+                       const protocol::DeltaFrame* baseline);
+
     protocol::SnapshotEncoder encoder_;
     std::unique_ptr<protocol::AckedSnapshotEncoder> acked_encoder_; // when acked()
     std::size_t last_updates_ = 0;
     protocol::AckedSnapshotCounts last_acked_;
     std::vector<std::uint32_t> known_; // increasing
     std::vector<std::uint32_t> next_known_;
+    std::size_t last_deferred_ = 0;
+    std::vector<std::uint8_t> enter_allowed_; ///< choose_enters()'s, by interest index
+    struct EnterCandidate {
+        std::uint8_t tier = 0;
+        float distance2 = 0.0f;  ///< from the eye, squared [world units^2]
+        std::uint32_t index = 0; ///< in the interest set
+    };
+    std::vector<EnterCandidate> candidates_; ///< choose_enters()'s scratch
 };
 
 } // namespace dsoc::server

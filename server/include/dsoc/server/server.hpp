@@ -127,6 +127,9 @@ struct ServerStats {
     std::uint64_t acked_snapshots_against_baseline = 0;
     std::uint64_t acked_snapshots_whole = 0;
     std::uint64_t acked_baseline_age_ticks = 0;
+    /// Entities a client was to know that did not enter its snapshot for want of room
+    /// (protocol::kMaxEntersPerSnapshot): they enter in its later snapshots.
+    std::uint64_t acked_enters_deferred = 0;
     /// Role gateway, per tick: from the world process encoding the tick to this gateway
     /// handing the tick's last snapshot to the kernel (both clocks CLOCK_MONOTONIC, so
     /// meaningful when both run on one host). Microseconds, and as a histogram.
