@@ -76,14 +76,16 @@ void other_message(std::uint8_t which, std::span<const std::byte> bytes) {
         break;
     case 2:
         if (auto inputs = dsoc::scaleout::decode_inputs(bytes, "fuzz"); inputs.ok()) {
-            dsoc::scaleout::encode_inputs(inputs->gateway, inputs->entries, again);
+            dsoc::scaleout::encode_inputs({inputs->gateway, inputs->instance}, inputs->entries,
+                                          again);
             same_or_abort(again, bytes);
         }
         break;
     default: {
         const IdBatchKind kind = which % 5 == 3 ? IdBatchKind::join : IdBatchKind::leave;
         if (auto ids = dsoc::scaleout::decode_id_batch(kind, bytes, "fuzz"); ids.ok()) {
-            dsoc::scaleout::encode_id_batch(kind, ids->gateway, ids->entries, again);
+            dsoc::scaleout::encode_id_batch(kind, {ids->gateway, ids->instance}, ids->entries,
+                                            again);
             same_or_abort(again, bytes);
         }
     }

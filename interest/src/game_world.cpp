@@ -36,7 +36,7 @@ GameWorld::GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::
     bots_ = sim::spawn_wander_bots(collision_, move_, map_->spawn_points,
                                    static_cast<std::size_t>(settings.bots), settings.seed);
     for (std::size_t i = 0; i < bots_.size(); ++i) {
-        Entity& bot = add(EntityKind::bot, next_id_++);
+        Entity& bot = insert(Entity{.id = next_id_++, .kind = EntityKind::bot});
         bot.bot = static_cast<std::int32_t>(i);
         bot.move = bots_[i].state;
         bot.team = team_for(bot.id);
@@ -44,41 +44,70 @@ GameWorld::GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::
     next_spawn_ = static_cast<std::uint32_t>(settings.seed % map_->spawn_points.size());
 }
 
-Entity& GameWorld::add(EntityKind kind, std::uint32_t id) {
-    Entity e;
-    e.id = id;
-    e.kind = kind;
-    if (entities_.empty() || entities_.back().id < id) {
-        entities_.push_back(e);
-        index_[e.id] = entities_.size() - 1;
+Entity& GameWorld::insert(Entity e) {
+    if (entities_.empty() || entities_.back().id < e.id) {
+        entities_.push_back(std::move(e));
+        index_[entities_.back().id] = entities_.size() - 1;
         return entities_.back();
     }
     // A reserved id spawned after a later one: insert in id order.
-    const auto at = std::lower_bound(entities_.begin(), entities_.end(), id,
+    const auto at = std::lower_bound(entities_.begin(), entities_.end(), e.id,
                                      [](const Entity& a, std::uint32_t b) { return a.id < b; });
     const auto index = at - entities_.begin();
-    entities_.insert(at, e);
+    entities_.insert(at, std::move(e));
     rebuild_index();
     return entities_[static_cast<std::size_t>(index)];
 }
 
 std::uint32_t GameWorld::reserve_player() {
-    return next_id_++;
+    return reserve_players(1);
+}
+
+std::uint32_t GameWorld::reserve_players(std::uint32_t count) {
+    if (count > ids_left()) {
+        return 0;
+    }
+    const std::uint32_t first = next_id_;
+    next_id_ += count;
+    return first;
 }
 
 std::uint32_t GameWorld::spawn_player() {
     const std::uint32_t id = reserve_player();
-    spawn_reserved(id);
+    if (id != 0) {
+        spawn_reserved(id);
+    }
     return id;
 }
 
-void GameWorld::spawn_reserved(std::uint32_t id) {
+Entity GameWorld::new_player(std::uint32_t id) {
     assert(id != 0 && id < next_id_ && find(id) == nullptr); // reserved, not spawned yet
     const auto& spawn = map_->spawn_points[next_spawn_++ % map_->spawn_points.size()];
-    Entity& p = add(EntityKind::player, id);
+    Entity p{.id = id, .kind = EntityKind::player};
     p.move = sim::spawn_state(collision_, move_, spawn.origin);
     p.yaw_deg = wrap_degrees(spawn.yaw_degrees);
     p.team = team_for(id);
+    return p;
+}
+
+void GameWorld::spawn_reserved(std::uint32_t id) {
+    insert(new_player(id));
+}
+
+void GameWorld::spawn_reserved(std::span<const std::uint32_t> ids) {
+    if (ids.empty()) {
+        return;
+    }
+    std::vector<std::uint32_t> sorted(ids.begin(), ids.end());
+    std::sort(sorted.begin(), sorted.end());
+    sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+    const auto old_size = static_cast<std::ptrdiff_t>(entities_.size());
+    for (const std::uint32_t id : sorted) {
+        entities_.push_back(new_player(id));
+    }
+    std::inplace_merge(entities_.begin(), entities_.begin() + old_size, entities_.end(),
+                       [](const Entity& a, const Entity& b) { return a.id < b.id; });
+    rebuild_index();
 }
 
 visibility::TeamId GameWorld::team_for(std::uint32_t id) const {
@@ -107,6 +136,18 @@ void GameWorld::remove(std::uint32_t id) {
         return;
     }
     entities_.erase(entities_.begin() + static_cast<std::ptrdiff_t>(it->second));
+    rebuild_index();
+}
+
+void GameWorld::remove(std::span<const std::uint32_t> ids) {
+    if (ids.empty()) {
+        return;
+    }
+    std::vector<std::uint32_t> sorted(ids.begin(), ids.end());
+    std::sort(sorted.begin(), sorted.end());
+    std::erase_if(entities_, [&](const Entity& e) {
+        return std::binary_search(sorted.begin(), sorted.end(), e.id);
+    });
     rebuild_index();
 }
 

@@ -16,8 +16,8 @@ constexpr std::uint32_t kJoinMagic = 0x4a575344u;    // "DSWJ"
 constexpr std::uint32_t kInputMagic = 0x49575344u;   // "DSWI"
 constexpr std::uint32_t kLeaveMagic = 0x4c575344u;   // "DSWL"
 constexpr std::size_t kBlockBytes = 32;
-constexpr std::size_t kReserveBytes = 20;
-constexpr std::size_t kBatchHeaderBytes = 20;
+constexpr std::size_t kReserveBytes = 28;
+constexpr std::size_t kBatchHeaderBytes = 28;
 constexpr std::size_t kInputBytes = 24;
 constexpr std::uint8_t kJump = 1;
 constexpr std::uint8_t kFire = 2;
@@ -47,18 +47,31 @@ std::string header_problem(std::span<const std::byte> bytes, std::uint32_t magic
     return {};
 }
 
-/// The gateway and entry count of a batch whose entries take `entry_bytes` each, after
-/// checking that exactly that many follow; `problem` says why not.
+void put_batch_header(std::vector<std::byte>& out, std::uint32_t magic, BatchFrom from,
+                      std::size_t count) {
+    out.clear();
+    put_header(out, magic);
+    put(out, from.gateway);
+    put(out, from.instance);
+    put(out, static_cast<std::uint32_t>(count));
+}
+
+/// The gateway, instance and entry count of a batch whose entries take `entry_bytes`
+/// each, after checking that exactly that many follow; `problem` says why not.
+template <typename Entry>
 std::uint32_t batch_count(std::span<const std::byte> bytes, std::size_t entry_bytes,
-                          std::uint64_t& gateway, std::string& problem) {
+                          Batch<Entry>& batch, std::string& problem) {
     if (bytes.size() < kBatchHeaderBytes) {
-        problem = std::to_string(bytes.size()) + " bytes: no gateway and entry count";
+        problem = std::to_string(bytes.size()) + " bytes: no gateway, instance and entry count";
         return 0;
     }
-    gateway = get<std::uint64_t>(bytes, 8);
-    const auto count = get<std::uint32_t>(bytes, 16);
-    if (gateway == 0) {
+    batch.gateway = get<std::uint64_t>(bytes, 8);
+    batch.instance = get<std::uint64_t>(bytes, 16);
+    const auto count = get<std::uint32_t>(bytes, 24);
+    if (batch.gateway == 0) {
         problem = "gateway id 0";
+    } else if (batch.instance == 0) {
+        problem = "world instance 0";
     } else if (count > kMaxBatchEntries ||
                bytes.size() != kBatchHeaderBytes + static_cast<std::size_t>(count) * entry_bytes) {
         problem = std::to_string(count) + " entries in " + std::to_string(bytes.size()) +
@@ -132,6 +145,7 @@ void encode_reserve_request(const ReserveRequest& request, std::vector<std::byte
     out.clear();
     put_header(out, kReserveMagic);
     put(out, request.gateway);
+    put(out, request.instance);
     put(out, request.count);
 }
 
@@ -146,7 +160,8 @@ maps::Result<ReserveRequest> decode_reserve_request(std::span<const std::byte> b
                                std::to_string(bytes.size()) + " bytes, a reserve request has " +
                                    std::to_string(kReserveBytes)};
     }
-    const ReserveRequest request{get<std::uint64_t>(bytes, 8), get<std::uint32_t>(bytes, 16)};
+    const ReserveRequest request{get<std::uint64_t>(bytes, 8), get<std::uint64_t>(bytes, 16),
+                                 get<std::uint32_t>(bytes, 24)};
     if (request.gateway == 0) {
         return maps::LoadError{source, "reserve request", "gateway id 0"};
     }
@@ -157,12 +172,9 @@ maps::Result<ReserveRequest> decode_reserve_request(std::span<const std::byte> b
     return request;
 }
 
-void encode_inputs(std::uint64_t gateway, std::span<const PlayerInput> inputs,
+void encode_inputs(BatchFrom from, std::span<const PlayerInput> inputs,
                    std::vector<std::byte>& out) {
-    out.clear();
-    put_header(out, kInputMagic);
-    put(out, gateway);
-    put(out, static_cast<std::uint32_t>(inputs.size()));
+    put_batch_header(out, kInputMagic, from, inputs.size());
     for (const PlayerInput& in : inputs) {
         put(out, in.entity_id);
         put(out, in.wish.x);
@@ -182,7 +194,7 @@ maps::Result<Batch<PlayerInput>> decode_inputs(std::span<const std::byte> bytes,
     }
     std::string problem;
     Batch<PlayerInput> batch;
-    const std::uint32_t count = batch_count(bytes, kInputBytes, batch.gateway, problem);
+    const std::uint32_t count = batch_count(bytes, kInputBytes, batch, problem);
     if (!problem.empty()) {
         return maps::LoadError{source, "input batch", problem};
     }
@@ -214,12 +226,10 @@ maps::Result<Batch<PlayerInput>> decode_inputs(std::span<const std::byte> bytes,
     return batch;
 }
 
-void encode_id_batch(IdBatchKind kind, std::uint64_t gateway,
-                     std::span<const std::uint32_t> entity_ids, std::vector<std::byte>& out) {
-    out.clear();
-    put_header(out, kind == IdBatchKind::join ? kJoinMagic : kLeaveMagic);
-    put(out, gateway);
-    put(out, static_cast<std::uint32_t>(entity_ids.size()));
+void encode_id_batch(IdBatchKind kind, BatchFrom from, std::span<const std::uint32_t> entity_ids,
+                     std::vector<std::byte>& out) {
+    put_batch_header(out, kind == IdBatchKind::join ? kJoinMagic : kLeaveMagic, from,
+                     entity_ids.size());
     for (const std::uint32_t id : entity_ids) {
         put(out, id);
     }
@@ -235,7 +245,7 @@ decode_id_batch(IdBatchKind kind, std::span<const std::byte> bytes, const std::s
     }
     std::string problem;
     Batch<std::uint32_t> batch;
-    const std::uint32_t count = batch_count(bytes, sizeof(std::uint32_t), batch.gateway, problem);
+    const std::uint32_t count = batch_count(bytes, sizeof(std::uint32_t), batch, problem);
     if (!problem.empty()) {
         return maps::LoadError{source, name, problem};
     }

@@ -38,6 +38,13 @@ void WorldProcess::refuse(const std::string& why) {
     stats_.last_error = why;
 }
 
+bool WorldProcess::for_us(std::uint64_t instance) {
+    if (instance != instance_) {
+        ++stats_.other_instance;
+    }
+    return instance == instance_;
+}
+
 template <typename T>
 bool WorldProcess::accepted(const maps::Result<T>& decoded) {
     if (!decoded.ok()) {
@@ -75,38 +82,55 @@ bool WorldProcess::make_room(std::size_t count) {
     return true;
 }
 
+std::optional<IdBlock> WorldProcess::reserve_for(std::uint64_t gateway_id, std::uint32_t count,
+                                                 const std::string& subject) {
+    Gateway& gateway = heard_from(gateway_id);
+    // Before make_room: ids that cannot be handed out forget no lost gateway.
+    if (world_.ids_left() < count) {
+        ++stats_.ids_exhausted;
+        stats_.last_error = subject + ": " + std::to_string(count) + " ids asked for, " +
+                            std::to_string(world_.ids_left()) + " left below 2^32";
+        return std::nullopt;
+    }
+    if (!make_room(count)) {
+        refuse(subject + ": " + std::to_string(reserved_) +
+               " ids reserved and not joined already (at most " + std::to_string(kMaxReserved) +
+               ")");
+        return std::nullopt;
+    }
+    // tick() steps under the same lock, so no step sees half a block.
+    const IdBlock block{key_, instance_, world_.reserve_players(count), count};
+    for (std::uint32_t i = 0; i < count; ++i) {
+        gateway.reserved.insert(block.first_id + i);
+    }
+    reserved_ += count;
+    stats_.ids_reserved += count;
+    return block;
+}
+
 void WorldProcess::on_reserve(const NatsMessage& message) {
-    auto request = decode_reserve_request(message.data, std::string(message.subject));
-    IdBlock block{key_, instance_, 0, 0};
+    const std::string subject(message.subject);
+    auto request = decode_reserve_request(message.data, subject);
+    std::optional<IdBlock> block;
     {
         const std::lock_guard lock(mutex_);
         if (!accepted(request)) {
             return;
         }
         if (message.reply.empty()) {
-            refuse(std::string(message.subject) + ": a reserve request without a reply subject");
+            refuse(subject + ": a reserve request without a reply subject");
             return;
         }
-        Gateway& gateway = heard_from(request->gateway);
-        if (!make_room(request->count)) {
-            refuse(std::string(message.subject) + ": " + std::to_string(reserved_) +
-                   " ids reserved and not joined already (at most " + std::to_string(kMaxReserved) +
-                   ")");
-            return;
+        if (request->instance != 0 && !for_us(request->instance)) {
+            return; // 0: a gateway's first contact, before it follows any instance
         }
-        // tick() steps under the same lock, so no step sees half a block.
-        block.count = request->count;
-        block.first_id = world_.reserve_player();
-        gateway.reserved.insert(block.first_id);
-        for (std::uint32_t i = 1; i < block.count; ++i) {
-            gateway.reserved.insert(world_.reserve_player()); // consecutive: it counts up
-        }
-        reserved_ += block.count;
-        stats_.ids_reserved += block.count;
+        block = reserve_for(request->gateway, request->count, subject);
     }
-    std::vector<std::byte> bytes;
-    encode_id_block(block, bytes);
-    (void)link_.publish(message.reply, bytes); // lost: the gateway asks again, ids stay unused
+    if (block) {
+        std::vector<std::byte> bytes;
+        encode_id_block(*block, bytes);
+        (void)link_.publish(message.reply, bytes); // lost: the gateway asks again
+    }
 }
 
 void WorldProcess::on_gateway(const NatsMessage& message) {
@@ -130,7 +154,7 @@ void WorldProcess::on_gateway(const NatsMessage& message) {
 void WorldProcess::on_join(const NatsMessage& message) {
     auto batch = decode_id_batch(IdBatchKind::join, message.data, std::string(message.subject));
     const std::lock_guard lock(mutex_);
-    if (!accepted(batch)) {
+    if (!accepted(batch) || !for_us(batch->instance)) {
         return;
     }
     Gateway& gateway = heard_from(batch->gateway);
@@ -151,7 +175,7 @@ void WorldProcess::on_join(const NatsMessage& message) {
 void WorldProcess::on_input(const NatsMessage& message) {
     auto batch = decode_inputs(message.data, std::string(message.subject));
     const std::lock_guard lock(mutex_);
-    if (!accepted(batch)) {
+    if (!accepted(batch) || !for_us(batch->instance)) {
         return;
     }
     const Gateway& gateway = heard_from(batch->gateway);
@@ -170,7 +194,7 @@ void WorldProcess::on_input(const NatsMessage& message) {
 void WorldProcess::on_leave(const NatsMessage& message) {
     auto batch = decode_id_batch(IdBatchKind::leave, message.data, std::string(message.subject));
     const std::lock_guard lock(mutex_);
-    if (!accepted(batch)) {
+    if (!accepted(batch) || !for_us(batch->instance)) {
         return;
     }
     Gateway& gateway = heard_from(batch->gateway);
@@ -211,6 +235,28 @@ void WorldProcess::lose_silent_gateways(std::chrono::steady_clock::time_point no
     }
 }
 
+void WorldProcess::spawn_and_remove() {
+    spawning_.clear();
+    for (const auto& [gateway, id] : joining_) {
+        const auto it = gateways_.find(gateway);
+        if (it != gateways_.end() && it->second.players.count(id) != 0 &&
+            world_.find(id) == nullptr) { // not left (or lost) before its first step
+            spawning_.push_back(id);
+        }
+    }
+    joining_.clear();
+    // Each batch in one pass (a lost gateway's hundreds of players, or their return,
+    // cost one rebuild, not one each), in id order as the single-process server spawns
+    // them (an id joined twice, lost in between, spawns once).
+    world_.spawn_reserved(spawning_);
+    world_.remove(leaving_); // an id never spawned is ignored
+    for (const std::uint32_t id : leaving_) {
+        inputs_.erase(id);
+    }
+    stats_.leaves += leaving_.size();
+    leaving_.clear();
+}
+
 void WorldProcess::tick() {
     {
         const std::lock_guard lock(mutex_);
@@ -224,24 +270,7 @@ void WorldProcess::tick() {
             }
         }
         lose_silent_gateways(now);
-        // In id order, as the single-process server spawns them (GameWorld keeps
-        // entities in id order whatever the order; the spawn points are dealt in turn).
-        std::sort(joining_.begin(), joining_.end(),
-                  [](const auto& a, const auto& b) { return a.second < b.second; });
-        for (const auto& [gateway, id] : joining_) {
-            const auto it = gateways_.find(gateway);
-            if (it != gateways_.end() && it->second.players.count(id) != 0 &&
-                world_.find(id) == nullptr) { // not left (or lost) before its first step
-                world_.spawn_reserved(id);
-            }
-        }
-        joining_.clear();
-        for (const std::uint32_t id : leaving_) {
-            world_.remove(id); // an id never spawned is ignored
-            inputs_.erase(id);
-        }
-        stats_.leaves += leaving_.size();
-        leaving_.clear();
+        spawn_and_remove();
         // The world keeps each player's intent until the next input changes it.
         for (const auto& [id, in] : inputs_) {
             world_.set_player_input(id, in.wish, in.jump, in.yaw_deg, in.pitch_deg);

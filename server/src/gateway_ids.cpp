@@ -1,7 +1,8 @@
 #include "dsoc/server/gateway_ids.hpp"
 
+#include "dsoc/scaleout/world_messages.hpp"
+
 #include <algorithm>
-#include <iterator>
 
 namespace dsoc::server {
 
@@ -23,33 +24,31 @@ bool due(GatewayIds::Clock::time_point sent, GatewayIds::Clock::time_point now) 
 } // namespace
 
 void GatewayIds::add_block(std::uint32_t first, std::uint32_t count) {
-    const auto at = std::upper_bound(blocks_.begin(), blocks_.end(), first,
-                                     [](std::uint32_t id, const Block& b) { return id < b.first; });
-    blocks_.insert(at, Block{first, count});
     for (std::uint32_t i = 0; i < count; ++i) {
         unused_.push_back(first + i);
     }
+    wanted_ -= std::min<std::size_t>(wanted_, count);
 }
 
 std::uint32_t GatewayIds::take() {
     if (unused_.empty()) {
+        wanted_ = std::min<std::size_t>(wanted_ + 1, scaleout::kMaxIdBlock);
         return 0;
     }
     const std::uint32_t id = unused_.front();
     unused_.pop_front();
+    given_.emplace(id, true);
+    ++held_;
     return id;
 }
 
-bool GatewayIds::ours(std::uint32_t id) const {
-    // The last block starting at or before `id`.
-    const auto after =
-        std::upper_bound(blocks_.begin(), blocks_.end(), id,
-                         [](std::uint32_t v, const Block& b) { return v < b.first; });
-    return after != blocks_.begin() && id - std::prev(after)->first < std::prev(after)->count;
-}
-
-bool GatewayIds::given_out(std::uint32_t id) const {
-    return ours(id) && std::find(unused_.begin(), unused_.end(), id) == unused_.end();
+std::uint32_t GatewayIds::to_reserve() const {
+    const std::size_t short_by = wanted_ > left() ? wanted_ - left() : 0;
+    if (short_by == 0 && left() >= kIdBlock / 2) {
+        return 0;
+    }
+    return static_cast<std::uint32_t>(
+        std::min<std::size_t>(short_by + kIdBlock, scaleout::kMaxIdBlock));
 }
 
 std::vector<std::uint32_t> GatewayIds::join(std::span<const std::uint32_t> ids,
@@ -57,7 +56,7 @@ std::vector<std::uint32_t> GatewayIds::join(std::span<const std::uint32_t> ids,
     std::vector<std::uint32_t> out;
     for (const std::uint32_t id : ids) {
         if (given_out(id)) {
-            joined_[id] = now;
+            joined_[id] = Joined{now, false};
             out.push_back(id);
         }
     }
@@ -68,11 +67,22 @@ std::vector<std::uint32_t> GatewayIds::leave(std::span<const std::uint32_t> ids,
                                              Clock::time_point now) {
     std::vector<std::uint32_t> out;
     for (const std::uint32_t id : ids) {
-        if (given_out(id)) {
-            joined_.erase(id);
-            left_[id] = now;
-            out.push_back(id);
+        const auto given = given_.find(id);
+        if (given == given_.end()) {
+            continue;
         }
+        if (given->second) {
+            given->second = false;
+            --held_;
+        }
+        const auto joined = joined_.find(id);
+        const bool shown = joined != joined_.end() && joined->second.shown;
+        if (joined != joined_.end()) {
+            joined_.erase(joined);
+        }
+        // Shown: the ticks acknowledge it; else re-sent blind, a bounded number of times.
+        left_[id] = Left{now, shown ? 0 : kBlindResends};
+        out.push_back(id);
     }
     return out;
 }
@@ -82,36 +92,54 @@ GatewayIds::Resend GatewayIds::check(std::span<const interest::Entity> entities,
     Resend resend;
     // A player of ours the world does not have: its join was lost (or the world removed
     // it, as it does a gateway it has not heard for its timeout).
-    for (auto& [id, sent] : joined_) {
-        if (due(sent, now) && !in_tick(entities, id)) {
+    for (auto& [id, joined] : joined_) {
+        joined.shown = in_tick(entities, id);
+        if (!joined.shown && due(joined.sent, now)) {
             resend.joins.push_back(id);
-            sent = now;
+            joined.sent = now;
         }
     }
-    // An id of ours the world has though no player of ours holds it: its leave was lost.
+    // An id we gave out that the world has though no player of ours holds it: its leave
+    // was lost.
     for (const interest::Entity& e : entities) {
-        if (e.kind != interest::EntityKind::player || !ours(e.id) || joined_.count(e.id) != 0) {
+        if (e.kind != interest::EntityKind::player || !given_out(e.id) ||
+            joined_.count(e.id) != 0) {
             continue;
         }
         // Never sent from here (a time_point of 0 is long due): sent at once.
-        auto [it, added] = left_.try_emplace(e.id, Clock::time_point{});
-        if (due(it->second, now)) {
+        auto [it, added] = left_.try_emplace(e.id, Left{Clock::time_point{}, 0});
+        it->second.blind_resends = 0; // shown: the ticks acknowledge it from now on
+        if (due(it->second.sent, now)) {
             resend.leaves.push_back(e.id);
-            it->second = now;
+            it->second.sent = now;
         }
     }
-    // Left and gone once its leave had its time (a tick taken before the world had it
-    // may still show it): nothing more to watch.
-    std::erase_if(left_, [&](const auto& entry) {
-        return due(entry.second, now) && !in_tick(entities, entry.first);
-    });
+    // Left, not shown, its leave had its time: sent again blind while it has re-sends
+    // left, else nothing more to watch (a tick taken before the world had it may still
+    // have shown it).
+    for (auto it = left_.begin(); it != left_.end();) {
+        Left& left = it->second;
+        if (!due(left.sent, now) || in_tick(entities, it->first)) {
+            ++it;
+        } else if (left.blind_resends == 0) {
+            it = left_.erase(it);
+        } else {
+            --left.blind_resends;
+            left.sent = now;
+            resend.leaves.push_back(it->first);
+            ++it;
+        }
+    }
     std::sort(resend.joins.begin(), resend.joins.end());
+    std::sort(resend.leaves.begin(), resend.leaves.end());
     return resend;
 }
 
 void GatewayIds::clear() {
-    blocks_.clear();
+    wanted_ = std::min<std::size_t>(wanted_ + held_, scaleout::kMaxIdBlock);
     unused_.clear();
+    given_.clear();
+    held_ = 0;
     joined_.clear();
     left_.clear();
 }

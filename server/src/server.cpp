@@ -550,13 +550,9 @@ void Server::on_hello(Connection& session, const pb::ClientHello& client_hello) 
     }
     // The entity is spawned (and the policy told) at the next tick start: a phase may
     // be reading the world now. The client learns its id at once.
-    const std::uint32_t entity = feed_ ? feed_->take_entity_id() : world_.reserve_player();
+    const std::uint32_t entity = take_entity_id(session);
     if (entity == 0) {
-        session.disconnect(pb::DISCONNECT_REASON_SERVER_FULL,
-                           "the world process has reserved no entity ids for this gateway yet "
-                           "(is it running, at " +
-                               config_.nats_url + "?)");
-        return;
+        return; // refused
     }
     session.set_entity_id(entity);
     pb::Envelope reply;
@@ -584,6 +580,26 @@ void Server::on_hello(Connection& session, const pb::ClientHello& client_hello) 
     pending_joins_.push_back(session.client_id());
     spdlog::debug("client {} '{}' from {} joined as entity {}", session.client_id(), session.name(),
                   session.remote(), entity);
+}
+
+std::uint32_t Server::take_entity_id(Connection& session) {
+    if (!feed_) {
+        const std::uint32_t entity = world_.reserve_player();
+        if (entity == 0) {
+            session.disconnect(pb::DISCONNECT_REASON_SERVER_FULL,
+                               "the world's 32-bit entity ids are used up");
+        }
+        return entity;
+    }
+    // A gateway without an id yet will have one shortly (ids asked for, or a world
+    // restart being taken): the client is told to try again, not that the server is
+    // full (docs/scale-out.md, "Entity ids").
+    std::string why_not;
+    const std::uint32_t entity = feed_->take_entity_id(&why_not);
+    if (entity == 0) {
+        session.disconnect(pb::DISCONNECT_REASON_TRY_AGAIN, why_not + ": connect again shortly");
+    }
+    return entity;
 }
 
 void Server::on_input(Connection& session, const pb::ClientInput& input) {

@@ -11,8 +11,6 @@ namespace dsoc::server {
 
 namespace {
 
-/// Ids asked for at a time: a second's joins of a busy gateway.
-constexpr std::uint32_t kIdBlock = 256;
 /// How often an unanswered reserve is asked again.
 constexpr auto kReserveRetry = std::chrono::seconds(1);
 
@@ -55,14 +53,26 @@ bool WorldFeed::follow(std::uint64_t instance) {
     if (instance_ != 0) { // the world process restarted
         restart_ = WorldRestart{restart_ ? restart_->old_instance : instance_, instance};
         ++stats_.world_restarts;
-    }
+        reserve_pending_ = false; // an answer from the old world would be refused: ask anew
+    } // else first contact: a request naming no instance is answered by this one
     instance_ = instance;
     heard_ = now;
     last_tick_ = 0; // its ticks count from 1
     stats_.ticks_skipped += newest_ ? 1 : 0;
     newest_.reset(); // the old world's
-    ids_.clear();
-    reserve_pending_ = false; // an answer from the old world would be refused: ask anew
+    ids_.clear();    // its players are the demand for the first block of the new instance
+    return true;
+}
+
+bool WorldFeed::plausible_start(const scaleout::WorldTick& tick) {
+    const bool first = tick.instance != instance_ || last_tick_ == 0;
+    if (first && tick.tick > kMaxFirstTick) {
+        ++stats_.bad_messages;
+        stats_.last_error = "world tick " + std::to_string(tick.tick) +
+                            " as the first of instance " + std::to_string(tick.instance) +
+                            " (at most 2^40)";
+        return false;
+    }
     return true;
 }
 
@@ -75,7 +85,7 @@ void WorldFeed::on_tick_message(const scaleout::NatsMessage& message) {
             stats_.last_error = tick.error().message();
             return;
         }
-        if (!follow(tick->instance)) {
+        if (!plausible_start(tick.value()) || !follow(tick->instance)) {
             return;
         }
         if (tick->tick <= last_tick_) {
@@ -93,22 +103,27 @@ void WorldFeed::on_tick_message(const scaleout::NatsMessage& message) {
     if (wake_) {
         wake_();
     }
+    maybe_reserve(); // at once when this tick made the gateway follow a new instance
 }
 
 void WorldFeed::on_block_message(const scaleout::NatsMessage& message) {
     auto block = scaleout::decode_id_block(message.data, std::string(message.subject));
-    const std::lock_guard lock(mutex_);
-    reserve_pending_ = false;
-    if (!block.ok() || block->world_key != world_key_) {
-        ++stats_.bad_messages;
-        stats_.last_error = block.ok() ? "an id block of another world" : block.error().message();
-        return;
+    {
+        const std::lock_guard lock(mutex_);
+        if (!block.ok() || block->world_key != world_key_) {
+            ++stats_.bad_messages;
+            stats_.last_error =
+                block.ok() ? "an id block of another world" : block.error().message();
+            return; // the request stays pending: asked again after kReserveRetry
+        }
+        if (!follow(block->instance)) {
+            return;
+        }
+        ids_.add_block(block->first_id, block->count);
+        ++stats_.id_blocks;
+        reserve_pending_ = false;
     }
-    if (!follow(block->instance)) {
-        return;
-    }
-    ids_.add_block(block->first_id, block->count);
-    ++stats_.id_blocks;
+    maybe_reserve(); // the demand may be larger than one block
 }
 
 std::optional<TakenTick> WorldFeed::take_newest() {
@@ -121,6 +136,7 @@ std::optional<TakenTick> WorldFeed::take_newest() {
         }
         out.emplace(TakenTick{std::move(*newest_), std::exchange(restart_, std::nullopt)});
         newest_.reset();
+        served_ = out->tick.instance;
         resend = ids_.check(out->tick.entities, GatewayIds::Clock::now());
         stats_.joins_resent += resend.joins.size();
         stats_.leaves_resent += resend.leaves.size();
@@ -135,12 +151,19 @@ bool WorldFeed::tick_waiting() const {
     return newest_.has_value();
 }
 
-std::uint32_t WorldFeed::take_entity_id() {
+std::uint32_t WorldFeed::take_entity_id(std::string* why_not) {
     std::uint32_t id = 0;
     {
         const std::lock_guard lock(mutex_);
-        if (!restart_) { // else the server still holds sessions of the old world
-            id = ids_.take();
+        if (restart_) { // the server still holds sessions of the old world
+            if (why_not != nullptr) {
+                *why_not = "the world process restarted and this gateway is ending the old "
+                           "world's sessions";
+            }
+        } else if (id = ids_.take(); id == 0 && why_not != nullptr) {
+            *why_not = "the world process has not reserved entity ids for this gateway yet "
+                       "(asked; is it running, at " +
+                       link_->url() + "?)";
         }
     }
     maybe_reserve();
@@ -149,17 +172,19 @@ std::uint32_t WorldFeed::take_entity_id() {
 
 void WorldFeed::maybe_reserve() {
     const auto now = std::chrono::steady_clock::now();
+    scaleout::ReserveRequest request{gateway_id_, 0, 0};
     {
         const std::lock_guard lock(mutex_);
-        if (ids_.left() >= kIdBlock / 2 ||
-            (reserve_pending_ && now - last_reserve_ < kReserveRetry)) {
+        request.instance = instance_;
+        request.count = ids_.to_reserve();
+        if (request.count == 0 || (reserve_pending_ && now - last_reserve_ < kReserveRetry)) {
             return;
         }
         reserve_pending_ = true;
         last_reserve_ = now;
     }
     std::vector<std::byte> bytes;
-    scaleout::encode_reserve_request({gateway_id_, kIdBlock}, bytes);
+    scaleout::encode_reserve_request(request, bytes);
     if (!link_->publish_request(scaleout::world_subject(world_name_, "reserve"), inbox_, bytes)) {
         const std::lock_guard lock(mutex_);
         ++stats_.not_sent;
@@ -173,9 +198,15 @@ void WorldFeed::send(const std::string& what, const std::vector<std::byte>& byte
     }
 }
 
+scaleout::BatchFrom WorldFeed::batch_from() const {
+    const std::lock_guard lock(mutex_);
+    return {gateway_id_, served_};
+}
+
 void WorldFeed::send_batch(scaleout::IdBatchKind kind, std::span<const std::uint32_t> entity_ids) {
-    if (!entity_ids.empty()) {
-        scaleout::encode_id_batch(kind, gateway_id_, entity_ids, bytes_);
+    const scaleout::BatchFrom from = batch_from();
+    if (!entity_ids.empty() && from.instance != 0) {
+        scaleout::encode_id_batch(kind, from, entity_ids, bytes_);
         send("gateway", bytes_);
     }
 }
@@ -199,9 +230,12 @@ void WorldFeed::send_joins(std::span<const std::uint32_t> entity_ids) {
 }
 
 void WorldFeed::send_inputs(std::span<const scaleout::PlayerInput> inputs) {
-    // Empty or not: the world takes it as this gateway's heartbeat.
-    scaleout::encode_inputs(gateway_id_, inputs, bytes_);
-    send("gateway", bytes_);
+    // Empty or not: the world takes it as this gateway's heartbeat (none before a tick
+    // was served: no world to beat for).
+    if (const scaleout::BatchFrom from = batch_from(); from.instance != 0) {
+        scaleout::encode_inputs(from, inputs, bytes_);
+        send("gateway", bytes_);
+    }
     maybe_reserve(); // also retries an unanswered reserve, once a tick at most
 }
 

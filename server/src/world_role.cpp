@@ -53,8 +53,9 @@ void WorldRole::run(const std::atomic<bool>& stop) {
             last_log = now;
             const scaleout::WorldProcessStats s = process_.stats();
             spdlog::info("world: {} ticks ({} not published), {} players joined, {} left, {} bad "
-                         "messages{}{}",
+                         "messages, {} of another instance, {} reservations past the last id{}{}",
                          s.ticks, s.ticks_not_published, s.joins, s.leaves, s.bad_messages,
+                         s.other_instance, s.ids_exhausted,
                          s.last_error.empty() ? "" : "; last: ", s.last_error);
         }
     }
@@ -96,6 +97,13 @@ std::string WorldRole::render_metrics() const {
     out.counter("dsoc_world_gateways_forgotten_total",
                 "Lost gateways whose reserved ids were released to make room for others.",
                 d(s.gateways_forgotten));
+    out.counter("dsoc_world_other_instance_total",
+                "Gateway messages naming another world instance (a gateway that follows another "
+                "world process on this name): dropped.",
+                d(s.other_instance));
+    out.counter("dsoc_world_ids_exhausted_total",
+                "Reserve requests refused: fewer ids than asked for left below 2^32.",
+                d(s.ids_exhausted));
     out.counter("dsoc_world_nats_disconnects_total", "Connections to NATS lost.",
                 d(link_.disconnects()));
     out.counter("dsoc_world_nats_reconnects_total", "Connections to NATS regained.",

@@ -37,6 +37,8 @@ std::string_view of_disconnect(pb::DisconnectReason reason) {
         return server_shutdown;
     case pb::DISCONNECT_REASON_WORLD_RESTARTED:
         return world_restarted;
+    case pb::DISCONNECT_REASON_TRY_AGAIN:
+        return try_again;
     default:
         return dropped_by_server;
     }

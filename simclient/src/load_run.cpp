@@ -184,9 +184,10 @@ std::pair<std::string, std::uint16_t> LoadRun::server_of(int index) const {
 
 bool LoadRun::fails_over(const SimClient& client) const {
     const std::string& why = client.stats().failure;
-    // A restarted world's gateway asks its clients to connect again: with one server,
-    // to the same one.
-    if (stopping_ || (config_.more_servers.empty() && why != failure::world_restarted)) {
+    // A gateway whose world restarted, or that has no entity id for it yet, asks its
+    // clients to connect again: with one server, to the same one.
+    const bool asked_back = why == failure::world_restarted || why == failure::try_again;
+    if (stopping_ || (config_.more_servers.empty() && !asked_back)) {
         return false;
     }
     // A client whose sessions failed before their hello at every server twice in a row:
@@ -197,8 +198,7 @@ bool LoadRun::fails_over(const SimClient& client) const {
         return false;
     }
     return why == failure::refused || why == failure::timeout || why == failure::connection_lost ||
-           why == failure::connect_error || why == failure::server_shutdown ||
-           why == failure::world_restarted;
+           why == failure::connect_error || why == failure::server_shutdown || asked_back;
 }
 
 void LoadRun::start_session(std::size_t g, int index) {

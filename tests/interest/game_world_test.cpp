@@ -1,5 +1,6 @@
 // GameWorld's reserved player ids: the server tells a client its entity id at hello
-// and spawns it at the next tick start, possibly after later-reserved ones. Its step
+// and spawns it at the next tick start, possibly after later-reserved ones; spawns and
+// removals in a batch give the world of one by one; ids never wrap. Its step
 // gives the same world whether the moves run one by one or through a parallel for.
 
 #include "dsoc/interest/game_world.hpp"
@@ -56,6 +57,81 @@ TEST(GameWorld, ReservedPlayersSpawnInIdOrderWhateverOrderTheySpawnIn) {
     EXPECT_EQ(world.find(second), nullptr);
     EXPECT_NE(world.find(first), nullptr);
     EXPECT_TRUE(ids_increasing(world));
+}
+
+/// Whether `a` and `b` hold the same entities, field for field as a spawn or removal
+/// leaves them.
+void expect_same_entities(const GameWorld& a, const GameWorld& b) {
+    ASSERT_EQ(a.entities().size(), b.entities().size());
+    for (std::size_t i = 0; i < a.entities().size(); ++i) {
+        const Entity& x = a.entities()[i];
+        const Entity& y = b.entities()[i];
+        EXPECT_TRUE(x.id == y.id && x.kind == y.kind && x.move.position == y.move.position &&
+                    x.move.velocity == y.move.velocity && x.yaw_deg == y.yaw_deg &&
+                    x.team == y.team && x.health == y.health)
+            << "entity " << i << ": " << x.id << " and " << y.id;
+        const Entity* found = b.find(x.id);
+        ASSERT_NE(found, nullptr) << x.id;
+        EXPECT_EQ(found->id, x.id);
+    }
+}
+
+TEST(GameWorld, SpawnsAndRemovalsInABatchGiveTheWorldOfOneByOne) {
+    WorldSettings settings;
+    settings.bots = 20;
+    settings.teams = 2;
+    GameWorld single(settings, testing::rooms_map());
+    GameWorld batch(settings, testing::rooms_map());
+    std::vector<std::uint32_t> ids;
+    for (int i = 0; i < 300; ++i) {
+        ids.push_back(single.reserve_player());
+        ASSERT_EQ(batch.reserve_player(), ids.back());
+    }
+    // Joins arrive in any order; the world spawns them in id order (the spawn points
+    // are dealt in that order), an id given twice once.
+    std::vector<std::uint32_t> shuffled = ids;
+    std::shuffle(shuffled.begin(), shuffled.end(), std::mt19937(7));
+    shuffled.push_back(shuffled.front());
+    for (const std::uint32_t id : ids) {
+        single.spawn_reserved(id);
+    }
+    batch.spawn_reserved(shuffled);
+    EXPECT_TRUE(ids_increasing(batch));
+    expect_same_entities(single, batch);
+
+    // Every other player and a few bots leave, with an unknown id and a repeat.
+    std::vector<std::uint32_t> leaving = {1, 5, 999'999};
+    for (std::size_t i = 0; i < ids.size(); i += 2) {
+        leaving.push_back(ids[i]);
+    }
+    leaving.push_back(ids[0]);
+    for (const std::uint32_t id : leaving) {
+        single.remove(id);
+    }
+    batch.remove(leaving);
+    EXPECT_TRUE(ids_increasing(batch));
+    expect_same_entities(single, batch);
+    EXPECT_EQ(batch.find(ids[0]), nullptr);
+
+    // And the next spawn point dealt is the same.
+    EXPECT_EQ(single.spawn_player(), batch.spawn_player());
+    expect_same_entities(single, batch);
+}
+
+TEST(GameWorld, IdsNeverWrapPast32Bits) {
+    WorldSettings settings;
+    settings.bots = 0;
+    GameWorld world(settings, testing::rooms_map());
+    // A mirror takes the next id as given: one close to the end.
+    world.mirror({}, 0, UINT32_MAX - 10);
+    EXPECT_EQ(world.ids_left(), 10u);
+    EXPECT_EQ(world.reserve_players(11), 0u); // would hand out id 2^32 - 1, then 0
+    EXPECT_EQ(world.next_id(), UINT32_MAX - 10);
+    EXPECT_EQ(world.reserve_players(9), UINT32_MAX - 10);
+    EXPECT_EQ(world.reserve_player(), UINT32_MAX - 1);
+    EXPECT_EQ(world.ids_left(), 0u);
+    EXPECT_EQ(world.reserve_player(), 0u);
+    EXPECT_EQ(world.next_id(), UINT32_MAX);
 }
 
 /// The rooms map with a pit under the first spawn point, and a player put there: it

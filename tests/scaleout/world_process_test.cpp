@@ -2,7 +2,8 @@
 // binary is absent): a gateway reserves ids, and a joined one appears at the next
 // tick; its inputs move that player and no other; a leave removes it; a join or leave
 // sent again changes nothing; a gateway lost past its timeout gets its players back by
-// re-joining them, and its ids are released once others need the room; bad messages and
+// re-joining them, and its ids are released once others need the room; messages naming
+// another world instance take nothing and keep no gateway alive; bad messages and
 // inputs for entities that are not joined players are counted, and the world carries
 // on publishing ticks a gateway can mirror.
 
@@ -55,10 +56,12 @@ protected:
     [[nodiscard]] virtual std::chrono::milliseconds gateway_timeout() const {
         return WorldProcess::kDefaultGatewayTimeout;
     }
+    /// Gateway `id`, following this world's instance.
+    [[nodiscard]] BatchFrom from(std::uint64_t id) const { return {id, process_->instance()}; }
     /// Gateway `id`'s heartbeat: an empty input batch.
     void beat(std::uint64_t id) {
         std::vector<std::byte> bytes;
-        encode_inputs(id, {}, bytes);
+        encode_inputs(from(id), {}, bytes);
         send("gateway", bytes);
     }
     void TearDown() override {
@@ -74,7 +77,7 @@ protected:
     /// A block of `count` ids reserved for `gateway`.
     IdBlock reserve(std::uint64_t gateway, std::uint32_t count) {
         std::vector<std::byte> bytes;
-        encode_reserve_request({gateway, count}, bytes);
+        encode_reserve_request({gateway, process_->instance(), count}, bytes);
         const auto answer = gateway_link_->request(world_subject("t", "reserve"), bytes, 2000ms);
         if (!answer) {
             ADD_FAILURE() << "no answer to a reserve request";
@@ -87,7 +90,7 @@ protected:
     /// Gateway `gateway`'s joins (leaves) of `ids`, waited for.
     void send_ids(IdBatchKind kind, std::uint64_t gateway, std::vector<std::uint32_t> ids) {
         std::vector<std::byte> bytes;
-        encode_id_batch(kind, gateway, ids, bytes);
+        encode_id_batch(kind, from(gateway), ids, bytes);
         send("gateway", bytes);
     }
     /// Runs one tick and waits for it to reach the gateway.
@@ -125,7 +128,7 @@ TEST_F(WorldProcessTest, AJoinedPlayerMovesByItsInputsAndLeaves) {
     EXPECT_EQ(first.entities.size(), 10u); // the bots
 
     std::vector<std::byte> bytes;
-    encode_reserve_request({kGateway, 3}, bytes);
+    encode_reserve_request({kGateway, 0, 3}, bytes); // 0: a gateway's first contact
     const auto answer = gateway_link_->request(world_subject("t", "reserve"), bytes, 2000ms);
     ASSERT_TRUE(answer.has_value());
     auto block = decode_id_block(*answer, "reserve");
@@ -139,7 +142,7 @@ TEST_F(WorldProcessTest, AJoinedPlayerMovesByItsInputsAndLeaves) {
     EXPECT_EQ(find(tick(), player), nullptr); // reserved is not joined
 
     const std::uint32_t joins[] = {player, 999'999}; // the second was never reserved
-    encode_id_batch(IdBatchKind::join, kGateway, joins, bytes);
+    encode_id_batch(IdBatchKind::join, from(kGateway), joins, bytes);
     send("gateway", bytes);
     EXPECT_EQ(process_->stats().for_strangers, 1u);
     const WorldTick joined = tick();
@@ -149,7 +152,7 @@ TEST_F(WorldProcessTest, AJoinedPlayerMovesByItsInputsAndLeaves) {
     const glm::vec3 start = spawned->move.position;
 
     const PlayerInput forward{player, glm::vec3(1.0f, 0.0f, 0.0f), false, false, 0.0f, 0.0f};
-    encode_inputs(kGateway, std::span(&forward, 1), bytes);
+    encode_inputs(from(kGateway), std::span(&forward, 1), bytes);
     send("gateway", bytes);
     WorldTick moved;
     for (int i = 0; i < 15; ++i) {
@@ -162,12 +165,12 @@ TEST_F(WorldProcessTest, AJoinedPlayerMovesByItsInputsAndLeaves) {
     // An input for a bot is not the gateway's to give: counted, the bot left alone.
     const PlayerInput steal{
         first.entities[0].id, glm::vec3(0.0f, 1.0f, 0.0f), true, true, 0.0f, 0.0f};
-    encode_inputs(kGateway, std::span(&steal, 1), bytes);
+    encode_inputs(from(kGateway), std::span(&steal, 1), bytes);
     send("gateway", bytes);
     EXPECT_EQ(process_->stats().for_strangers, 2u);
 
     const std::uint32_t ids[] = {player};
-    encode_id_batch(IdBatchKind::leave, kGateway, ids, bytes);
+    encode_id_batch(IdBatchKind::leave, from(kGateway), ids, bytes);
     send("gateway", bytes);
     const WorldTick left = tick();
     EXPECT_EQ(find(left, player), nullptr);
@@ -194,7 +197,7 @@ TEST_F(ShortGatewayTimeout, APlayerBelongsToItsGatewayAndLeavesWithIt) {
     // Another gateway can neither steer nor remove this gateway's player.
     std::vector<std::byte> bytes;
     const PlayerInput steer{mine, glm::vec3(1.0f, 0.0f, 0.0f), false, false, 0.0f, 0.0f};
-    encode_inputs(kGateway + 1, std::span(&steer, 1), bytes);
+    encode_inputs(from(kGateway + 1), std::span(&steer, 1), bytes);
     send("gateway", bytes);
     send_ids(IdBatchKind::leave, kGateway + 1, {mine});
     EXPECT_EQ(process_->stats().for_strangers, 3u);
@@ -256,7 +259,7 @@ TEST_F(ShortGatewayTimeout, ALostGatewayThatComesBackGetsItsPlayersBack) {
     send_ids(IdBatchKind::leave, kGateway, {leaves});
     const PlayerInput early{stays, glm::vec3(1.0f, 0.0f, 0.0f), false, false, 0.0f, 0.0f};
     std::vector<std::byte> bytes;
-    encode_inputs(kGateway, std::span(&early, 1), bytes);
+    encode_inputs(from(kGateway), std::span(&early, 1), bytes);
     send("gateway", bytes);
     send_ids(IdBatchKind::join, kGateway, {stays});
     send_ids(IdBatchKind::join, kGateway, {leaves}); // left: its id was released
@@ -275,7 +278,7 @@ TEST_F(ShortGatewayTimeout, LostGatewaysAreForgottenWhenTheirIdsAreNeeded) {
     }
     // Full: another gateway's request is refused while the first is alive...
     std::vector<std::byte> bytes;
-    encode_reserve_request({kGateway + 1, 1}, bytes);
+    encode_reserve_request({kGateway + 1, process_->instance(), 1}, bytes);
     EXPECT_FALSE(gateway_link_->request(world_subject("t", "reserve"), bytes, 300ms).has_value());
     EXPECT_NE(process_->stats().last_error.find("reserved and not joined"), std::string::npos)
         << process_->stats().last_error;
@@ -288,14 +291,56 @@ TEST_F(ShortGatewayTimeout, LostGatewaysAreForgottenWhenTheirIdsAreNeeded) {
     EXPECT_EQ(process_->stats().gateways_forgotten, 1u);
 }
 
+TEST_F(ShortGatewayTimeout, MessagesNamingAnotherInstanceTakeNothingAndKeepNoGatewayAlive) {
+    // What a gateway that follows another world process on this name sends.
+    const std::uint32_t id = reserve(kGateway, 2).first_id;
+    send_ids(IdBatchKind::join, kGateway, {id});
+    ASSERT_NE(find(tick(), id), nullptr);
+    const BatchFrom other{kGateway, process_->instance() ^ 1};
+    std::vector<std::byte> bytes;
+    encode_reserve_request({kGateway, other.instance, 8}, bytes);
+    EXPECT_FALSE(gateway_link_->request(world_subject("t", "reserve"), bytes, 300ms).has_value());
+    const std::uint32_t spare = id + 1; // reserved for it, not joined
+    encode_id_batch(IdBatchKind::join, other, std::span(&spare, 1), bytes);
+    send("gateway", bytes);
+    const PlayerInput steer{id, glm::vec3(1.0f, 0.0f, 0.0f), true, true, 0.0f, 0.0f};
+    encode_inputs(other, std::span(&steer, 1), bytes);
+    send("gateway", bytes);
+    encode_id_batch(IdBatchKind::leave, other, std::span(&id, 1), bytes);
+    send("gateway", bytes);
+    const WorldTick after = tick();
+    EXPECT_NE(find(after, id), nullptr);
+    EXPECT_EQ(find(after, spare), nullptr);
+    WorldProcessStats stats = process_->stats();
+    EXPECT_EQ(stats.other_instance, 4u);
+    EXPECT_EQ(stats.ids_reserved, 2u);
+    EXPECT_EQ(stats.joins, 1u);
+    EXPECT_EQ(stats.leaves, 0u);
+    EXPECT_EQ(stats.inputs, 0u);
+    EXPECT_EQ(stats.for_strangers, 0u);
+    EXPECT_EQ(stats.bad_messages, 0u);
+
+    // Its heartbeats keep no gateway alive here: past the timeout its player goes.
+    const auto since = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - since < 800ms) {
+        encode_inputs(other, {}, bytes);
+        send("gateway", bytes);
+        std::this_thread::sleep_for(50ms);
+    }
+    EXPECT_EQ(find(tick(), id), nullptr);
+    stats = process_->stats();
+    EXPECT_EQ(stats.gateways_lost, 1u);
+    EXPECT_GT(stats.other_instance, 4u);
+}
+
 TEST_F(WorldProcessTest, BadMessagesAreCountedAndTheWorldCarriesOn) {
     const std::vector<std::byte> garbage(30, std::byte{0x41});
     send("gateway", garbage); // no magic of ours
     std::vector<std::byte> bad_input;
-    encode_inputs(0, {}, bad_input); // gateway id 0
+    encode_inputs(from(0), {}, bad_input); // gateway id 0
     send("gateway", bad_input);
     std::vector<std::byte> bad_leave;
-    encode_id_batch(IdBatchKind::leave, kGateway, {}, bad_leave);
+    encode_id_batch(IdBatchKind::leave, from(kGateway), {}, bad_leave);
     bad_leave.pop_back(); // truncated
     send("gateway", bad_leave);
     send("reserve", garbage);
@@ -308,12 +353,15 @@ TEST_F(WorldProcessTest, BadMessagesAreCountedAndTheWorldCarriesOn) {
 }
 
 TEST(WorldMessages, EachDecoderRefusesWhatItsEncoderCouldNotHaveWritten) {
+    constexpr std::uint64_t kInstance = 0x1457;
+    constexpr BatchFrom kFrom{kGateway, kInstance};
     std::vector<std::byte> bytes;
     const PlayerInput in{7, glm::vec3(0.5f, -1.0f, 0.0f), true, true, 90.0f, -10.0f};
-    encode_inputs(kGateway, std::span(&in, 1), bytes);
+    encode_inputs(kFrom, std::span(&in, 1), bytes);
     auto decoded = decode_inputs(bytes, "s");
     ASSERT_TRUE(decoded.ok());
     EXPECT_EQ(decoded->gateway, kGateway);
+    EXPECT_EQ(decoded->instance, kInstance);
     ASSERT_EQ(decoded->entries.size(), 1u);
     EXPECT_EQ(decoded->entries[0].entity_id, 7u);
     EXPECT_TRUE(decoded->entries[0].jump && decoded->entries[0].fire);
@@ -321,22 +369,30 @@ TEST(WorldMessages, EachDecoderRefusesWhatItsEncoderCouldNotHaveWritten) {
     for (std::size_t n = 0; n < bytes.size(); ++n) {
         EXPECT_FALSE(decode_inputs(std::span(bytes).first(n), "s").ok()) << n;
     }
+    constexpr std::size_t kHeader = 28; // magic, version, 0, gateway, instance, count
     std::vector<std::byte> nan = bytes;
     const float bad = std::numeric_limits<float>::quiet_NaN();
-    std::memcpy(nan.data() + 20 + 12, &bad, sizeof bad); // the yaw
+    std::memcpy(nan.data() + kHeader + 12, &bad, sizeof bad); // the yaw
     EXPECT_NE(decode_inputs(nan, "s").error().message().find("input 0"), std::string::npos);
     std::vector<std::byte> far = bytes;
     const float two = 2.0f;
-    std::memcpy(far.data() + 20 + 4, &two, sizeof two); // wish x
+    std::memcpy(far.data() + kHeader + 4, &two, sizeof two); // wish x
     EXPECT_FALSE(decode_inputs(far, "s").ok());
-    encode_inputs(0, std::span(&in, 1), bytes);
+    encode_inputs({0, kInstance}, std::span(&in, 1), bytes);
     EXPECT_NE(decode_inputs(bytes, "s").error().message().find("gateway id 0"), std::string::npos);
+    encode_inputs({kGateway, 0}, std::span(&in, 1), bytes);
+    EXPECT_NE(decode_inputs(bytes, "s").error().message().find("world instance 0"),
+              std::string::npos);
 
     const std::uint32_t ids[] = {3, 0};
-    encode_id_batch(IdBatchKind::leave, kGateway, ids, bytes);
+    encode_id_batch(IdBatchKind::leave, kFrom, ids, bytes);
     EXPECT_NE(decode_id_batch(IdBatchKind::leave, bytes, "s").error().message().find("entry 1"),
               std::string::npos);
     EXPECT_FALSE(decode_id_batch(IdBatchKind::join, bytes, "s").ok()); // a leave is no join
+    encode_id_batch(IdBatchKind::join, kFrom, std::span(ids, 1), bytes);
+    EXPECT_EQ(decode_id_batch(IdBatchKind::join, bytes, "s")->instance, kInstance);
+    encode_id_batch(IdBatchKind::join, {kGateway, 0}, std::span(ids, 1), bytes);
+    EXPECT_FALSE(decode_id_batch(IdBatchKind::join, bytes, "s").ok()); // instance 0
     encode_id_block({1, 7, 0, 5}, bytes);
     EXPECT_FALSE(decode_id_block(bytes, "s").ok()); // id 0
     encode_id_block({1, 7, 9, 5000}, bytes);
@@ -347,13 +403,16 @@ TEST(WorldMessages, EachDecoderRefusesWhatItsEncoderCouldNotHaveWritten) {
     EXPECT_EQ(decode_id_block(bytes, "s")->first_id, 9u);
     EXPECT_EQ(decode_id_block(bytes, "s")->instance, 7u);
     EXPECT_FALSE(decode_reserve_request(bytes, "s").ok()); // a block is no request
-    encode_reserve_request({kGateway, 0}, bytes);
+    encode_reserve_request({kGateway, kInstance, 0}, bytes);
     EXPECT_FALSE(decode_reserve_request(bytes, "s").ok());
-    encode_reserve_request({0, 64}, bytes);
+    encode_reserve_request({0, kInstance, 64}, bytes);
     EXPECT_FALSE(decode_reserve_request(bytes, "s").ok()); // gateway 0
-    encode_reserve_request({kGateway, 64}, bytes);
+    encode_reserve_request({kGateway, kInstance, 64}, bytes);
     EXPECT_EQ(decode_reserve_request(bytes, "s")->count, 64u);
     EXPECT_EQ(decode_reserve_request(bytes, "s")->gateway, kGateway);
+    EXPECT_EQ(decode_reserve_request(bytes, "s")->instance, kInstance);
+    encode_reserve_request({kGateway, 0, 64}, bytes); // first contact: no instance yet
+    EXPECT_EQ(decode_reserve_request(bytes, "s")->instance, 0u);
 }
 
 } // namespace

@@ -1,9 +1,13 @@
 // A gateway's ids and the rules that repair lost joins and leaves (GatewayIds), tick by
 // tick on a fake clock: a join is sent again only when a tick lacks its player a whole
-// kResendAfter after it was sent, a leave only while a tick still shows the player that
-// long after; ids the gateway did not give out are never sent.
+// kResendAfter after it was sent, a leave while a tick still shows the player that long
+// after, or, when no tick showed it, a bounded number of times; ids the gateway did not
+// give out are never sent. And how many ids it asks for: more after a world restart
+// (its players come back together) and when hellos found none left.
 
 #include "dsoc/server/gateway_ids.hpp"
+
+#include "dsoc/scaleout/world_messages.hpp"
 
 #include <gtest/gtest.h>
 
@@ -81,8 +85,9 @@ TEST_F(GatewayIdsTest, OnlyIdsItGaveOutAreSentAndAClearForgetsThemAll) {
     EXPECT_TRUE(ids_.join(Ids{a + 1, 99, 3}, now_).empty()); // not given out; not ours; a bot's
     EXPECT_TRUE(ids_.leave(Ids{a + 1, 99}, now_).empty());
     now_ += 5s;
-    // Neither are another gateway's players, nor bots, taken for ghosts.
-    EXPECT_TRUE(check({20, 21}).leaves.empty());
+    // Neither are another gateway's players, nor bots, nor an id of our block not
+    // handed out yet, taken for ghosts.
+    EXPECT_TRUE(check({a + 1, 20, 21}).leaves.empty());
     EXPECT_EQ(ids_.left(), 3u);
 
     (void)ids_.join(Ids{a}, now_);
@@ -98,6 +103,92 @@ TEST_F(GatewayIdsTest, OnlyIdsItGaveOutAreSentAndAClearForgetsThemAll) {
     EXPECT_TRUE(ids_.leave(Ids{a}, now_).empty()); // not given out in it yet
     EXPECT_EQ(ids_.take(), a);
     EXPECT_EQ(ids_.join(Ids{a}, now_), (Ids{a}));
+}
+
+TEST_F(GatewayIdsTest, ALeaveNoTickShowedIsSentAgainABoundedNumberOfTimes) {
+    // a: joined, but its join was lost (no tick ever shows it); b: given out, its client
+    // gone before its first tick (never joined). The world keeps both reserved for this
+    // gateway until a leave arrives, and no tick can acknowledge one.
+    const std::uint32_t a = ids_.take();
+    const std::uint32_t b = ids_.take();
+    (void)ids_.join(Ids{a}, now_);
+    now_ += 100ms;
+    EXPECT_TRUE(check({}).joins.empty());
+    EXPECT_EQ(ids_.leave(Ids{a, b}, now_), (Ids{a, b}));
+    int resent = 0;
+    for (int i = 0; i < 3 * GatewayIds::kBlindResends; ++i) {
+        now_ += 500ms;
+        const GatewayIds::Resend resend = check({});
+        EXPECT_TRUE(resend.joins.empty()); // a left player is never joined again
+        if (!resend.leaves.empty()) {
+            EXPECT_EQ(resend.leaves, (Ids{a, b})) << i;
+            ++resent;
+        }
+    }
+    EXPECT_EQ(resent, GatewayIds::kBlindResends); // each a whole kResendAfter apart
+}
+
+TEST_F(GatewayIdsTest, ALeaveShownByATickIsResentWhileShownNotBlind) {
+    const std::uint32_t a = ids_.take();
+    (void)ids_.join(Ids{a}, now_);
+    now_ += 100ms;
+    (void)check({a}); // the world has it
+    (void)ids_.leave(Ids{a}, now_);
+    now_ += 1s;
+    EXPECT_TRUE(check({}).leaves.empty()); // gone: the tick acknowledged the leave
+    now_ += 5s;
+    EXPECT_TRUE(check({}).leaves.empty());
+
+    // A blind leave whose player a tick shows after all (its join was on its way) is
+    // sent again while the ticks show it, then no more once they do not.
+    const std::uint32_t b = ids_.take();
+    (void)ids_.join(Ids{b}, now_);
+    (void)ids_.leave(Ids{b}, now_);
+    now_ += 1s;
+    EXPECT_EQ(check({b}).leaves, (Ids{b}));
+    now_ += 1s;
+    EXPECT_EQ(check({b}).leaves, (Ids{b}));
+    now_ += 1s;
+    EXPECT_TRUE(check({}).leaves.empty());
+    now_ += 1s;
+    EXPECT_TRUE(check({}).leaves.empty());
+}
+
+TEST(GatewayIdsDemand, ABlockAfterAClearCoversThePlayersThatHeldIds) {
+    GatewayIds ids;
+    EXPECT_EQ(ids.to_reserve(), GatewayIds::kIdBlock); // none yet
+    ids.add_block(100, 1000);
+    EXPECT_EQ(ids.to_reserve(), 0u);
+    Ids taken;
+    for (int i = 0; i < 700; ++i) {
+        taken.push_back(ids.take());
+    }
+    (void)ids.leave(std::span(taken).first(100), GatewayIds::Clock::now());
+    EXPECT_EQ(ids.to_reserve(), 0u); // 300 left
+    // A world restart: the 600 sessions that held an id end, and their clients come
+    // back together: one request covers them, and a block more.
+    ids.clear();
+    EXPECT_EQ(ids.to_reserve(), 600u + GatewayIds::kIdBlock);
+    ids.add_block(5000, 600 + GatewayIds::kIdBlock);
+    EXPECT_EQ(ids.to_reserve(), 0u);
+
+    // Never more than one request may carry.
+    ids.add_block(10'000, scaleout::kMaxIdBlock);
+    for (std::uint32_t i = 0; i < 2 * scaleout::kMaxIdBlock; ++i) {
+        (void)ids.take();
+    }
+    ids.clear();
+    EXPECT_EQ(ids.to_reserve(), scaleout::kMaxIdBlock);
+}
+
+TEST(GatewayIdsDemand, HellosThatFoundNoIdMakeTheNextRequestLarger) {
+    GatewayIds ids;
+    for (int i = 0; i < 1000; ++i) {
+        EXPECT_EQ(ids.take(), 0u);
+    }
+    EXPECT_EQ(ids.to_reserve(), 1000u + GatewayIds::kIdBlock);
+    ids.add_block(1, GatewayIds::kIdBlock); // the request sent before they came
+    EXPECT_EQ(ids.to_reserve(), 744u);      // 488 short, and a block more
 }
 
 } // namespace

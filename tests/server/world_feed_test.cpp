@@ -5,7 +5,9 @@
 // the world. And the faults it repairs, each made for real by cutting one process's
 // connection to NATS (a TCP proxy between it and the server): a join or a leave lost
 // while the world was cut off is sent again until the ticks show it taken; a world
-// process replaced by a new one is followed from its own tick 1; a gateway the world
+// process replaced by a new one is followed from its own tick 1 (fresh ids for all its
+// players asked for at once; a stray first tick numbered near 2^64 is refused); a
+// second world on the same name takes none of a gateway's messages; a gateway the world
 // took for lost gets its players back once it is heard again.
 
 #include "dsoc/scaleout/world_process.hpp"
@@ -23,6 +25,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <mutex>
 #include <span>
 #include <thread>
 
@@ -85,6 +88,58 @@ TEST(WorldFeed, AGatewayBehindServesTheNewestTickAndCountsTheRest) {
     world.tick();
     ASSERT_TRUE(eventually([&] { return feed.stats().ticks_received == 4; }));
     EXPECT_EQ(feed.take_newest()->tick.tick, 4u); // and the good ones still come
+}
+
+TEST(WorldFeed, ARefusedIdBlockLeavesItsRequestPending) {
+    if (testing::nats_server_binary().empty()) {
+        GTEST_SKIP() << testing::kNoNatsServer;
+    }
+    testing::NatsServer nats;
+    ServerConfig config;
+    config.role = "gateway";
+    config.nats_url = nats.url();
+    config.world_name = "refused";
+    scaleout::NatsLinkOptions options;
+    options.url = nats.url();
+    scaleout::NatsLink fake_world(options); // answers nothing but what the test says
+    std::mutex mutex;
+    std::vector<scaleout::ReserveRequest> requests;
+    std::string reply;
+    const auto sub =
+        fake_world.subscribe("dsoc.refused.reserve", [&](const scaleout::NatsMessage& m) {
+            auto request = scaleout::decode_reserve_request(m.data, "reserve");
+            ASSERT_TRUE(request.ok()) << request.error().message();
+            const std::lock_guard lock(mutex);
+            requests.push_back(request.value());
+            reply = std::string(m.reply);
+        });
+    ASSERT_TRUE(fake_world.flush(2000ms));
+    const auto count = [&] {
+        const std::lock_guard lock(mutex);
+        return requests.size();
+    };
+
+    boost::asio::io_context io;
+    WorldFeed feed(io, config, 42, [] {});
+    const auto asked = std::chrono::steady_clock::now();
+    ASSERT_TRUE(eventually([&] { return count() == 1; }));
+    {
+        const std::lock_guard lock(mutex);
+        EXPECT_EQ(requests[0].instance, 0u); // first contact: no instance known yet
+        EXPECT_EQ(requests[0].count, GatewayIds::kIdBlock);
+    }
+    std::vector<std::byte> bytes;
+    scaleout::encode_id_block({43, 7, 1, 10}, bytes); // of another world: refused
+    ASSERT_TRUE(fake_world.publish(reply, bytes));
+    ASSERT_TRUE(eventually([&] { return feed.stats().bad_messages == 1; }));
+
+    // Still pending: a hello does not send another request before the retry is due.
+    EXPECT_EQ(feed.take_entity_id(), 0u);
+    std::this_thread::sleep_for(200ms);
+    EXPECT_EQ(count(), 1u);
+    std::this_thread::sleep_until(asked + 1100ms);
+    EXPECT_EQ(feed.take_entity_id(), 0u);
+    EXPECT_TRUE(eventually([&] { return count() == 2; })); // the retry
 }
 
 /// A world process and one gateway's feed on a real nats-server, each through a proxy
@@ -221,7 +276,23 @@ TEST_F(WorldFeedFaults, ARestartedWorldIsFollowedFromItsFirstTick) {
     ASSERT_TRUE(eventually([&] { return feed_->stats().other_instance == 1; }));
     std::this_thread::sleep_for(WorldFeed::kWorldSilence);
     // Before, this tick was refused as going back in time, and every later one too.
-    const auto taken = step();
+    const std::uint64_t ticks = feed_->stats().ticks_received;
+    world_->tick();
+    ASSERT_TRUE(eventually([&] { return feed_->stats().ticks_received == ticks + 1; }))
+        << feed_->stats().last_error;
+    // The feed follows the new world; the server has not taken the restart yet: a hello
+    // is told to try again, and inputs of the old world's sessions name the old world
+    // (the new one drops them, whatever entity the id is there: here a bot).
+    std::string why;
+    EXPECT_EQ(feed_->take_entity_id(&why), 0u);
+    EXPECT_NE(why.find("restarted"), std::string::npos) << why;
+    const std::uint64_t other = world_->stats().other_instance;
+    const scaleout::PlayerInput old_input{1, glm::vec3(1.0f, 0.0f, 0.0f), false, true, 0, 0};
+    feed_->send_inputs(std::span(&old_input, 1));
+    ASSERT_TRUE(eventually([&] { return world_->stats().other_instance > other; }));
+    EXPECT_EQ(world_->stats().inputs + world_->stats().for_strangers, 0u);
+    auto taken = feed_->take_newest();
+    feed_->send_inputs({});
     ASSERT_TRUE(taken.has_value()) << feed_->stats().last_error;
     EXPECT_EQ(taken->tick.tick, 2u);
     ASSERT_TRUE(taken->restart.has_value());
@@ -250,6 +321,86 @@ TEST_F(WorldFeedFaults, ARestartedWorldIsFollowedFromItsFirstTick) {
     EXPECT_FALSE(next->restart.has_value());
     EXPECT_EQ(feed_->stats().world_restarts, 1u);
     EXPECT_EQ(feed_->stats().bad_messages, 0u);
+}
+
+TEST_F(WorldFeedFaults, AfterARestartOneRequestCoversEveryPlayerThatWasThere) {
+    // 600 clients on this gateway (more than two blocks of ids).
+    constexpr std::size_t kPlayers = 600;
+    std::size_t players = 0;
+    const auto deadline = std::chrono::steady_clock::now() + 5s;
+    while (players < kPlayers && std::chrono::steady_clock::now() < deadline) {
+        if (feed_->take_entity_id() != 0) {
+            ++players;
+        } else {
+            std::this_thread::sleep_for(5ms); // a block on its way
+        }
+    }
+    ASSERT_EQ(players, kPlayers);
+    const std::uint64_t blocks = feed_->stats().id_blocks;
+    start_world();
+    world_->tick();
+    ASSERT_TRUE(eventually([&] { return feed_->stats().other_instance == 1; }));
+    std::this_thread::sleep_for(WorldFeed::kWorldSilence);
+    world_->tick(); // followed: their sessions end, and their clients come back together
+
+    // Asked for at once (no hello, no gateway tick needed), in one request: before, one
+    // block of 256, and the rest of the clients refused until more came.
+    ASSERT_TRUE(eventually([&] { return feed_->stats().id_blocks == blocks + 1; }));
+    EXPECT_GE(feed_->stats().ids_left, kPlayers);
+    EXPECT_EQ(world_->stats().ids_reserved, feed_->stats().ids_left);
+    ASSERT_TRUE(feed_->take_newest()->restart.has_value());
+    EXPECT_NE(feed_->take_entity_id(), 0u);
+}
+
+TEST_F(WorldFeedFaults, ASecondWorldOnTheSameNameTakesNothingOfTheGateways) {
+    scaleout::WorldProcess second(testing::rooms_map(), world_settings(config_), 30, *world_link_,
+                                  "faults");
+    ASSERT_TRUE(world_link_->flush(2000ms));
+    // Enough new players for a reserve request, their joins, an input and a leave.
+    std::vector<std::uint32_t> players;
+    const auto deadline = std::chrono::steady_clock::now() + 5s;
+    while (players.size() < GatewayIds::kIdBlock && std::chrono::steady_clock::now() < deadline) {
+        if (const std::uint32_t id = feed_->take_entity_id(); id != 0) {
+            players.push_back(id);
+        } else {
+            std::this_thread::sleep_for(5ms);
+        }
+    }
+    ASSERT_EQ(players.size(), GatewayIds::kIdBlock);
+    ASSERT_TRUE(eventually([&] { return feed_->stats().id_blocks == 2; }));
+    feed_->send_joins(players);
+    ASSERT_TRUE(step_until([&](const scaleout::WorldTick& t) { return has(t, players.back()); }));
+    const scaleout::PlayerInput input{players[0], glm::vec3(1.0f, 0.0f, 0.0f), true, true, 0, 0};
+    feed_->send_inputs(std::span(&input, 1));
+    feed_->send_leaves(std::span(players).first(1));
+    ASSERT_TRUE(step_until([&](const scaleout::WorldTick& t) { return !has(t, players[0]); }));
+
+    // The second world heard all of it (on the same connection as the first), and took
+    // none.
+    std::this_thread::sleep_for(100ms);
+    const scaleout::WorldProcessStats stats = second.stats();
+    EXPECT_GE(stats.other_instance, 4u); // a reserve request, joins, inputs, a leave
+    EXPECT_EQ(stats.other_instance, second.messages_received());
+    EXPECT_EQ(stats.ids_reserved, 0u);
+    EXPECT_EQ(stats.joins + stats.leaves + stats.inputs + stats.for_strangers, 0u);
+    EXPECT_EQ(world_->stats().joins, GatewayIds::kIdBlock);
+    EXPECT_EQ(world_->stats().leaves, 1u);
+    EXPECT_EQ(feed_->stats().other_instance, 0u); // and no block of the second's came
+}
+
+TEST_F(WorldFeedFaults, AnImplausibleFirstTickTakesNoGatewayOver) {
+    std::this_thread::sleep_for(WorldFeed::kWorldSilence); // the world followed is silent
+    std::vector<std::byte> bytes;
+    scaleout::encode_world_tick(world_->world(), world_->world_key(), WorldFeed::kMaxFirstTick + 1,
+                                bytes, 0, world_->instance() ^ 1);
+    ASSERT_TRUE(world_link_->publish("dsoc.faults.tick", bytes));
+    ASSERT_TRUE(eventually([&] { return feed_->stats().bad_messages == 1; }));
+    EXPECT_NE(feed_->stats().last_error.find("as the first of instance"), std::string::npos)
+        << feed_->stats().last_error;
+    const auto next = step(); // the world followed, heard again
+    ASSERT_TRUE(next.has_value());
+    EXPECT_FALSE(next->restart.has_value());
+    EXPECT_EQ(feed_->stats().world_restarts, 0u);
 }
 
 class WorldFeedShortTimeout : public WorldFeedFaults {

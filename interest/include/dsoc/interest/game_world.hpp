@@ -28,6 +28,7 @@
 #include <memory>
 #include <optional>
 #include <random>
+#include <span>
 #include <stdexcept>
 #include <unordered_map>
 #include <vector>
@@ -79,16 +80,29 @@ public:
     /// `map` must outlive the world and have at least one spawn point.
     GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::Map> map);
 
-    /// Adds a player entity at a spawn point; returns its id (never 0, never reused).
-    /// The same as spawn_reserved(reserve_player()).
+    /// Adds a player entity at a spawn point; returns its id (never 0, never reused), or
+    /// 0 (nothing added) when the ids are used up (ids_left()). The same as
+    /// spawn_reserved(reserve_player()).
     std::uint32_t spawn_player();
     /// An id for a player entity not in the world yet (never 0, never reused), so that
     /// a client can be told its entity before it is spawned (the server answers hellos
-    /// while the world is being read by the tick's jobs). Does not touch entities().
+    /// while the world is being read by the tick's jobs), or 0 when the ids are used up.
+    /// Does not touch entities(). The same as reserve_players(1).
     [[nodiscard]] std::uint32_t reserve_player();
+    /// The first of `count` consecutive ids reserved as reserve_player() reserves one,
+    /// or 0 (nothing reserved) when fewer than `count` are left (ids_left()).
+    [[nodiscard]] std::uint32_t reserve_players(std::uint32_t count);
+    /// Ids reserve_players() can still hand out: ids are 32-bit and never wrap to 0 or
+    /// repeat, so every id stays below 2^32 - 1 (next_id() fits in 32 bits). [Limit: ids]
+    [[nodiscard]] std::uint32_t ids_left() const { return UINT32_MAX - next_id_; }
     /// Adds the player entity `id` (from reserve_player(), not spawned yet) at the next
     /// spawn point, keeping entities() in increasing id order.
     void spawn_reserved(std::uint32_t id);
+    /// Adds the player entities `ids` (each from reserve_player(), not spawned yet; any
+    /// order, an id given twice spawned once) in one pass: the same world as
+    /// spawn_reserved(id) for each in increasing id order (the spawn points are dealt in
+    /// that order). O(entities + ids log ids), where one by one costs O(entities) each.
+    void spawn_reserved(std::span<const std::uint32_t> ids);
     /// The team entity `id` plays for when it joins (WorldSettings::teams; kNoTeam
     /// without teams).
     [[nodiscard]] visibility::TeamId team_for(std::uint32_t id) const;
@@ -96,6 +110,9 @@ public:
     void set_team(std::uint32_t id, visibility::TeamId team);
     /// Removes an entity; unknown ids are ignored.
     void remove(std::uint32_t id);
+    /// Removes the entities `ids` (unknown ones, and repeats, ignored) in one pass: the
+    /// same world as remove(id) for each. O(entities log ids).
+    void remove(std::span<const std::uint32_t> ids);
     /// Sets a player's intent: `wish` horizontal, clamped to length <= 1; angles are
     /// wrapped and clamped. Non-finite values must be rejected by the caller.
     void set_player_input(std::uint32_t id, glm::vec3 wish, bool jump, float yaw_deg,
@@ -157,7 +174,10 @@ public:
     [[nodiscard]] const std::shared_ptr<const maps::Map>& map_ptr() const { return map_; }
 
 private:
-    Entity& add(EntityKind kind, std::uint32_t id);
+    /// Inserts `e` (its id not in the world) in id order.
+    Entity& insert(Entity e);
+    /// Player `id` (reserved, not spawned) at the next spawn point, not inserted yet.
+    [[nodiscard]] Entity new_player(std::uint32_t id);
     void rebuild_index();
     /// step(): the shots of the entities in fired_, marking the killed in died_.
     void resolve_shots();

@@ -22,9 +22,14 @@
 // Joins and leaves may come more than once (a gateway re-sends what the ticks show
 // lost: NATS delivers at most once): a join of a player its gateway has joined already
 // and a leave of a player gone already change nothing.
-// Messages that do not decode, and joins, inputs or leaves for ids that are neither
-// the sender's players nor reserved for it, are dropped and counted by reason
-// (stats()); the world carries on.
+// Every message from a gateway names the world instance it is for (the one whose ticks
+// the gateway serves; a reserve request may name none, 0, before the gateway knows one):
+// a message naming another instance is dropped, the gateway not taken as heard, so that
+// a second world process on the same name (or one started while gateways still follow
+// a dead one) reserves, spawns and steers nothing for gateways that follow another.
+// Messages that do not decode, messages of another instance, and joins, inputs or
+// leaves for ids that are neither the sender's players nor reserved for it, are dropped
+// and counted by reason (stats()); the world carries on.
 
 #include "dsoc/interest/game_world.hpp"
 #include "dsoc/scaleout/nats_link.hpp"
@@ -35,6 +40,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <string>
 #include <unordered_map>
@@ -66,6 +72,12 @@ struct WorldProcessStats {
     /// Lost gateways whose ids were released to make room for other reservations: their
     /// re-joins, should they come back, are refused (as strangers').
     std::uint64_t gateways_forgotten = 0;
+    /// Messages naming another world instance than this process's (a gateway that
+    /// follows another world process on the same name): dropped unread.
+    std::uint64_t other_instance = 0;
+    /// Reserve requests refused because fewer ids than asked for are left below 2^32
+    /// (interest::GameWorld::ids_left(): ids never wrap).
+    std::uint64_t ids_exhausted = 0;
     std::string last_error; ///< why the last bad message was refused
 };
 
@@ -108,6 +120,12 @@ private:
     void on_leave(const NatsMessage& message);
     /// Counts a message that did not decode, and why (under mutex_, as what follows).
     void refuse(const std::string& why);
+    /// Whether a message naming world `instance` is for this process; counts it when not.
+    bool for_us(std::uint64_t instance);
+    /// Reserves `count` ids for `gateway` (under mutex_); the block, or nothing when they
+    /// do not fit under kMaxReserved or below 2^32 (refused and counted).
+    std::optional<IdBlock> reserve_for(std::uint64_t gateway, std::uint32_t count,
+                                       const std::string& subject);
     /// Whether `decoded` decoded; refuses it when not.
     template <typename T>
     bool accepted(const maps::Result<T>& decoded);
@@ -131,6 +149,9 @@ private:
     /// Removes the players of every gateway silent past the timeout at `now`, keeping
     /// their ids reserved for it.
     void lose_silent_gateways(std::chrono::steady_clock::time_point now);
+    /// tick(): spawns the players joined since the last step and removes those leaving,
+    /// each kind in one pass over the world (under mutex_).
+    void spawn_and_remove();
 
     interest::GameWorld world_;
     float dt_;
@@ -144,6 +165,7 @@ private:
     mutable std::mutex mutex_; ///< what the callbacks hand to tick(), and the stats
     /// Joined since the last step: (gateway, id).
     std::vector<std::pair<std::uint64_t, std::uint32_t>> joining_;
+    std::vector<std::uint32_t> spawning_; ///< tick(): joining_'s ids still to spawn
     std::unordered_map<std::uint32_t, PlayerInput> inputs_; ///< newest per entity
     std::vector<std::uint32_t> leaving_;
 

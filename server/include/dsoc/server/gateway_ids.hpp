@@ -1,15 +1,22 @@
 #pragma once
 // An interest gateway's entity ids in one world instance (docs/scale-out.md, "Faults"):
 // the blocks the world process reserved for it, which of them it gave to players, joined
-// to the world and had leave, and what each world tick shows lost on the way.
+// to the world and had leave, what each world tick shows lost on the way, and how many
+// ids to ask the world for next.
 //
 // NATS delivers at most once, so joins and leaves can be lost (the world's connection
 // was down when one was sent). The tick stream is their acknowledgement, since every
 // tick lists every entity:
 // - a player the gateway joined that a tick lacks kResendAfter or more after its join
 //   was last sent has its join sent again;
-// - an id of the gateway's blocks that a tick shows though none of its players holds it
-//   (it left) has its leave sent again, kResendAfter or more after the last one.
+// - an id the gateway gave out that a tick shows though none of its players holds it
+//   (it left) has its leave sent again, kResendAfter or more after the last one;
+// - a leave of an id the last tick checked did not show (its join lost or still on its
+//   way, its player removed with a gateway the world took for lost, a client gone
+//   before its first tick) has no tick to acknowledge it, yet the world keeps that id
+//   reserved for the gateway until a leave arrives: it is sent again kBlindResends
+//   times, kResendAfter apart, unless a tick shows the player meanwhile (then the rule
+//   above takes over).
 // The world takes a join of a player it has and a leave of one it no longer has as
 // no-ops, so a re-send that crossed its original changes nothing.
 //
@@ -32,18 +39,28 @@ public:
     /// How long a join or leave is given to show in the ticks before it is sent again:
     /// many world steps and hops, well under a client's patience. [Units: ms]
     static constexpr std::chrono::milliseconds kResendAfter{1000};
+    /// Re-sends of a leave no tick can acknowledge (above): with kResendAfter, it reaches
+    /// a world whose connection to NATS is back within this many seconds. [Limit: re-sends]
+    static constexpr int kBlindResends = 5;
+    /// Ids asked for at a time when nothing more is wanted: a second's joins of a busy
+    /// gateway. A request is due when fewer than half of it are left. [Units: ids]
+    static constexpr std::uint32_t kIdBlock = 256;
 
-    /// Adds [first, first + count) to the ids this gateway may give out.
+    /// Adds [first, first + count) to the ids this gateway may give out; they meet that
+    /// much of the demand (to_reserve()).
     void add_block(std::uint32_t first, std::uint32_t count);
-    /// An id not given out yet (the oldest block's first), or 0 when none is left.
+    /// An id not given out yet (the oldest block's first), or 0 when none is left: then
+    /// the demand grows by one (a client that will try again).
     [[nodiscard]] std::uint32_t take();
     /// Ids not given out yet.
     [[nodiscard]] std::size_t left() const { return unused_.size(); }
-    /// Whether `id` is from one of this gateway's blocks.
-    [[nodiscard]] bool ours(std::uint32_t id) const;
+    /// How many ids to ask the world for now: 0 while at least kIdBlock / 2 are left and
+    /// they cover the demand; else the demand not covered plus kIdBlock, at most
+    /// scaleout::kMaxIdBlock (one request's limit). [Units: ids]
+    [[nodiscard]] std::uint32_t to_reserve() const;
 
     /// Whether `id` was given out by take() since the last clear().
-    [[nodiscard]] bool given_out(std::uint32_t id) const;
+    [[nodiscard]] bool given_out(std::uint32_t id) const { return given_.count(id) != 0; }
 
     /// Of `ids`, those given out, now joined: their joins are sent at `now`.
     [[nodiscard]] std::vector<std::uint32_t> join(std::span<const std::uint32_t> ids,
@@ -61,21 +78,30 @@ public:
     /// `now`; the re-sends it returns count as sent at `now`.
     [[nodiscard]] Resend check(std::span<const interest::Entity> entities, Clock::time_point now);
 
-    /// Forgets every id: those of one world instance mean nothing to another.
+    /// Forgets every id: those of one world instance mean nothing to another. The
+    /// players that held one (given out, not left) are the demand for the next block:
+    /// their sessions end with that instance, and their clients come back together.
     void clear();
 
 private:
-    struct Block {
-        std::uint32_t first;
-        std::uint32_t count;
+    struct Joined {
+        Clock::time_point sent; ///< when its join was last sent
+        bool shown = false;     ///< in the last tick checked
     };
-    std::vector<Block> blocks_;        ///< in increasing order of first id, never overlapping
+    struct Left {
+        Clock::time_point sent; ///< when its leave was last sent
+        int blind_resends = 0;  ///< re-sends left while no tick shows it
+    };
     std::deque<std::uint32_t> unused_; ///< not given out, oldest block first
-    /// Joined and not left: when its join was last sent.
-    std::unordered_map<std::uint32_t, Clock::time_point> joined_;
-    /// Left, and in the ticks since or sent within kResendAfter: when its leave was last
-    /// sent.
-    std::unordered_map<std::uint32_t, Clock::time_point> left_;
+    /// Given out since clear(): true while held (not left).
+    std::unordered_map<std::uint32_t, bool> given_;
+    std::size_t held_ = 0; ///< given_ entries still held
+    /// Ids wanted beyond those left: see to_reserve(). [Units: ids]
+    std::size_t wanted_ = 0;
+    /// Joined and not left.
+    std::unordered_map<std::uint32_t, Joined> joined_;
+    /// Left, and in the ticks since, or sent within kResendAfter, or blind re-sends left.
+    std::unordered_map<std::uint32_t, Left> left_;
 };
 
 } // namespace dsoc::server

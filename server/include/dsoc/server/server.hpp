@@ -31,7 +31,9 @@
 // move the world: a tick starts when the world process's next tick arrives over NATS
 // (the newest, when several did), the world is mirrored from it, and the joins,
 // inputs and leaves go to the world process instead of the world (they take effect
-// at its next step). Hellos are answered with ids the world reserved for this gateway.
+// at its next step). Hellos are answered with ids the world reserved for this gateway;
+// while it has none (asked for, or a world restart being taken) they are refused with
+// `try_again`.
 // When the world process restarts, every session that holds an entity id ends with
 // `world_restarted` (the new world hands the same ids to others); its clients connect
 // again. The server's tick numbers keep increasing across such restarts.
@@ -208,6 +210,10 @@ private:
     /// so each session ends with world_restarted and loses its id at once (nothing of it,
     /// no input and no leave, reaches the new world, where that id is another's).
     void end_sessions_of_a_past_world(const WorldRestart& restart);
+    /// A hello's entity id (reserved in the world, or from the gateway's blocks), or 0
+    /// after ending `session` with the reason: try_again on a gateway that has none yet,
+    /// server_full when the world's ids are used up.
+    std::uint32_t take_entity_id(Connection& session);
     void apply_joins();
     void apply_inputs();
     void prepare_client_ticks();

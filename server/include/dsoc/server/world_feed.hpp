@@ -16,7 +16,14 @@
 // take the gateway over, nor a stray message); once it is silent, the other instance
 // is followed from its own tick 1 (the world process restarted): the ids of the old
 // one are forgotten, the server is told to end every session that holds one
-// (take_newest()), and fresh ids are reserved.
+// (take_newest()), and fresh ids are reserved at once, as many as those sessions held
+// (their clients come back together) and a block more. The first tick taken of an
+// instance must be plausible (kMaxFirstTick), so that no stray tick makes the gateway's
+// own tick numbers wrap.
+//
+// Whatever the gateway sends names a world instance: joins, inputs and leaves the one
+// whose tick the server took last (so that none of a past world's sessions reaches the
+// next), a reserve request the one followed (0 before any: first contact).
 
 #include "dsoc/scaleout/nats_link.hpp"
 #include "dsoc/scaleout/world_messages.hpp"
@@ -91,10 +98,11 @@ public:
     [[nodiscard]] std::optional<TakenTick> take_newest();
     /// Whether a tick waits to be taken.
     [[nodiscard]] bool tick_waiting() const;
-    /// An entity id for a new player, or 0 when the world has not reserved any for us
-    /// (unreachable, or not answered yet) or a restart of the world has not been taken
-    /// yet. Asks for more before they run out.
-    [[nodiscard]] std::uint32_t take_entity_id();
+    /// An entity id for a new player, or 0 when there is none yet: the world has not
+    /// reserved enough for us (unreachable, or not answered yet: the demand grows, so the
+    /// next request asks for more) or a restart of the world has not been taken yet;
+    /// `why_not`, when given, then says which. Asks for more before they run out.
+    [[nodiscard]] std::uint32_t take_entity_id(std::string* why_not = nullptr);
 
     /// Sends the joins (leaves) of those of `entity_ids` that take_entity_id() gave out
     /// since the world instance followed now was first heard of (any other is void:
@@ -108,6 +116,12 @@ public:
     /// How long the world instance followed must have been silent before another one is
     /// followed: far longer than a live world's period, short beside a restart. [Units: ms]
     static constexpr std::chrono::milliseconds kWorldSilence{1000};
+    /// The first tick taken of a world instance is at most this: a world process steps
+    /// at most 240 times a second (ServerConfig::tick_rate), so 2^40 is 145 years of
+    /// its life; a larger one is refused (counted as bad) and does not take the gateway
+    /// over. Beyond it, the gateway's tick numbers (the world's plus those served under
+    /// earlier instances) could wrap. [Units: ticks]
+    static constexpr std::uint64_t kMaxFirstTick = std::uint64_t{1} << 40;
 
 private:
     void on_tick_message(const scaleout::NatsMessage& message);
@@ -116,9 +130,14 @@ private:
     /// instance followed, or of another once that one is silent (followed from now on; a
     /// restart when one was followed before: its ids are forgotten).
     bool follow(std::uint64_t instance);
-    /// Asks for a block when fewer than half a block are left and none was asked for
-    /// within the last second.
+    /// Whether `tick` may be taken as the first of its instance (under mutex_): not beyond
+    /// kMaxFirstTick. Counts it as bad when not.
+    bool plausible_start(const scaleout::WorldTick& tick);
+    /// Asks for a block when GatewayIds::to_reserve() wants one and none was asked for
+    /// within the last second (or the one asked for was of a past instance).
     void maybe_reserve();
+    /// Who sends, for a batch: this gateway and the instance served (0: none yet).
+    [[nodiscard]] scaleout::BatchFrom batch_from() const;
     void send(const std::string& what, const std::vector<std::byte>& bytes);
     /// A join (leave) batch of `entity_ids`, when there are any.
     void send_batch(scaleout::IdBatchKind kind, std::span<const std::uint32_t> entity_ids);
@@ -140,11 +159,13 @@ private:
     std::uint64_t instance_ = 0; ///< the world instance followed (0: none heard of yet)
     std::chrono::steady_clock::time_point heard_{}; ///< its last tick or block
     std::uint64_t last_tick_ = 0; ///< the newest tick of it accepted; older ones are refused
+    /// The instance of the last tick taken (0: none yet): named in joins, inputs, leaves.
+    std::uint64_t served_ = 0;
     std::optional<WorldRestart> restart_; ///< not taken by the server yet
     GatewayIds ids_;                      ///< of the instance followed
     WorldFeedStats stats_;
     std::chrono::steady_clock::time_point last_reserve_{};
-    bool reserve_pending_ = false;
+    bool reserve_pending_ = false; ///< asked, and no block of the instance followed since
 
     std::unique_ptr<scaleout::NatsSubscription> tick_sub_;
     std::unique_ptr<scaleout::NatsSubscription> block_sub_;

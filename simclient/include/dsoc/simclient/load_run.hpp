@@ -139,8 +139,9 @@ private:
     std::shared_ptr<SimClient> start_client(std::size_t group, int index);
     void on_session_failure(SimClient& client);
     /// Whether `client`'s failure means its server is gone and the run has another to
-    /// try (LoadConfig::more_servers), or its gateway's world restarted (then the same
-    /// server will do when it is the only one).
+    /// try (LoadConfig::more_servers), or its gateway asked it to connect again (its world
+    /// restarted, or it had no entity id yet: then the same server will do when it is the
+    /// only one).
     [[nodiscard]] bool fails_over(const SimClient& client) const;
     /// The server client `index` uses now: its first, moved on by its failovers.
     [[nodiscard]] std::pair<std::string, std::uint16_t> server_of(int index) const;
