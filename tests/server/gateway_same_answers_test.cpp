@@ -16,14 +16,12 @@
 #include "dsoc/server/server.hpp"
 #include "dsoc/trace/trace_reader.hpp"
 #include "integration/server_fixture.hpp"
+#include "server/gateway_config.hpp"
 #include "support/nats_server.hpp"
 #include "support/temp_dir.hpp"
 #include "support/test_maps.hpp"
 
 #include <gtest/gtest.h>
-
-#include <boost/asio/io_context.hpp>
-#include <boost/asio/post.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -36,37 +34,6 @@ namespace dsoc::server {
 namespace {
 
 using namespace std::chrono_literals;
-
-/// A gateway Server on loopback with the server's default policy path (its baked table),
-/// which testing::RunningServer turns off.
-class RunningGateway {
-public:
-    explicit RunningGateway(const ServerConfig& config)
-        : loop_(io_, std::chrono::microseconds(config.io_gather_us)),
-          server_(io_, config, testing::rooms_map()) {
-        server_.set_io_loop(&loop_);
-        port_ = server_.start();
-        thread_ = std::thread([this] { loop_.run(); });
-    }
-    ~RunningGateway() { stop(); }
-    RunningGateway(const RunningGateway&) = delete;
-    RunningGateway& operator=(const RunningGateway&) = delete;
-
-    void stop() {
-        if (thread_.joinable()) {
-            boost::asio::post(io_, [this] { server_.shutdown(); });
-            thread_.join();
-        }
-    }
-    [[nodiscard]] std::uint16_t port() const { return port_; }
-
-private:
-    boost::asio::io_context io_;
-    IoLoop loop_;
-    Server server_;
-    std::uint16_t port_ = 0;
-    std::thread thread_;
-};
 
 std::vector<std::uint32_t> ids_of(const std::vector<interest::Interest>& set) {
     std::vector<std::uint32_t> out;
@@ -82,18 +49,14 @@ TEST(GatewaySameAnswers, EveryClientGetsTheSingleProcessServersSetEveryTick) {
     }
     testing::NatsServer nats;
     const testing::TempDir files("dsoc-gateway-same-answers");
-    ServerConfig config;
-    config.role = "gateway";
-    config.nats_url = nats.url();
-    config.world_name = "same";
+    ServerConfig config = testing::gateway_config(nats.url(), "same");
     config.bots = 8;
     config.bot_shots_per_second = 2.0; // shots heard, deaths and respawns
-    config.port = 0;
-    config.bind_address = "127.0.0.1";
-    config.insecure = true;
-    // The exact stages, with their TBVs, hints and temporal coherence: answers that
-    // depend on the ticks before (a baked table of this map takes a minute to bake).
+    // The exact stages (as testing::RunningServer runs them; a baked table of this map takes
+    // a minute to bake), with their TBVs, hints and temporal coherence: answers that depend
+    // on the ticks before.
     config.baked_stage = false;
+    config.insecure = true;      // no connect tokens (as testing::RunningServer)
     config.culling_budget = 0.0; // no cheapest answers for a late tick: every set exact
     config.threads = 1;
     config.trace_file = files.path("gateway.jsonl");
@@ -112,7 +75,7 @@ TEST(GatewaySameAnswers, EveryClientGetsTheSingleProcessServersSetEveryTick) {
     // The world's state after each of its ticks, kept to be judged after the run.
     std::map<std::uint64_t, interest::GameWorld> worlds;
     {
-        RunningGateway gateway(config);
+        testing::RunningServer gateway(config);
         simclient::LoadConfig lc;
         lc.transport = simclient::LoadConfig::Transport::tcp;
         lc.port = gateway.port();

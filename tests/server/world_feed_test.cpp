@@ -14,6 +14,7 @@
 #include "dsoc/scaleout/world_tick.hpp"
 #include "dsoc/server/interest_setup.hpp"
 #include "dsoc/server/world_feed.hpp"
+#include "server/gateway_config.hpp"
 #include "support/eventually.hpp"
 #include "support/nats_server.hpp"
 #include "support/tcp_proxy.hpp"
@@ -40,10 +41,7 @@ TEST(WorldFeed, AGatewayBehindServesTheNewestTickAndCountsTheRest) {
         GTEST_SKIP() << testing::kNoNatsServer;
     }
     testing::NatsServer nats;
-    ServerConfig config;
-    config.role = "gateway";
-    config.nats_url = nats.url();
-    config.world_name = "feed";
+    ServerConfig config = testing::gateway_config(nats.url(), "feed");
     config.bots = 5;
     const auto map = testing::rooms_map();
     scaleout::NatsLinkOptions options;
@@ -95,10 +93,7 @@ TEST(WorldFeed, ARefusedIdBlockLeavesItsRequestPending) {
         GTEST_SKIP() << testing::kNoNatsServer;
     }
     testing::NatsServer nats;
-    ServerConfig config;
-    config.role = "gateway";
-    config.nats_url = nats.url();
-    config.world_name = "refused";
+    ServerConfig config = testing::gateway_config(nats.url(), "refused");
     scaleout::NatsLinkOptions options;
     options.url = nats.url();
     scaleout::NatsLink fake_world(options); // answers nothing but what the test says
@@ -153,9 +148,7 @@ protected:
         nats_ = std::make_unique<testing::NatsServer>();
         world_proxy_ = std::make_unique<testing::TcpProxy>(nats_->port());
         gateway_proxy_ = std::make_unique<testing::TcpProxy>(nats_->port());
-        config_.role = "gateway";
-        config_.nats_url = gateway_proxy_->url();
-        config_.world_name = "faults";
+        config_ = testing::gateway_config(gateway_proxy_->url(), "faults");
         config_.bots = 3;
         scaleout::NatsLinkOptions options;
         options.url = world_proxy_->url();
