@@ -110,7 +110,8 @@ TEST(GatewaySameAnswers, EveryClientGetsTheSingleProcessServersSetEveryTick) {
     interest::GameWorld reference = worlds.begin()->second;
     const auto policy = make_policy(config, reference);
     interest::Hearing hearing;
-    std::set<std::uint32_t> viewers;
+    std::set<std::uint32_t> viewers; // every client seen, and those that left
+    std::set<std::uint32_t> left;
     trace::TraceReader trace;
     ASSERT_TRUE(trace.open(config.trace_file)) << trace.error();
     trace::TraceTick t;
@@ -122,11 +123,20 @@ TEST(GatewaySameAnswers, EveryClientGetsTheSingleProcessServersSetEveryTick) {
         ASSERT_NE(state, worlds.end()) << "traced tick " << t.t << " was never published";
         reference = state->second;
         // As the server: a client's viewer is added when it says hello (its entity
-        // spawned then), before the tick's begin_tick() (which meets that entity first).
+        // spawned then), before the tick's begin_tick() (which meets that entity first),
+        // and removed when it leaves.
+        std::set<std::uint32_t> present;
         for (const trace::TraceClient& c : t.clients) {
             ASSERT_TRUE(c.entity.has_value()) << "tick " << t.t << " client " << c.id;
+            present.insert(c.id);
             if (viewers.insert(c.id).second) {
                 policy->add_viewer(c.id, *c.entity);
+            }
+        }
+        for (const std::uint32_t gone : viewers) {
+            if (!present.contains(gone) && !left.contains(gone)) {
+                policy->remove_viewer(gone);
+                left.insert(gone);
             }
         }
         policy->begin_tick(reference, t.t);
