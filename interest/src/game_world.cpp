@@ -101,11 +101,19 @@ void GameWorld::spawn_reserved(std::span<const std::uint32_t> ids) {
     std::vector<std::uint32_t> sorted(ids.begin(), ids.end());
     std::sort(sorted.begin(), sorted.end());
     sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
-    const auto old_size = static_cast<std::ptrdiff_t>(entities_.size());
+    const std::size_t old_size = entities_.size();
+    const bool after_all = old_size == 0 || entities_.back().id < sorted.front();
     for (const std::uint32_t id : sorted) {
         entities_.push_back(new_player(id));
     }
-    std::inplace_merge(entities_.begin(), entities_.begin() + old_size, entities_.end(),
+    if (after_all) { // in order already: only the new ones need an index entry
+        for (std::size_t i = old_size; i < entities_.size(); ++i) {
+            index_[entities_[i].id] = i;
+        }
+        return;
+    }
+    std::inplace_merge(entities_.begin(), entities_.begin() + static_cast<std::ptrdiff_t>(old_size),
+                       entities_.end(),
                        [](const Entity& a, const Entity& b) { return a.id < b.id; });
     rebuild_index();
 }

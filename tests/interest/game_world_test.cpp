@@ -116,6 +116,27 @@ TEST(GameWorld, SpawnsAndRemovalsInABatchGiveTheWorldOfOneByOne) {
     // And the next spawn point dealt is the same.
     EXPECT_EQ(single.spawn_player(), batch.spawn_player());
     expect_same_entities(single, batch);
+
+    // Ids of an earlier block joined after those of a later one (two gateways' blocks)
+    // go in among the entities, and every one is found by its id.
+    std::vector<std::uint32_t> early;
+    std::vector<std::uint32_t> late;
+    for (int i = 0; i < 40; ++i) {
+        (i < 20 ? early : late).push_back(single.reserve_player());
+        ASSERT_EQ(batch.reserve_player(), (i < 20 ? early : late).back());
+    }
+    for (const auto* block : {&late, &early}) {
+        for (const std::uint32_t id : *block) {
+            single.spawn_reserved(id);
+        }
+        batch.spawn_reserved(*block);
+        EXPECT_TRUE(ids_increasing(batch));
+        expect_same_entities(single, batch);
+    }
+    for (const Entity& e : single.entities()) {
+        ASSERT_NE(batch.find(e.id), nullptr) << e.id;
+        EXPECT_EQ(batch.find(e.id)->id, e.id);
+    }
 }
 
 TEST(GameWorld, IdsNeverWrapPast32Bits) {
