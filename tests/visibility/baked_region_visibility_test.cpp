@@ -523,20 +523,30 @@ TEST(BakedRegionVisibility, TheManagersBulkAnswersAreItsOneByOneAnswers) {
     expect_bulk_answers_are_one_by_one(b.table, b.play_area, nullptr);
 }
 
+/// The corridor's table with the lower half of x uncovered.
+std::shared_ptr<const CellVisibilityTable> half_covered_table() {
+    static const auto half = [] {
+        const Baked& b = corridor_table();
+        const CellGrid& grid = b.table->grid();
+        std::vector<std::uint8_t> covered(grid.cell_count(), 0);
+        for (std::uint32_t i = 0; i < grid.cell_count(); ++i) {
+            covered[i] = grid.coords(i).x >= grid.dims.x / 2 ? 1 : 0;
+        }
+        CellBakeConfig config;
+        config.cell_size = grid.cell_size;
+        config.threads = 2;
+        return std::make_shared<const CellVisibilityTable>(
+            bake_cell_visibility(*b.scene, grid, config, nullptr, nullptr, {}, covered));
+    }();
+    return half;
+}
+
 TEST(BakedRegionVisibility, BehindTheTableAloneTheExactStagesAnswerOnlyWhereItDoesNotCover) {
     // The corridor's table with the lower half of x uncovered: what touches it is asked
     // of the exact stages, built only when needed; the rest is the table's answer.
     const Baked& b = corridor_table();
     const CellGrid& grid = b.table->grid();
-    std::vector<std::uint8_t> covered(grid.cell_count(), 0);
-    for (std::uint32_t i = 0; i < grid.cell_count(); ++i) {
-        covered[i] = grid.coords(i).x >= grid.dims.x / 2 ? 1 : 0;
-    }
-    CellBakeConfig config;
-    config.cell_size = grid.cell_size;
-    config.threads = 2;
-    const auto half = std::make_shared<const CellVisibilityTable>(
-        bake_cell_visibility(*b.scene, grid, config, nullptr, nullptr, {}, covered));
+    const auto half = half_covered_table();
     ASSERT_GT(half->uncovered_cells().size(), 0u);
     // A covered region and covered boxes never build the exact stages.
     int builds = 0;
@@ -569,6 +579,109 @@ TEST(BakedRegionVisibility, BehindTheTableAloneTheExactStagesAnswerOnlyWhereItDo
     EXPECT_EQ(builds, 0);
     EXPECT_EQ(tests, 0);
     expect_bulk_answers_are_one_by_one(half, b.play_area, b.scene);
+}
+
+/// Whether some covered open cell of `region` may see some open cell of `box` by the
+/// table, cell pair by cell pair: the slow twin of a partial region's union.
+bool covered_cells_may_see(const CellVisibilityTable& table, const Aabb& region, const Aabb& box) {
+    const auto open_cells = [&table](const Aabb& b) {
+        std::vector<OpenCell> cells;
+        glm::ivec3 lo;
+        glm::ivec3 hi;
+        if (table.grid().range_of(b, lo, hi)) {
+            for (int z = lo.z; z <= hi.z; ++z) {
+                for (int y = lo.y; y <= hi.y; ++y) {
+                    for (int x = lo.x; x <= hi.x; ++x) {
+                        const OpenCell c = table.open_index(table.grid().index({x, y, z}));
+                        if (c >= 0) {
+                            cells.push_back(c);
+                        }
+                    }
+                }
+            }
+        }
+        return cells;
+    };
+    for (const OpenCell from : open_cells(region)) {
+        for (const OpenCell to : open_cells(box)) {
+            if (table.may_see(from, to)) {
+                return true;
+            }
+        }
+    }
+    return false;
+}
+
+TEST(BakedRegionVisibility, APartialRegionKeepsTheTablesVisibleAndAsksTheExactStagesTheRest) {
+    // Behind the table alone, a region with cells on both sides of the covered half:
+    // a box an eye of its covered cells may see is visible by the table, unasked; a
+    // box hidden from all of them is the exact stages' to answer (an eye of the
+    // uncovered cells may see it). Nothing called hidden is reached by a segment.
+    const Baked& b = corridor_table();
+    const auto half = half_covered_table();
+    const ReferenceVisibility reference(b.scene->world);
+    int builds = 0;
+    int tests = 0;
+    BakedRegionVisibility stage(
+        half,
+        std::make_unique<CountingNext>(occluder_region_visibility(b.scene)(), &builds, &tests),
+        BakedRegionVisibility::NextFor::where_uncovered);
+    const auto exact = occluder_region_visibility(b.scene)();
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::vector<std::int32_t> words;
+    std::vector<std::int32_t> runs;
+    int partial_regions = 0;
+    int seen_by_table = 0;
+    int asked = 0;
+    int hidden = 0;
+    int clear = 0;
+    for (int r = 0; r < 400 && partial_regions < 40; ++r) {
+        const Aabb region = random_box(rng, b.play_area, 40.0f, 160.0f);
+        stage.build(region);
+        if (!stage.partial()) {
+            continue;
+        }
+        ++partial_regions;
+        EXPECT_FALSE(stage.active());
+        exact->build(region);
+        for (int k = 0; k < 30; ++k) {
+            const Aabb box = random_box(rng, b.play_area, 16.0f, 64.0f);
+            if (!half->open_words_of(box, words, runs)) {
+                continue; // a box the table does not cover: the exact stages', as before
+            }
+            const int tests_before = tests;
+            const Visibility v = stage.test_box(box);
+            PreparedBox p;
+            stage.prepare(box, p);
+            ASSERT_EQ(stage.test_prepared_coarse(p), v);
+            if (covered_cells_may_see(*half, region, box)) {
+                EXPECT_EQ(v, Visibility::visible);
+                EXPECT_EQ(tests, tests_before) << "the table's visible was asked again";
+                ++seen_by_table;
+                continue;
+            }
+            ++asked;
+            EXPECT_EQ(v, exact->test_box(box)) << "the exact stages' answer";
+            if (v != Visibility::occluded) {
+                continue;
+            }
+            ++hidden;
+            for (int s = 0; s < 64; ++s) {
+                const glm::vec3 from =
+                    region.min + glm::vec3(unit(rng), unit(rng), unit(rng)) * region.size();
+                const glm::vec3 to =
+                    box.min + glm::vec3(unit(rng), unit(rng), unit(rng)) * box.size();
+                clear += reference.segment_blocked(from, to) ? 0 : 1;
+            }
+        }
+    }
+    EXPECT_GE(partial_regions, 20);
+    EXPECT_GT(seen_by_table, 50) << "boxes the exact stages were spared";
+    EXPECT_GT(asked, 20);
+    EXPECT_GT(hidden, 5) << "something is culled";
+    EXPECT_EQ(clear, 0) << "clear segments into boxes called hidden";
+    EXPECT_GT(builds, 0);
 }
 
 } // namespace

@@ -29,12 +29,13 @@ void BakedRegionVisibility::build(const Aabb& region) {
     glm::ivec3 hi;
     if (!table_->grid().range_of(region, lo, hi)) {
         active_ = false;
+        partial_ = false;
         built_lo_ = glm::ivec3(1);
         built_hi_ = glm::ivec3(0);
         return;
     }
     if (lo == built_lo_ && hi == built_hi_) {
-        return; // the same cells: the same union (and the same active_)
+        return; // the same cells: the same union (and the same active_ and partial_)
     }
     // The union is kept as one slab per x of the range (the rows of that x's cells);
     // when only the x range moved, the slabs of the xs kept are reused.
@@ -87,12 +88,12 @@ void BakedRegionVisibility::build(const Aabb& region) {
     built_hi_ = hi;
     visible_.assign(words, 0);
     active_ = false;
+    partial_ = false;
     for (std::size_t k = 0; k < slabs; ++k) {
-        if ((slab_open_[k] & kSlabUncovered) != 0) {
-            active_ = false; // an eye may be where the table says nothing
-            return;
-        }
-        if (slab_open_[k] != kSlabSolid) {
+        // An eye may be where the table says nothing: the union speaks for the eyes
+        // in the covered cells only.
+        partial_ = partial_ || (slab_open_[k] & kSlabUncovered) != 0;
+        if ((slab_open_[k] & kSlabOpen) != 0) {
             active_ = true;
             const std::uint64_t* slab = slabs_.data() + k * words;
             for (std::size_t w = 0; w < words; ++w) {
@@ -113,11 +114,12 @@ bool BakedRegionVisibility::hidden(const std::int32_t* words, std::size_t count)
 }
 
 bool BakedRegionVisibility::prepared_hidden(const PreparedBox& p) const {
-    return active_ && p.prepared && hidden(p.keys);
+    return active_ && !partial_ && p.prepared && hidden(p.keys);
 }
 
 bool BakedRegionVisibility::box_hidden(const Aabb& box) const {
-    return active_ && table_->open_words_of(box, scratch_, scratch_runs_) && hidden(scratch_);
+    return active_ && !partial_ && table_->open_words_of(box, scratch_, scratch_runs_) &&
+           hidden(scratch_);
 }
 
 const RegionVisibility& BakedRegionVisibility::fallback() const {
@@ -128,11 +130,18 @@ const RegionVisibility& BakedRegionVisibility::fallback() const {
     return *next_;
 }
 
+Visibility BakedRegionVisibility::covered_answer(bool hidden_from_covered, const Aabb& box) const {
+    if (!hidden_from_covered) {
+        return Visibility::visible; // an eye of a covered cell may see it
+    }
+    return partial_ ? fallback().test_box(box) : Visibility::occluded;
+}
+
 Visibility BakedRegionVisibility::where_uncovered_answer(const Aabb& box) const {
     if (!active_ || !table_->open_words_of(box, scratch_, scratch_runs_)) {
         return fallback().test_box(box);
     }
-    return hidden(scratch_) ? Visibility::occluded : Visibility::visible;
+    return covered_answer(hidden(scratch_), box);
 }
 
 Visibility BakedRegionVisibility::test_box(const Aabb& box) const {
@@ -217,8 +226,9 @@ Visibility BakedRegionVisibility::test_prepared_hinted(const PreparedBox& p,
 }
 
 Visibility BakedRegionVisibility::test_prepared_coarse(const PreparedBox& p) const {
-    if (next_for_ == NextFor::where_uncovered && !(active_ && p.prepared)) {
-        return fallback().test_box(p.box);
+    if (next_for_ == NextFor::where_uncovered) {
+        return active_ && p.prepared ? covered_answer(hidden(p.keys), p.box)
+                                     : fallback().test_box(p.box);
     }
     return prepared_hidden(p) ? Visibility::occluded : Visibility::visible;
 }
@@ -236,7 +246,10 @@ void BakedRegionVisibility::coarse_hidden_all(const PackedPreparedBoxes& boxes,
             answers[i] = 0;
         } else if (active_ && boxes.prepared[i] != 0) {
             const std::uint32_t start = boxes.key_start[i];
-            answers[i] = hidden(keys + start, boxes.key_start[i + 1] - start) ? 1 : 0;
+            const bool hidden_from_covered = hidden(keys + start, boxes.key_start[i + 1] - start);
+            answers[i] = !partial_ ? hidden_from_covered
+                                   : answer_rest && hidden_from_covered &&
+                                         fallback().test_box(p->box) == Visibility::occluded;
         } else {
             answers[i] = answer_rest && fallback().test_box(p->box) == Visibility::occluded ? 1 : 0;
         }

@@ -258,8 +258,21 @@ bool Baker::segment_clear(Worker& w, glm::vec3 p, glm::vec3 q) const {
     // long before their end.
     return !scene_.grid->any_along_segment(p, q, w.segment, [&](OccluderId id) {
         const Aabb& solid = world.solid_box(id);
-        return solid.is_empty() ? segment_blocked_by(p, q, world.solid_planes(id))
-                                : segment_through_box(ray, solid);
+        if (!solid.is_empty()) {
+            return segment_through_box(ray, solid);
+        }
+        // A convex solid lies within its bounds: a segment that misses them (grown by
+        // kBoxShrink against rounding) misses its interior, for a slab test instead
+        // of a clip against every plane. (Were it wrong, a blocked segment would be
+        // called clear: a pair marked visible, never one hidden.)
+        const Aabb& bounds = world.occluder(id).bounds();
+        float t0 = 0.0f;
+        float t1 = 1.0f;
+        return clip_segment_to_box(
+                   p, ray.inv,
+                   Aabb{bounds.min - glm::vec3(kBoxShrink), bounds.max + glm::vec3(kBoxShrink)}, t0,
+                   t1) &&
+               segment_blocked_by(p, q, world.solid_planes(id));
     });
 }
 

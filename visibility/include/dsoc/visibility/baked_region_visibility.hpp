@@ -6,7 +6,9 @@
 //
 // A region or box the table does not cover (part of it outside the grid or in an
 // uncovered cell, or only solid cells) is never answered by guess: it goes to the next
-// stage, or is `visible` when there is none.
+// stage, or is `visible` when there is none. A region part in covered cells and part in
+// uncovered ones ("partial") still has a union for the eyes of its covered cells: a box
+// some of them may see is visible, and only a box hidden from all of them goes on.
 //
 // Two ways to chain the next stage: `after_table`, it answers every box the table does
 // not prove hidden (the table, then the exact stages); `where_uncovered`, it answers
@@ -65,7 +67,11 @@ public:
     void merge_prepared(PreparedBox& into, const PreparedBox& more) const override;
 
     /// True when the last build() found the region covered by the table.
-    [[nodiscard]] bool active() const { return active_; }
+    [[nodiscard]] bool active() const { return active_ && !partial_; }
+    /// True when the last build() found open cells of the region covered and others
+    /// not: the table answers `visible` for what an eye of the covered ones may see
+    /// (behind the table alone), and nothing else.
+    [[nodiscard]] bool partial() const { return active_ && partial_; }
     /// With `where_uncovered`: whether the next stage was built for the last region
     /// (it is only when something the table does not cover was tested).
     [[nodiscard]] bool next_built() const { return next_built_; }
@@ -90,11 +96,16 @@ private:
     /// With `where_uncovered`, every test of `box`: the table's answer where it covers
     /// the box and the region, else the next stage's test_box().
     [[nodiscard]] Visibility where_uncovered_answer(const Aabb& box) const;
+    /// With `where_uncovered`, a box the table covers, from whether no eye of the
+    /// region's covered cells may see it: `visible` if one may, else the next stage's
+    /// answer where the region is partial, else `occluded`.
+    [[nodiscard]] Visibility covered_answer(bool hidden_from_covered, const Aabb& box) const;
 
     std::shared_ptr<const CellVisibilityTable> table_;
     std::unique_ptr<RegionVisibility> next_;
     NextFor next_for_ = NextFor::after_table;
-    bool active_ = false;
+    bool active_ = false;             ///< the region has covered open cells: visible_ is theirs
+    bool partial_ = false;            ///< ... and uncovered ones too
     Aabb region_;                     ///< the last built region
     mutable bool next_built_ = false; ///< `where_uncovered`: next_ built for region_
     glm::ivec3 built_lo_{1};
