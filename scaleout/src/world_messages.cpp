@@ -165,6 +165,10 @@ maps::Result<ReserveRequest> decode_reserve_request(std::span<const std::byte> b
     if (request.gateway == 0) {
         return maps::LoadError{source, "reserve request", "gateway id 0"};
     }
+    if (request.instance == 0) {
+        return maps::LoadError{source, "reserve request",
+                               "world instance 0 (a gateway asks the instance it follows)"};
+    }
     if (request.count == 0 || request.count > kMaxIdBlock) {
         return maps::LoadError{source, "reserve request",
                                std::to_string(request.count) + " ids asked for (1..4096)"};

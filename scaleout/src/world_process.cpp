@@ -121,8 +121,8 @@ void WorldProcess::on_reserve(const NatsMessage& message) {
             refuse(subject + ": a reserve request without a reply subject");
             return;
         }
-        if (request->instance != 0 && !for_us(request->instance)) {
-            return; // 0: a gateway's first contact, before it follows any instance
+        if (!for_us(request->instance)) {
+            return;
         }
         block = reserve_for(request->gateway, request->count, subject);
     }

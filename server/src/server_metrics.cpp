@@ -175,9 +175,9 @@ std::string Server::render_metrics() const {
                     "then ended with world_restarted.",
                     d(w.world_restarts));
         out.counter("dsoc_gateway_other_instance_total",
-                    "World ticks and id blocks of another world instance, refused while the one "
-                    "followed was live (a restarted world's first; steadily: a second world "
-                    "process on this world name).",
+                    "World ticks of another world instance, refused while the one followed was "
+                    "live (a restarted world's first; steadily: a second world process on this "
+                    "world name), and id blocks of an instance not followed.",
                     d(w.other_instance));
         out.counter("dsoc_gateway_messages_not_sent_total",
                     "Joins, inputs, leaves or reserve requests the NATS link refused.",

@@ -32,7 +32,7 @@ WorldFeed::WorldFeed(boost::asio::io_context& io, const ServerConfig& config,
     tick_sub_ = link_->subscribe(
         scaleout::world_subject(world_name_, "tick"),
         [this](const scaleout::NatsMessage& m) { on_tick_message(m); }, 4);
-    maybe_reserve();
+    // The first ids are asked for at the first tick: of the instance it names.
 }
 
 WorldFeed::~WorldFeed() {
@@ -54,7 +54,7 @@ bool WorldFeed::follow(std::uint64_t instance) {
         restart_ = WorldRestart{restart_ ? restart_->old_instance : instance_, instance};
         ++stats_.world_restarts;
         reserve_pending_ = false; // an answer from the old world would be refused: ask anew
-    } // else first contact: a request naming no instance is answered by this one
+    } // else first contact: the first reserve request goes to this instance
     instance_ = instance;
     heard_ = now;
     last_tick_ = 0; // its ticks count from 1
@@ -116,9 +116,13 @@ void WorldFeed::on_block_message(const scaleout::NatsMessage& message) {
                 block.ok() ? "an id block of another world" : block.error().message();
             return; // the request stays pending: asked again after kReserveRetry
         }
-        if (!follow(block->instance)) {
+        if (block->instance != instance_) {
+            // Asked of the instance followed before a switch to another (its answer came
+            // late), or a stray: ids of one instance only (they mean nothing to another).
+            ++stats_.other_instance;
             return;
         }
+        heard_ = std::chrono::steady_clock::now();
         ids_.add_block(block->first_id, block->count);
         ++stats_.id_blocks;
         reserve_pending_ = false;
@@ -161,9 +165,13 @@ std::uint32_t WorldFeed::take_entity_id(std::string* why_not) {
                            "world's sessions";
             }
         } else if (id = ids_.take(); id == 0 && why_not != nullptr) {
-            *why_not = "the world process has not reserved entity ids for this gateway yet "
-                       "(asked; is it running, at " +
-                       link_->url() + "?)";
+            *why_not = instance_ == 0
+                           ? "this gateway has heard no world tick yet (is the world process "
+                             "running, at " +
+                                 link_->url() + "?)"
+                           : "the world process has not reserved entity ids for this gateway "
+                             "yet (asked; is it running, at " +
+                                 link_->url() + "?)";
         }
     }
     maybe_reserve();
@@ -177,7 +185,10 @@ void WorldFeed::maybe_reserve() {
         const std::lock_guard lock(mutex_);
         request.instance = instance_;
         request.count = ids_.to_reserve();
-        if (request.count == 0 || (reserve_pending_ && now - last_reserve_ < kReserveRetry)) {
+        // None before a world instance is followed: a request naming none would be
+        // answered by every world process on the name.
+        if (request.instance == 0 || request.count == 0 ||
+            (reserve_pending_ && now - last_reserve_ < kReserveRetry)) {
             return;
         }
         reserve_pending_ = true;

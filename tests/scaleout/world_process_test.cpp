@@ -128,7 +128,7 @@ TEST_F(WorldProcessTest, AJoinedPlayerMovesByItsInputsAndLeaves) {
     EXPECT_EQ(first.entities.size(), 10u); // the bots
 
     std::vector<std::byte> bytes;
-    encode_reserve_request({kGateway, 0, 3}, bytes); // 0: a gateway's first contact
+    encode_reserve_request({kGateway, first.instance, 3}, bytes); // the instance followed
     const auto answer = gateway_link_->request(world_subject("t", "reserve"), bytes, 2000ms);
     ASSERT_TRUE(answer.has_value());
     auto block = decode_id_block(*answer, "reserve");
@@ -411,8 +411,13 @@ TEST(WorldMessages, EachDecoderRefusesWhatItsEncoderCouldNotHaveWritten) {
     EXPECT_EQ(decode_reserve_request(bytes, "s")->count, 64u);
     EXPECT_EQ(decode_reserve_request(bytes, "s")->gateway, kGateway);
     EXPECT_EQ(decode_reserve_request(bytes, "s")->instance, kInstance);
-    encode_reserve_request({kGateway, 0, 64}, bytes); // first contact: no instance yet
-    EXPECT_EQ(decode_reserve_request(bytes, "s")->instance, 0u);
+    // None naming no instance: two world processes on one name would both answer it.
+    encode_reserve_request({kGateway, 0, 64}, bytes);
+    const auto no_instance = decode_reserve_request(bytes, "dsoc.w.reserve");
+    ASSERT_FALSE(no_instance.ok());
+    EXPECT_NE(no_instance.error().message().find("dsoc.w.reserve"), std::string::npos);
+    EXPECT_NE(no_instance.error().message().find("world instance 0"), std::string::npos)
+        << no_instance.error().message();
 }
 
 } // namespace

@@ -2,7 +2,9 @@
 // with the reason, where the binary is absent): a gateway that falls behind serves the
 // newest tick and counts the ones it skipped; a tick that goes back in time, bad bytes
 // and a tick of another world are refused and counted; ids come in blocks reserved by
-// the world. And the faults it repairs, each made for real by cutting one process's
+// the world instance the gateway follows, asked of it alone (of two world processes on
+// one name, the other reserves nothing). And the faults it repairs, each made for real
+// by cutting one process's
 // connection to NATS (a TCP proxy between it and the server): a join or a leave lost
 // while the world was cut off is sent again until the ticks show it taken; a world
 // process replaced by a new one is followed from its own tick 1 (fresh ids for all its
@@ -53,24 +55,35 @@ TEST(WorldFeed, AGatewayBehindServesTheNewestTickAndCountsTheRest) {
     boost::asio::io_context io; // not run: the ticks pile up as behind a busy gateway
     int posted = 0;
     WorldFeed feed(io, config, world.world_key(), [&] { ++posted; });
-    ASSERT_TRUE(eventually([&] { return feed.stats().id_blocks == 1; })); // asked at start
+    // Ticks until one comes after the feed's subscription is in: followed, ids asked of it
+    // at once.
+    ASSERT_TRUE(eventually([&] {
+        world.tick();
+        return feed.stats().ticks_received > 0;
+    }));
+    ASSERT_TRUE(eventually([&] { return feed.stats().id_blocks == 1; }));
     EXPECT_NE(feed.take_entity_id(), 0u);
+    std::this_thread::sleep_for(100ms); // every tick on its way arrived
+    ASSERT_TRUE(feed.take_newest().has_value());
+    const WorldFeedStats before = feed.stats();
 
     for (int i = 0; i < 3; ++i) {
         world.tick();
     }
-    ASSERT_TRUE(eventually([&] { return feed.stats().ticks_received == 3; }));
+    ASSERT_TRUE(
+        eventually([&] { return feed.stats().ticks_received == before.ticks_received + 3; }));
     const auto newest = feed.take_newest();
     ASSERT_TRUE(newest.has_value());
-    EXPECT_EQ(newest->tick.tick, 3u);
+    const std::uint64_t last = world.stats().ticks;
+    EXPECT_EQ(newest->tick.tick, last);
     EXPECT_FALSE(newest->restart.has_value());
-    EXPECT_EQ(feed.stats().ticks_skipped, 2u);
+    EXPECT_EQ(feed.stats().ticks_skipped, before.ticks_skipped + 2);
     EXPECT_FALSE(feed.take_newest().has_value()); // nothing new since
     // One wake-up per arrival (the last may still be on its way to the queue).
     EXPECT_TRUE(eventually([&] {
         io.poll();
         io.restart();
-        return posted == 3;
+        return posted == static_cast<int>(before.ticks_received + 3);
     })) << posted;
 
     // Bad bytes, another world's tick and a tick that goes back: refused, counted.
@@ -81,11 +94,13 @@ TEST(WorldFeed, AGatewayBehindServesTheNewestTickAndCountsTheRest) {
     scaleout::encode_world_tick(world.world(), world.world_key(), 2, bytes, 0, world.instance());
     ASSERT_TRUE(world_link.publish("dsoc.feed.tick", bytes));
     ASSERT_TRUE(eventually([&] { return feed.stats().bad_messages == 3; }));
-    EXPECT_NE(feed.stats().last_error.find("world tick 2 after 3"), std::string::npos)
+    EXPECT_NE(feed.stats().last_error.find("world tick 2 after " + std::to_string(last)),
+              std::string::npos)
         << feed.stats().last_error;
     world.tick();
-    ASSERT_TRUE(eventually([&] { return feed.stats().ticks_received == 4; }));
-    EXPECT_EQ(feed.take_newest()->tick.tick, 4u); // and the good ones still come
+    ASSERT_TRUE(
+        eventually([&] { return feed.stats().ticks_received == before.ticks_received + 4; }));
+    EXPECT_EQ(feed.take_newest()->tick.tick, last + 1); // and the good ones still come
 }
 
 TEST(WorldFeed, ARefusedIdBlockLeavesItsRequestPending) {
@@ -116,17 +131,33 @@ TEST(WorldFeed, ARefusedIdBlockLeavesItsRequestPending) {
 
     boost::asio::io_context io;
     WorldFeed feed(io, config, 42, [] {});
+    // Nothing asked before a world's tick says which instance to ask.
+    std::this_thread::sleep_for(200ms);
+    EXPECT_EQ(count(), 0u);
+    std::string why;
+    EXPECT_EQ(feed.take_entity_id(&why), 0u);
+    EXPECT_NE(why.find("no world tick yet"), std::string::npos) << why;
+    const interest::GameWorld world(world_settings(config), testing::rooms_map());
+    std::vector<std::byte> bytes;
+    std::uint64_t tick = 0;
+    ASSERT_TRUE(eventually([&] { // until one comes after the feed's subscription is in
+        scaleout::encode_world_tick(world, 42, ++tick, bytes, 0, 7); // of instance 7
+        EXPECT_TRUE(fake_world.publish("dsoc.refused.tick", bytes));
+        return count() == 1;
+    }));
     const auto asked = std::chrono::steady_clock::now();
-    ASSERT_TRUE(eventually([&] { return count() == 1; }));
     {
         const std::lock_guard lock(mutex);
-        EXPECT_EQ(requests[0].instance, 0u); // first contact: no instance known yet
-        EXPECT_EQ(requests[0].count, GatewayIds::kIdBlock);
+        EXPECT_EQ(requests[0].instance, 7u);                    // the instance followed
+        EXPECT_EQ(requests[0].count, GatewayIds::kIdBlock + 1); // and the hello refused
     }
-    std::vector<std::byte> bytes;
     scaleout::encode_id_block({43, 7, 1, 10}, bytes); // of another world: refused
     ASSERT_TRUE(fake_world.publish(reply, bytes));
     ASSERT_TRUE(eventually([&] { return feed.stats().bad_messages == 1; }));
+    scaleout::encode_id_block({42, 8, 1, 10}, bytes); // of an instance not followed
+    ASSERT_TRUE(fake_world.publish(reply, bytes));
+    ASSERT_TRUE(eventually([&] { return feed.stats().other_instance == 1; }));
+    EXPECT_EQ(feed.stats().id_blocks, 0u);
 
     // Still pending: a hello does not send another request before the retry is due.
     EXPECT_EQ(feed.take_entity_id(), 0u);
@@ -135,6 +166,72 @@ TEST(WorldFeed, ARefusedIdBlockLeavesItsRequestPending) {
     std::this_thread::sleep_until(asked + 1100ms);
     EXPECT_EQ(feed.take_entity_id(), 0u);
     EXPECT_TRUE(eventually([&] { return count() == 2; })); // the retry
+}
+
+TEST(WorldFeed, OfTwoWorldsOnOneNameTheGatewayTakesIdsOfTheOneItFollowsAlone) {
+    if (testing::nats_server_binary().empty()) {
+        GTEST_SKIP() << testing::kNoNatsServer;
+    }
+    // Two world processes on one name (a standby started before the old one is stopped),
+    // both live before the gateway starts.
+    testing::NatsServer nats;
+    ServerConfig config = testing::gateway_config(nats.url(), "two");
+    const auto map = testing::rooms_map();
+    scaleout::NatsLinkOptions options;
+    options.url = nats.url();
+    scaleout::NatsLink first_link(options);
+    scaleout::NatsLink second_link(options);
+    scaleout::WorldProcess first(map, world_settings(config), 30, first_link, "two");
+    scaleout::WorldProcess second(map, world_settings(config), 30, second_link, "two");
+    ASSERT_TRUE(first_link.flush(2000ms));
+    ASSERT_TRUE(second_link.flush(2000ms));
+
+    boost::asio::io_context io;
+    WorldFeed feed(io, config, first.world_key(), [] {});
+    ASSERT_TRUE(eventually([&] { // heard first: followed
+        first.tick();
+        return feed.stats().id_blocks == 1;
+    }));
+    // The gateway asked the first alone: the second reserved nothing (before, a first
+    // request named no instance and both answered; the second kept its block for a
+    // gateway it never heard again, and took that gateway for lost).
+    ASSERT_TRUE(eventually([&] { return second.messages_received() == 1; })); // the request
+    EXPECT_EQ(second.stats().ids_reserved, 0u);
+    EXPECT_EQ(second.stats().other_instance, 1u);
+    EXPECT_EQ(first.stats().ids_reserved, feed.stats().ids_left);
+
+    // Both tick on; the gateway keeps to the first, and asks it alone for more ids.
+    std::size_t given = 0;
+    for (int i = 0; i < 40; ++i) {
+        first.tick();
+        second.tick();
+        std::vector<std::uint32_t> players;
+        for (int n = 0; n < 10; ++n) {
+            if (const std::uint32_t id = feed.take_entity_id(); id != 0) {
+                players.push_back(id);
+            }
+        }
+        given += players.size();
+        if (const auto taken = feed.take_newest()) {
+            EXPECT_EQ(taken->tick.instance, first.instance());
+            EXPECT_FALSE(taken->restart.has_value());
+        }
+        feed.send_joins(players);
+        feed.send_inputs({});
+        std::this_thread::sleep_for(30ms);
+    }
+    ASSERT_GT(given, std::size_t{GatewayIds::kIdBlock}); // more than one block
+    ASSERT_TRUE(eventually([&] { return first.stats().joins == given; }));
+    EXPECT_GE(feed.stats().id_blocks, 2u);
+    EXPECT_EQ(first.stats().ids_reserved, given + feed.stats().ids_left); // all of the first's
+    std::this_thread::sleep_for(100ms); // what is on its way to the second arrived
+    const scaleout::WorldProcessStats other = second.stats();
+    EXPECT_EQ(other.ids_reserved, 0u);
+    EXPECT_EQ(other.joins + other.inputs + other.for_strangers + other.gateways_lost, 0u);
+    EXPECT_EQ(other.other_instance, second.messages_received());
+    EXPECT_GE(feed.stats().other_instance, 40u); // the second's ticks
+    EXPECT_EQ(feed.stats().world_restarts, 0u);
+    EXPECT_EQ(feed.stats().bad_messages, 0u);
 }
 
 /// A world process and one gateway's feed on a real nats-server, each through a proxy
@@ -155,8 +252,10 @@ protected:
         world_link_ = std::make_unique<scaleout::NatsLink>(options);
         start_world();
         feed_ = std::make_unique<WorldFeed>(io_, config_, world_->world_key(), [] {});
+        // The feed follows the world (from a tick that comes after its subscription is
+        // in), and asks it for ids.
+        ASSERT_TRUE(step_until([](const scaleout::WorldTick&) { return true; }));
         ASSERT_TRUE(eventually([&] { return feed_->stats().id_blocks == 1; }));
-        ASSERT_TRUE(step().has_value()); // the feed follows the world
     }
     void TearDown() override {
         feed_.reset();

@@ -43,8 +43,9 @@ inline constexpr std::uint32_t kMaxIdBlock = 4096;
 /// A gateway's request for a block of ids, reserved for that gateway alone.
 struct ReserveRequest {
     std::uint64_t gateway = 0; ///< the asking gateway's id (as in its batches; never 0)
-    /// The world instance the gateway follows; 0 before it knows one (first contact: any
-    /// world answers). A world of another instance ignores the request.
+    /// The world instance the gateway follows (never 0: a gateway asks once it follows
+    /// one, so that two world processes on one name never both answer). A world of
+    /// another instance ignores the request.
     std::uint64_t instance = 0;
     std::uint32_t count = 0; ///< 1..kMaxIdBlock
 };

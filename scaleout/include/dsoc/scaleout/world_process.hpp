@@ -23,8 +23,8 @@
 // lost: NATS delivers at most once): a join of a player its gateway has joined already
 // and a leave of a player gone already change nothing.
 // Every message from a gateway names the world instance it is for (the one whose ticks
-// the gateway serves; a reserve request may name none, 0, before the gateway knows one):
-// a message naming another instance is dropped, the gateway not taken as heard, so that
+// the gateway serves; a reserve request the one it follows): a message naming another
+// instance is dropped, the gateway not taken as heard, so that
 // a second world process on the same name (or one started while gateways still follow
 // a dead one) reserves, spawns and steers nothing for gateways that follow another.
 // Messages that do not decode, messages of another instance, and joins, inputs or

@@ -10,20 +10,21 @@
 // skipped, so clients get the present world late rather than a backlog of past ones.
 //
 // Faults it repairs (GatewayIds has the rules): a taken tick is checked against this
-// gateway's players, and joins and leaves it shows lost are sent again. A tick or id
-// block of another world instance than the one followed is refused while that one is
-// live (heard within kWorldSilence: a second world process on the same name does not
-// take the gateway over, nor a stray message); once it is silent, the other instance
-// is followed from its own tick 1 (the world process restarted): the ids of the old
-// one are forgotten, the server is told to end every session that holds one
-// (take_newest()), and fresh ids are reserved at once, as many as those sessions held
-// (their clients come back together) and a block more. The first tick taken of an
-// instance must be plausible (kMaxFirstTick), so that no stray tick makes the gateway's
-// own tick numbers wrap.
+// gateway's players, and joins and leaves it shows lost are sent again. A tick of
+// another world instance than the one followed is refused while that one is live (heard
+// within kWorldSilence: a second world process on the same name does not take the
+// gateway over, nor a stray message); once it is silent, the other instance is followed
+// from its own tick 1 (the world process restarted): the ids of the old one are
+// forgotten, the server is told to end every session that holds one (take_newest()),
+// and fresh ids are reserved at once, as many as those sessions held (their clients
+// come back together) and a block more. An id block is taken only of the instance
+// followed: a gateway asks for ids once it follows one (its first tick), of that one
+// alone. The first tick taken of an instance must be plausible (kMaxFirstTick), so that
+// no stray tick makes the gateway's own tick numbers wrap.
 //
 // Whatever the gateway sends names a world instance: joins, inputs and leaves the one
 // whose tick the server took last (so that none of a past world's sessions reaches the
-// next), a reserve request the one followed (0 before any: first contact).
+// next), a reserve request the one followed.
 
 #include "dsoc/scaleout/nats_link.hpp"
 #include "dsoc/scaleout/world_messages.hpp"
@@ -57,8 +58,9 @@ struct WorldFeedStats {
     std::uint64_t joins_resent = 0;   ///< players a tick lacked after their join was sent
     std::uint64_t leaves_resent = 0;  ///< left players a tick still showed
     std::uint64_t world_restarts = 0; ///< new world instances followed after a first one
-    /// Ticks and id blocks of another world instance, refused while the one followed was
-    /// live (a restarted world's first ones; steadily: a second world on this name).
+    /// Ticks of another world instance, refused while the one followed was live (a
+    /// restarted world's first ones; steadily: a second world on this name), and id
+    /// blocks of an instance not followed (an answer that came after a switch).
     std::uint64_t other_instance = 0;
     std::uint64_t nats_disconnects = 0;
     std::uint64_t nats_reconnects = 0;
@@ -85,8 +87,8 @@ public:
     /// `on_tick` runs on `io`'s thread after each tick arrives; `wake` (optional, any
     /// thread) is called right after it is posted, for a loop that gathers events
     /// (io_loop.hpp) to take it up at once. Connects to config.nats_url (throws
-    /// scaleout::NatsError when no server answers), subscribes and asks the world for a
-    /// first block of ids.
+    /// scaleout::NatsError when no server answers) and subscribes; the first block of ids
+    /// is asked for at the first tick, of the world instance it names.
     WorldFeed(boost::asio::io_context& io, const ServerConfig& config, std::uint64_t world_key,
               std::function<void()> on_tick, std::function<void()> wake = {});
     ~WorldFeed();
@@ -98,10 +100,11 @@ public:
     [[nodiscard]] std::optional<TakenTick> take_newest();
     /// Whether a tick waits to be taken.
     [[nodiscard]] bool tick_waiting() const;
-    /// An entity id for a new player, or 0 when there is none yet: the world has not
-    /// reserved enough for us (unreachable, or not answered yet: the demand grows, so the
-    /// next request asks for more) or a restart of the world has not been taken yet;
-    /// `why_not`, when given, then says which. Asks for more before they run out.
+    /// An entity id for a new player, or 0 when there is none yet: no world tick heard
+    /// yet, the world has not reserved enough for us (unreachable, or not answered yet:
+    /// the demand grows, so the next request asks for more) or a restart of the world has
+    /// not been taken yet; `why_not`, when given, then says which. Asks for more before
+    /// they run out.
     [[nodiscard]] std::uint32_t take_entity_id(std::string* why_not = nullptr);
 
     /// Sends the joins (leaves) of those of `entity_ids` that take_entity_id() gave out
@@ -126,15 +129,16 @@ public:
 private:
     void on_tick_message(const scaleout::NatsMessage& message);
     void on_block_message(const scaleout::NatsMessage& message);
-    /// Whether a message of world `instance` is to be taken (under mutex_): one of the
+    /// Whether a tick of world `instance` is to be taken (under mutex_): one of the
     /// instance followed, or of another once that one is silent (followed from now on; a
     /// restart when one was followed before: its ids are forgotten).
     bool follow(std::uint64_t instance);
     /// Whether `tick` may be taken as the first of its instance (under mutex_): not beyond
     /// kMaxFirstTick. Counts it as bad when not.
     bool plausible_start(const scaleout::WorldTick& tick);
-    /// Asks for a block when GatewayIds::to_reserve() wants one and none was asked for
-    /// within the last second (or the one asked for was of a past instance).
+    /// Asks the instance followed (none before one is) for a block when
+    /// GatewayIds::to_reserve() wants one and none was asked for within the last second
+    /// (or the one asked for was of a past instance).
     void maybe_reserve();
     /// Who sends, for a batch: this gateway and the instance served (0: none yet).
     [[nodiscard]] scaleout::BatchFrom batch_from() const;
