@@ -27,7 +27,19 @@ void GatewayIds::add_block(std::uint32_t first, std::uint32_t count) {
     for (std::uint32_t i = 0; i < count; ++i) {
         unused_.push_back(first + i);
     }
+    block_ends_.push_back(first + count);
     wanted_ -= std::min<std::size_t>(wanted_, count);
+}
+
+std::size_t GatewayIds::void_through(std::uint32_t id) {
+    const auto end = std::upper_bound(block_ends_.begin(), block_ends_.end(), id);
+    const std::uint32_t below = end == block_ends_.end() ? UINT32_MAX : *end;
+    std::size_t voided = 0;
+    while (!unused_.empty() && unused_.front() < below) { // given out oldest first
+        unused_.pop_front();
+        ++voided;
+    }
+    return voided;
 }
 
 std::uint32_t GatewayIds::take() {
@@ -91,14 +103,27 @@ GatewayIds::Resend GatewayIds::check(std::span<const interest::Entity> entities,
                                      Clock::time_point now) {
     Resend resend;
     // A player of ours the world does not have: its join was lost (or the world removed
-    // it, as it does a gateway it has not heard for its timeout).
+    // it, as it does a gateway it has not heard for its timeout). Given up once its
+    // re-sends went by: the world does not hold its id for us.
     for (auto& [id, joined] : joined_) {
         joined.shown = in_tick(entities, id);
-        if (!joined.shown && due(joined.sent, now)) {
-            resend.joins.push_back(id);
+        if (joined.shown) {
+            joined.resends = 0;
+        } else if (due(joined.sent, now)) {
+            (joined.resends < kJoinResends ? resend.joins : resend.abandoned).push_back(id);
+            ++joined.resends;
             joined.sent = now;
         }
     }
+    std::sort(resend.abandoned.begin(), resend.abandoned.end());
+    for (const std::uint32_t id : resend.abandoned) {
+        (void)leave(std::span(&id, 1), now); // blind: no tick shows it
+        wanted_ = std::min<std::size_t>(wanted_ + 1, scaleout::kMaxIdBlock);
+    }
+    if (!resend.abandoned.empty()) {
+        resend.voided = void_through(resend.abandoned.back());
+    }
+    resend.leaves = resend.abandoned; // sent now
     // An id we gave out that the world has though no player of ours holds it: its leave
     // was lost.
     for (const interest::Entity& e : entities) {
@@ -138,6 +163,7 @@ GatewayIds::Resend GatewayIds::check(std::span<const interest::Entity> entities,
 void GatewayIds::clear() {
     wanted_ = std::min<std::size_t>(wanted_ + held_, scaleout::kMaxIdBlock);
     unused_.clear();
+    block_ends_.clear();
     given_.clear();
     held_ = 0;
     joined_.clear();

@@ -178,6 +178,9 @@ void Server::start_tick() {
         if (arrived->restart) {
             end_sessions_of_a_past_world(*arrived->restart);
         }
+        if (!arrived->abandoned.empty()) {
+            end_sessions_without_a_player(arrived->abandoned);
+        }
     }
     tick_start_ = Clock::now();
     if (!feed_ && schedule_.start_tick(tick_start_)) {
@@ -287,6 +290,29 @@ void Server::end_sessions_of_a_past_world(const WorldRestart& restart) {
     spdlog::warn("world '{}' restarted (instance {:016x} after {:016x}): {} client session(s) "
                  "ended with world_restarted, their entity ids void in the new world",
                  config_.world_name, restart.new_instance, restart.old_instance, ending.size());
+}
+
+void Server::end_sessions_without_a_player(std::span<const std::uint32_t> entity_ids) {
+    std::vector<std::shared_ptr<Connection>> ending;
+    for (auto& [id, client] : clients_) {
+        const std::uint32_t entity = client.session->entity_id();
+        if (entity != 0 && std::binary_search(entity_ids.begin(), entity_ids.end(), entity)) {
+            client.session->set_entity_id(0); // its leave is sent: none at its close
+            ending.push_back(client.session);
+        }
+    }
+    // Not while iterating: a disconnect may close the session at once.
+    for (const auto& session : ending) {
+        session->disconnect(pb::DISCONNECT_REASON_TRY_AGAIN,
+                            "the world process no longer holds this player's entity id for "
+                            "this gateway (it took the gateway for lost and gave its ids up): "
+                            "connect again for a new one");
+    }
+    spdlog::warn("world '{}' no longer holds {} entity id(s) of this gateway's players (their "
+                 "joins went unanswered {} times: it forgot this gateway while it was cut "
+                 "off): {} client session(s) ended with try_again",
+                 config_.world_name, entity_ids.size(), GatewayIds::kJoinResends + 1,
+                 ending.size());
 }
 
 void Server::apply_joins() {

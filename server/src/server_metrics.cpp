@@ -170,6 +170,15 @@ std::string Server::render_metrics() const {
                     "Leaves sent again: a world tick still showed the player a second after its "
                     "leave was sent.",
                     d(w.leaves_resent));
+        out.counter("dsoc_gateway_joins_abandoned_total",
+                    "Joins given up after 5 re-sends no world tick showed: the world no longer "
+                    "held the player's id for this gateway (it forgot the gateway while it was "
+                    "cut off); the session ended with try_again.",
+                    d(w.joins_abandoned));
+        out.counter("dsoc_gateway_ids_voided_total",
+                    "Reserved entity ids not given out yet, dropped as void with an abandoned "
+                    "join's block (the world no longer held them for this gateway).",
+                    d(w.ids_voided));
         out.counter("dsoc_gateway_world_restarts_total",
                     "New world process instances followed (the world restarted): every session "
                     "then ended with world_restarted.",

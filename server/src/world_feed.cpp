@@ -138,15 +138,21 @@ std::optional<TakenTick> WorldFeed::take_newest() {
         if (!newest_) {
             return out;
         }
-        out.emplace(TakenTick{std::move(*newest_), std::exchange(restart_, std::nullopt)});
+        out.emplace(TakenTick{std::move(*newest_), std::exchange(restart_, std::nullopt), {}});
         newest_.reset();
         served_ = out->tick.instance;
         resend = ids_.check(out->tick.entities, GatewayIds::Clock::now());
         stats_.joins_resent += resend.joins.size();
-        stats_.leaves_resent += resend.leaves.size();
+        stats_.leaves_resent += resend.leaves.size() - resend.abandoned.size();
+        stats_.joins_abandoned += resend.abandoned.size();
+        stats_.ids_voided += resend.voided;
+        out->abandoned = std::move(resend.abandoned);
     }
     send_batch(scaleout::IdBatchKind::join, resend.joins);
     send_batch(scaleout::IdBatchKind::leave, resend.leaves);
+    if (!out->abandoned.empty()) {
+        maybe_reserve(); // their clients come back, and void ids were dropped
+    }
     return out;
 }
 

@@ -2,8 +2,10 @@
 // tick on a fake clock: a join is sent again only when a tick lacks its player a whole
 // kResendAfter after it was sent, a leave while a tick still shows the player that long
 // after, or, when no tick showed it, a bounded number of times; ids the gateway did not
-// give out are never sent. And how many ids it asks for: more after a world restart
-// (its players come back together) and when hellos found none left.
+// give out are never sent; a join no tick shows after its bounded re-sends is given up
+// with the rest of its block (the world forgot the gateway). And how many ids it asks
+// for: more after a world restart (its players come back together) and when hellos
+// found none left.
 
 #include "dsoc/server/gateway_ids.hpp"
 
@@ -154,6 +156,46 @@ TEST_F(GatewayIdsTest, ALeaveShownByATickIsResentWhileShownNotBlind) {
     EXPECT_TRUE(check({}).leaves.empty());
 }
 
+TEST_F(GatewayIdsTest, AJoinNoTickShowsAfterItsResendsIsGivenUpWithTheRestOfItsBlock) {
+    // A world that forgot this gateway (it took it for lost, then needed the room) no
+    // longer holds its ids: a re-join is refused however often it comes.
+    ids_.add_block(20, 4); // a block asked for after the world forgot the gateway
+    const std::uint32_t a = ids_.take();
+    const std::uint32_t b = ids_.take();
+    (void)ids_.join(Ids{a, b}, now_);
+    now_ += 1s;
+    (void)check({a, b}); // both in the world
+    int resent = 0;
+    GatewayIds::Resend last;
+    for (int i = 0; i < 3 * GatewayIds::kJoinResends && last.abandoned.empty(); ++i) {
+        now_ += 1s;
+        // b shows again now and then (the world had only lost it for a while): its
+        // re-sends count afresh each time.
+        last = check(i % 2 == 0 ? Ids{} : Ids{b});
+        resent += last.joins == Ids{a} || last.joins == Ids{a, b} ? 1 : 0;
+    }
+    EXPECT_EQ(resent, GatewayIds::kJoinResends);
+    EXPECT_EQ(last.abandoned, (Ids{a}));
+    EXPECT_EQ(last.leaves, (Ids{a})); // should the world hold it after all, released
+    EXPECT_TRUE(last.joins.empty());
+    // The rest of a's block is void too (reserved before the world forgot the gateway);
+    // the later block is kept.
+    EXPECT_EQ(last.voided, 2u);
+    EXPECT_EQ(ids_.left(), 4u);
+    EXPECT_EQ(ids_.take(), 20u);
+    // Given up for good: never joined again, and its leave sent blind a bounded number of
+    // times.
+    int leaves = 0;
+    for (int i = 0; i < 3 * GatewayIds::kBlindResends; ++i) {
+        now_ += 1s;
+        const GatewayIds::Resend resend = check({b});
+        EXPECT_TRUE(resend.joins.empty()) << i;
+        EXPECT_TRUE(resend.abandoned.empty()) << i;
+        leaves += resend.leaves == Ids{a} ? 1 : 0;
+    }
+    EXPECT_EQ(leaves, GatewayIds::kBlindResends);
+}
+
 TEST(GatewayIdsDemand, ABlockAfterAClearCoversThePlayersThatHeldIds) {
     GatewayIds ids;
     EXPECT_EQ(ids.to_reserve(), GatewayIds::kIdBlock); // none yet
@@ -179,6 +221,26 @@ TEST(GatewayIdsDemand, ABlockAfterAClearCoversThePlayersThatHeldIds) {
     }
     ids.clear();
     EXPECT_EQ(ids.to_reserve(), scaleout::kMaxIdBlock);
+}
+
+TEST(GatewayIdsDemand, PlayersWhoseJoinsWereGivenUpAreWantedAgain) {
+    GatewayIds ids;
+    ids.add_block(100, 300);
+    Ids players;
+    for (int i = 0; i < 300; ++i) {
+        players.push_back(ids.take());
+    }
+    auto now = GatewayIds::Clock::now();
+    (void)ids.join(players, now);
+    EXPECT_EQ(ids.to_reserve(), GatewayIds::kIdBlock);
+    GatewayIds::Resend resend;
+    for (int i = 0; i <= GatewayIds::kJoinResends; ++i) {
+        now += GatewayIds::kResendAfter;
+        resend = ids.check({}, now); // the world forgot this gateway
+    }
+    EXPECT_EQ(resend.abandoned, players);
+    // Their clients come back together: one request covers them, and a block more.
+    EXPECT_EQ(ids.to_reserve(), 300u + GatewayIds::kIdBlock);
 }
 
 TEST(GatewayIdsDemand, HellosThatFoundNoIdMakeTheNextRequestLarger) {

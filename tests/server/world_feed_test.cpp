@@ -10,7 +10,8 @@
 // process replaced by a new one is followed from its own tick 1 (fresh ids for all its
 // players asked for at once; a stray first tick numbered near 2^64 is refused); a
 // second world on the same name takes none of a gateway's messages; a gateway the world
-// took for lost gets its players back once it is heard again.
+// took for lost gets its players back once it is heard again, and one it forgot gives
+// its players' joins up and asks for fresh ids.
 
 #include "dsoc/scaleout/world_process.hpp"
 #include "dsoc/scaleout/world_tick.hpp"
@@ -520,6 +521,68 @@ TEST_F(WorldFeedShortTimeout, AGatewayTheWorldTookForLostGetsItsPlayersBack) {
     EXPECT_EQ(world_->stats().gateways_back, 1u);
     EXPECT_EQ(feed_->stats().joins_resent, 1u);
     EXPECT_EQ(world_->stats().for_strangers, 0u);
+}
+
+TEST_F(WorldFeedShortTimeout, AGatewayTheWorldForgotGivesUpItsJoinsAndAsksForFreshIds) {
+    const std::uint32_t id = joined_player();
+    gateway_proxy_->cut();
+    ASSERT_TRUE(eventually([&] { return feed_->stats().nats_disconnects == 1; }));
+    ASSERT_TRUE(eventually([&] {
+        world_->tick();
+        std::this_thread::sleep_for(30ms);
+        return world_->stats().gateways_lost == 1;
+    }));
+    // Another gateway reserves all the room there is: the world forgets the lost one.
+    scaleout::NatsLinkOptions options;
+    options.url = nats_->url();
+    scaleout::NatsLink other(options);
+    for (std::size_t reserved = 0; reserved < scaleout::WorldProcess::kMaxReserved;
+         reserved += scaleout::kMaxIdBlock) {
+        std::vector<std::byte> bytes;
+        scaleout::encode_reserve_request({0x07e4, world_->instance(), scaleout::kMaxIdBlock},
+                                         bytes);
+        ASSERT_TRUE(other.request("dsoc.faults.reserve", bytes, 2000ms).has_value());
+    }
+    ASSERT_EQ(world_->stats().gateways_forgotten, 1u);
+    gateway_proxy_->restore();
+    ASSERT_TRUE(eventually([&] { return feed_->stats().nats_reconnects == 1; }));
+
+    // Its re-joins are refused (the id is not reserved for it any more), a bounded number
+    // of times; then the join is given up, its session to be ended, and the rest of its
+    // block dropped. Before, the join was sent again every second, for good.
+    std::optional<TakenTick> abandoned;
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    while (!abandoned && std::chrono::steady_clock::now() < deadline) {
+        if (auto taken = step(); taken && !taken->abandoned.empty()) {
+            abandoned = std::move(taken);
+        }
+        std::this_thread::sleep_for(30ms);
+    }
+    ASSERT_TRUE(abandoned.has_value()) << "the join was never given up";
+    EXPECT_EQ(abandoned->abandoned, std::vector<std::uint32_t>{id});
+    const WorldFeedStats stats = feed_->stats();
+    EXPECT_EQ(stats.joins_resent, std::uint64_t{GatewayIds::kJoinResends});
+    EXPECT_EQ(stats.joins_abandoned, 1u);
+    EXPECT_EQ(stats.ids_voided, GatewayIds::kIdBlock - 1);
+    EXPECT_GE(world_->stats().for_strangers, std::uint64_t{GatewayIds::kJoinResends});
+    for (int i = 0; i < 30; ++i) { // nothing more is sent for it
+        (void)step();
+        std::this_thread::sleep_for(50ms);
+    }
+    EXPECT_EQ(feed_->stats().joins_resent, stats.joins_resent);
+
+    // Its client connects again: fresh ids (the world forgets the other gateway, lost
+    // too by now, to make room), and the new player joins.
+    std::uint32_t fresh = 0;
+    ASSERT_TRUE(eventually([&] {
+        fresh = feed_->take_entity_id();
+        return fresh != 0;
+    }));
+    EXPECT_GT(fresh, id);
+    feed_->send_joins(std::span(&fresh, 1));
+    EXPECT_TRUE(step_until([&](const scaleout::WorldTick& t) { return has(t, fresh); }))
+        << "the new player never joined";
+    EXPECT_EQ(feed_->stats().id_blocks, 2u);
 }
 
 } // namespace

@@ -8,7 +8,14 @@
 // was down when one was sent). The tick stream is their acknowledgement, since every
 // tick lists every entity:
 // - a player the gateway joined that a tick lacks kResendAfter or more after its join
-//   was last sent has its join sent again;
+//   was last sent has its join sent again, kJoinResends times at most; a join still not
+//   shown after that is given up (abandoned): the world does not hold that id for the
+//   gateway any more (it took the gateway for lost and then forgot it to make room for
+//   other reservations), so the player's session must end (its client connects again
+//   and gets a fresh id), a leave is sent for the id (blind, as below: should the world
+//   hold it after all, it is released), and the ids not given out yet of its block and
+//   of every earlier one are void too (reserved before the world forgot the gateway)
+//   and dropped;
 // - an id the gateway gave out that a tick shows though none of its players holds it
 //   (it left) has its leave sent again, kResendAfter or more after the last one;
 // - a leave of an id the last tick checked did not show (its join lost or still on its
@@ -42,6 +49,10 @@ public:
     /// Re-sends of a leave no tick can acknowledge (above): with kResendAfter, it reaches
     /// a world whose connection to NATS is back within this many seconds. [Limit: re-sends]
     static constexpr int kBlindResends = 5;
+    /// Re-sends of a join no tick shows before it is abandoned (above): with kResendAfter,
+    /// a world that holds the id for the gateway spawns the player well within that, so
+    /// only a world that forgot the gateway lets them all go by. [Limit: re-sends]
+    static constexpr int kJoinResends = 5;
     /// Ids asked for at a time when nothing more is wanted: a second's joins of a busy
     /// gateway. A request is due when fewer than half of it are left. [Units: ids]
     static constexpr std::uint32_t kIdBlock = 256;
@@ -69,13 +80,19 @@ public:
     [[nodiscard]] std::vector<std::uint32_t> leave(std::span<const std::uint32_t> ids,
                                                    Clock::time_point now);
 
-    /// Joins and leaves to send again, each in increasing id order.
+    /// Joins and leaves to send again, each in increasing id order, and the joins given
+    /// up.
     struct Resend {
         std::vector<std::uint32_t> joins;
-        std::vector<std::uint32_t> leaves;
+        std::vector<std::uint32_t> leaves; ///< the abandoned joins' ids among them
+        /// Players whose joins were given up (kJoinResends): their sessions must end.
+        std::vector<std::uint32_t> abandoned;
+        /// Ids not given out yet that the abandoned joins showed void: dropped. [Units: ids]
+        std::size_t voided = 0;
     };
     /// What a world tick's `entities` (in increasing id order, as decoded) show lost at
-    /// `now`; the re-sends it returns count as sent at `now`.
+    /// `now`; the re-sends it returns count as sent at `now`. An abandoned player counts
+    /// as left, and its client as one more id wanted (it connects again).
     [[nodiscard]] Resend check(std::span<const interest::Entity> entities, Clock::time_point now);
 
     /// Forgets every id: those of one world instance mean nothing to another. The
@@ -87,12 +104,20 @@ private:
     struct Joined {
         Clock::time_point sent; ///< when its join was last sent
         bool shown = false;     ///< in the last tick checked
+        int resends = 0;        ///< since a tick last showed it
     };
     struct Left {
         Clock::time_point sent; ///< when its leave was last sent
         int blind_resends = 0;  ///< re-sends left while no tick shows it
     };
+    /// Drops the ids not given out of the block holding `id` and of every earlier block;
+    /// how many.
+    std::size_t void_through(std::uint32_t id);
+
     std::deque<std::uint32_t> unused_; ///< not given out, oldest block first
+    /// One past the last id of each block added since clear(), increasing (the world
+    /// hands out increasing ids): which block an id is of.
+    std::vector<std::uint32_t> block_ends_;
     /// Given out since clear(): true while held (not left).
     std::unordered_map<std::uint32_t, bool> given_;
     std::size_t held_ = 0; ///< given_ entries still held

@@ -67,6 +67,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -210,6 +211,11 @@ private:
     /// so each session ends with world_restarted and loses its id at once (nothing of it,
     /// no input and no leave, reaches the new world, where that id is another's).
     void end_sessions_of_a_past_world(const WorldRestart& restart);
+    /// Role gateway, when the world no longer holds `entity_ids` for this gateway (their
+    /// joins were given up, their leaves sent: TakenTick::abandoned): each session holding
+    /// one ends with try_again and loses its id at once; its client connects again for a
+    /// fresh one.
+    void end_sessions_without_a_player(std::span<const std::uint32_t> entity_ids);
     /// A hello's entity id (reserved in the world, or from the gateway's blocks), or 0
     /// after ending `session` with the reason: try_again on a gateway that has none yet,
     /// server_full when the world's ids are used up.

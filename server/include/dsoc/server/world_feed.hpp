@@ -52,11 +52,16 @@ struct WorldFeedStats {
     std::uint64_t ticks_skipped = 0;  ///< replaced by a newer one before they were served
     /// Ticks or id blocks that did not decode, were of another world or went back in time.
     std::uint64_t bad_messages = 0;
-    std::uint64_t id_blocks = 0;      ///< blocks of entity ids the world reserved for us
-    std::uint64_t ids_left = 0;       ///< of those, not given to a player yet
-    std::uint64_t not_sent = 0;       ///< joins, inputs or leaves the NATS link refused
-    std::uint64_t joins_resent = 0;   ///< players a tick lacked after their join was sent
-    std::uint64_t leaves_resent = 0;  ///< left players a tick still showed
+    std::uint64_t id_blocks = 0;     ///< blocks of entity ids the world reserved for us
+    std::uint64_t ids_left = 0;      ///< of those, not given to a player yet
+    std::uint64_t not_sent = 0;      ///< joins, inputs or leaves the NATS link refused
+    std::uint64_t joins_resent = 0;  ///< players a tick lacked after their join was sent
+    std::uint64_t leaves_resent = 0; ///< left players a tick still showed
+    /// Players whose joins were given up (GatewayIds::kJoinResends): the world did not
+    /// hold their ids for this gateway any more; their sessions ended with try_again.
+    std::uint64_t joins_abandoned = 0;
+    /// Ids not given out yet dropped as void with an abandoned join's block. [Units: ids]
+    std::uint64_t ids_voided = 0;
     std::uint64_t world_restarts = 0; ///< new world instances followed after a first one
     /// Ticks of another world instance, refused while the one followed was live (a
     /// restarted world's first ones; steadily: a second world on this name), and id
@@ -80,6 +85,10 @@ struct TakenTick {
     /// gateway gave out before is void (the new world hands the same numbers to others),
     /// so every session holding one must end.
     std::optional<WorldRestart> restart;
+    /// Entity ids whose joins were given up at this tick (GatewayIds::check): the world
+    /// does not hold them for this gateway (it forgot the gateway), so the sessions
+    /// holding them must end; their leaves are sent already.
+    std::vector<std::uint32_t> abandoned;
 };
 
 class WorldFeed {
@@ -96,7 +105,8 @@ public:
     WorldFeed& operator=(const WorldFeed&) = delete;
 
     /// The newest tick not served yet (nothing when none arrived since the last call),
-    /// after sending again the joins and leaves it shows lost (GatewayIds::check).
+    /// after sending again the joins and leaves it shows lost (GatewayIds::check), and
+    /// the leaves of the joins it gives up (TakenTick::abandoned).
     [[nodiscard]] std::optional<TakenTick> take_newest();
     /// Whether a tick waits to be taken.
     [[nodiscard]] bool tick_waiting() const;
