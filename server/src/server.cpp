@@ -186,7 +186,7 @@ void Server::start_tick() {
     if (!feed_ && schedule_.start_tick(tick_start_)) {
         ++stats_.late_ticks;
     }
-    tick_ = feed_ ? world_tick_base_ + arrived->tick.tick : tick_ + 1;
+    tick_ = feed_ ? arrived->number : tick_ + 1;
     apply_joins();
     apply_inputs();
     if (feed_) {
@@ -272,7 +272,6 @@ void Server::finish_tick(Clock::time_point phase_end, std::exception_ptr error) 
 }
 
 void Server::end_sessions_of_a_past_world(const WorldRestart& restart) {
-    world_tick_base_ = tick_; // the new world counts from 1
     std::vector<std::shared_ptr<Connection>> ending;
     for (auto& [id, client] : clients_) {
         if (client.session->entity_id() != 0) {

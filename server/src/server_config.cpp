@@ -47,7 +47,7 @@ std::vector<std::string> validate(const ServerConfig& c) {
           "must be 1..64 letters, digits, '-' or '_' (it is part of NATS subjects); got '" +
               c.world_name + "'");
     check(p, !c.bind_address.empty(), "bind_address", "must not be empty");
-    check_range(p, "tick_rate", c.tick_rate, 1, 240, " Hz");
+    check_range(p, "tick_rate", c.tick_rate, 1, kMaxTickRate, " Hz");
     check_range(p, "bots", c.bots, 0, 100000);
     check_range(p, "teams", c.teams, 0, 1000);
     for (const auto& [name, range] :

@@ -154,8 +154,8 @@ std::string Server::render_metrics() const {
                     "fell behind and skipped to the newest).",
                     d(w.ticks_skipped));
         out.counter("dsoc_gateway_bad_messages_total",
-                    "Messages from NATS that did not decode, were of another world or went back "
-                    "in time.",
+                    "Messages from NATS that did not decode, were of another world, went back in "
+                    "time or jumped further ahead than the world's clock allows.",
                     d(w.bad_messages));
         out.counter("dsoc_gateway_id_blocks_total",
                     "Blocks of entity ids the world process reserved for this gateway.",
@@ -183,6 +183,10 @@ std::string Server::render_metrics() const {
                     "New world process instances followed (the world restarted): every session "
                     "then ended with world_restarted.",
                     d(w.world_restarts));
+        out.counter("dsoc_gateway_world_resyncs_total",
+                    "The world instance followed taken up anew at its present tick: its ticks "
+                    "had all gone back from the last one taken for a second (that one forged).",
+                    d(w.world_resyncs));
         out.counter("dsoc_gateway_other_instance_total",
                     "World ticks of another world instance, refused while the one followed was "
                     "live (a restarted world's first; steadily: a second world process on this "

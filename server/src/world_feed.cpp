@@ -3,6 +3,7 @@
 #include "dsoc/scaleout/world_process.hpp"
 
 #include <boost/asio/post.hpp>
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <utility>
@@ -13,6 +14,15 @@ namespace {
 
 /// How often an unanswered reserve is asked again.
 constexpr auto kReserveRetry = std::chrono::seconds(1);
+/// How often refused messages are logged at most (every one is counted).
+constexpr auto kRefusalLogEvery = std::chrono::seconds(10);
+
+/// Ticks a world can step in `ns` of its clock at most: kMaxTickRate a second, and a
+/// second more (a late step runs at once). No overflow for any `ns`. [Units: ticks]
+std::uint64_t steps_within(std::uint64_t ns) {
+    constexpr auto rate = static_cast<std::uint64_t>(kMaxTickRate);
+    return rate + ns / 1'000'000 * rate / 1000;
+}
 
 } // namespace
 
@@ -64,39 +74,99 @@ bool WorldFeed::follow(std::uint64_t instance) {
     return true;
 }
 
-bool WorldFeed::plausible_start(const scaleout::WorldTick& tick) {
+void WorldFeed::refuse(std::string why) {
+    ++stats_.bad_messages;
+    ++refused_unlogged_;
+    const auto now = std::chrono::steady_clock::now();
+    if (stats_.bad_messages == 1 || now - refusal_logged_ >= kRefusalLogEvery) {
+        spdlog::warn("world feed: {} message(s) from NATS refused since the last warning; the "
+                     "last: {}",
+                     refused_unlogged_, why);
+        refusal_logged_ = now;
+        refused_unlogged_ = 0;
+    }
+    stats_.last_error = std::move(why);
+}
+
+bool WorldFeed::plausible_start(const scaleout::WorldTick& tick, const std::string& subject) {
     const bool first = tick.instance != instance_ || last_tick_ == 0;
     if (first && tick.tick > kMaxFirstTick) {
-        ++stats_.bad_messages;
-        stats_.last_error = "world tick " + std::to_string(tick.tick) +
-                            " as the first of instance " + std::to_string(tick.instance) +
-                            " (at most 2^40)";
+        refuse(fmt::format("{}: world tick {} as the first of instance {:016x} (at most 2^40)",
+                           subject, tick.tick, tick.instance));
         return false;
     }
     return true;
 }
 
+std::optional<std::uint64_t> WorldFeed::number_of(const scaleout::WorldTick& tick,
+                                                  const std::string& subject,
+                                                  std::chrono::steady_clock::time_point now) {
+    std::uint64_t ahead = tick.tick; // the first of its instance: counts from 1
+    const auto since = std::chrono::duration_cast<std::chrono::nanoseconds>(now - accepted_at_);
+    const bool resync = last_tick_ != 0 && tick.tick <= last_tick_;
+    if (resync) {
+        if (since < kWorldSilence || tick.tick > kMaxFirstTick) {
+            refuse(fmt::format("{}: world tick {} after {} of instance {:016x}: not newer", subject,
+                               tick.tick, last_tick_, tick.instance));
+            return std::nullopt;
+        }
+        // Nothing of the instance taken for kWorldSilence, its ticks all behind the last
+        // one taken: that one was forged. Ahead by as many steps as a world can make since.
+        ahead = steps_within(static_cast<std::uint64_t>(since.count()));
+    } else if (last_tick_ != 0) {
+        ahead = tick.tick - last_tick_;
+        const std::uint64_t world_ns =
+            tick.published_ns > last_published_ ? tick.published_ns - last_published_ : 0;
+        if (ahead > steps_within(world_ns)) {
+            refuse(fmt::format("{}: world tick {} after {} of instance {:016x}: {} ticks ahead "
+                               "in {:.3f} s of the world's clock (a world steps at most {} "
+                               "times a second)",
+                               subject, tick.tick, last_tick_, tick.instance, ahead,
+                               static_cast<double>(world_ns) * 1e-9, kMaxTickRate));
+            return std::nullopt;
+        }
+    }
+    if (ahead > kMaxNumber - last_number_) {
+        refuse(fmt::format("{}: world tick {} of instance {:016x}: this gateway's tick numbers "
+                           "would pass 2^62 ({} now)",
+                           subject, tick.tick, tick.instance, last_number_));
+        return std::nullopt;
+    }
+    if (resync) {
+        ++stats_.world_resyncs;
+        spdlog::warn("world feed: world tick {} of instance {:016x} taken after {:.1f} s of its "
+                     "ticks going back from tick {} (that one forged?): the instance followed "
+                     "anew",
+                     tick.tick, tick.instance, std::chrono::duration<double>(since).count(),
+                     last_tick_);
+    }
+    return last_number_ + ahead;
+}
+
 void WorldFeed::on_tick_message(const scaleout::NatsMessage& message) {
-    auto tick = scaleout::decode_world_tick(message.data, std::string(message.subject), world_key_);
+    const std::string subject(message.subject);
+    auto tick = scaleout::decode_world_tick(message.data, subject, world_key_);
     {
         const std::lock_guard lock(mutex_);
         if (!tick.ok()) {
-            ++stats_.bad_messages;
-            stats_.last_error = tick.error().message();
+            refuse(tick.error().message());
             return;
         }
-        if (!plausible_start(tick.value()) || !follow(tick->instance)) {
+        if (!plausible_start(tick.value(), subject) || !follow(tick->instance)) {
             return;
         }
-        if (tick->tick <= last_tick_) {
-            ++stats_.bad_messages; // not newer: a second world of the same instance?
-            stats_.last_error =
-                "world tick " + std::to_string(tick->tick) + " after " + std::to_string(last_tick_);
+        const auto now = std::chrono::steady_clock::now();
+        const std::optional<std::uint64_t> number = number_of(tick.value(), subject, now);
+        if (!number) {
             return;
         }
         stats_.ticks_skipped += newest_ ? 1 : 0;
         ++stats_.ticks_received;
         last_tick_ = tick->tick;
+        last_published_ = tick->published_ns;
+        accepted_at_ = now;
+        last_number_ = *number;
+        newest_number_ = *number;
         newest_ = std::move(tick).value();
     }
     boost::asio::post(io_, [this] { on_tick_(); });
@@ -111,9 +181,8 @@ void WorldFeed::on_block_message(const scaleout::NatsMessage& message) {
     {
         const std::lock_guard lock(mutex_);
         if (!block.ok() || block->world_key != world_key_) {
-            ++stats_.bad_messages;
-            stats_.last_error =
-                block.ok() ? "an id block of another world" : block.error().message();
+            refuse(block.ok() ? std::string(message.subject) + ": an id block of another world"
+                              : block.error().message());
             return; // the request stays pending: asked again after kReserveRetry
         }
         if (block->instance != instance_) {
@@ -138,7 +207,8 @@ std::optional<TakenTick> WorldFeed::take_newest() {
         if (!newest_) {
             return out;
         }
-        out.emplace(TakenTick{std::move(*newest_), std::exchange(restart_, std::nullopt), {}});
+        out.emplace(TakenTick{
+            std::move(*newest_), newest_number_, std::exchange(restart_, std::nullopt), {}});
         newest_.reset();
         served_ = out->tick.instance;
         resend = ids_.check(out->tick.entities, GatewayIds::Clock::now());

@@ -1,17 +1,18 @@
 // A gateway's feed of the world's ticks (WorldFeed) over a real nats-server (skipped,
 // with the reason, where the binary is absent): a gateway that falls behind serves the
-// newest tick and counts the ones it skipped; a tick that goes back in time, bad bytes
-// and a tick of another world are refused and counted; ids come in blocks reserved by
-// the world instance the gateway follows, asked of it alone (of two world processes on
-// one name, the other reserves nothing). And the faults it repairs, each made for real
-// by cutting one process's
+// newest tick and counts the ones it skipped; a tick that goes back in time, or jumps
+// further ahead than the world's clock allows, bad bytes and a tick of another world are
+// refused and counted; ids come in blocks reserved by the world instance the gateway
+// follows, asked of it alone (of two world processes on one name, the other reserves
+// nothing). And the faults it repairs, each made for real by cutting one process's
 // connection to NATS (a TCP proxy between it and the server): a join or a leave lost
 // while the world was cut off is sent again until the ticks show it taken; a world
 // process replaced by a new one is followed from its own tick 1 (fresh ids for all its
 // players asked for at once; a stray first tick numbered near 2^64 is refused); a
 // second world on the same name takes none of a gateway's messages; a gateway the world
 // took for lost gets its players back once it is heard again, and one it forgot gives
-// its players' joins up and asks for fresh ids.
+// its players' joins up and asks for fresh ids; a tick forged ahead with a clock to
+// match is got over.
 
 #include "dsoc/scaleout/world_process.hpp"
 #include "dsoc/scaleout/world_tick.hpp"
@@ -77,6 +78,7 @@ TEST(WorldFeed, AGatewayBehindServesTheNewestTickAndCountsTheRest) {
     ASSERT_TRUE(newest.has_value());
     const std::uint64_t last = world.stats().ticks;
     EXPECT_EQ(newest->tick.tick, last);
+    EXPECT_EQ(newest->number, last); // the first world this gateway follows: its numbers
     EXPECT_FALSE(newest->restart.has_value());
     EXPECT_EQ(feed.stats().ticks_skipped, before.ticks_skipped + 2);
     EXPECT_FALSE(feed.take_newest().has_value()); // nothing new since
@@ -95,8 +97,9 @@ TEST(WorldFeed, AGatewayBehindServesTheNewestTickAndCountsTheRest) {
     scaleout::encode_world_tick(world.world(), world.world_key(), 2, bytes, 0, world.instance());
     ASSERT_TRUE(world_link.publish("dsoc.feed.tick", bytes));
     ASSERT_TRUE(eventually([&] { return feed.stats().bad_messages == 3; }));
-    EXPECT_NE(feed.stats().last_error.find("world tick 2 after " + std::to_string(last)),
-              std::string::npos)
+    EXPECT_NE(
+        feed.stats().last_error.find("dsoc.feed.tick: world tick 2 after " + std::to_string(last)),
+        std::string::npos)
         << feed.stats().last_error;
     world.tick();
     ASSERT_TRUE(
@@ -493,6 +496,53 @@ TEST_F(WorldFeedFaults, AnImplausibleFirstTickTakesNoGatewayOver) {
     const auto next = step(); // the world followed, heard again
     ASSERT_TRUE(next.has_value());
     EXPECT_FALSE(next->restart.has_value());
+    EXPECT_EQ(feed_->stats().world_restarts, 0u);
+}
+
+TEST_F(WorldFeedFaults, ATickFarAheadOfTheWorldsClockIsRefusedAndTheNextIsServed) {
+    const auto last = step();
+    ASSERT_TRUE(last.has_value());
+    const auto forge = [&](std::uint64_t number, std::uint64_t published) {
+        std::vector<std::byte> bytes;
+        scaleout::encode_world_tick(world_->world(), world_->world_key(), number, bytes, published,
+                                    world_->instance());
+        ASSERT_TRUE(world_link_->publish("dsoc.faults.tick", bytes));
+    };
+    // Of the instance followed, numbered 2^64 - 1, stamped now; then stamped 2^64 - 1 ns
+    // too (585 years of the world's clock are still not enough steps): both refused.
+    // Before, the first was taken, and every tick after it refused as not newer.
+    forge(UINT64_MAX, scaleout::monotonic_ns());
+    ASSERT_TRUE(eventually([&] { return feed_->stats().bad_messages == 1; }));
+    EXPECT_NE(feed_->stats().last_error.find("ticks ahead in"), std::string::npos)
+        << feed_->stats().last_error;
+    forge(UINT64_MAX, UINT64_MAX);
+    ASSERT_TRUE(eventually([&] { return feed_->stats().bad_messages == 2; }));
+    auto next = step();
+    ASSERT_TRUE(next.has_value()) << feed_->stats().last_error;
+    EXPECT_EQ(next->tick.tick, last->tick.tick + 1);
+    EXPECT_EQ(next->number, last->number + 1);
+
+    // One forged with a publish time to match (a second of the world's clock ahead for
+    // each 240 ticks) is taken: the world's own ticks are then behind it, refused, until
+    // they have gone back for WorldFeed::kWorldSilence; then the instance is followed anew
+    // and the gateway's numbers go on increasing.
+    const std::uint64_t ahead = 10 * kMaxTickRate;
+    const std::uint64_t received = feed_->stats().ticks_received;
+    forge(next->tick.tick + ahead, next->tick.published_ns + 10'000'000'000);
+    ASSERT_TRUE(eventually([&] { return feed_->stats().ticks_received == received + 1; }));
+    const auto forged = feed_->take_newest();
+    ASSERT_TRUE(forged.has_value());
+    EXPECT_EQ(forged->number, next->number + ahead);
+    world_->tick();
+    ASSERT_TRUE(eventually([&] { return feed_->stats().bad_messages == 3; }));
+    EXPECT_NE(feed_->stats().last_error.find("not newer"), std::string::npos)
+        << feed_->stats().last_error;
+    EXPECT_TRUE(step_until([](const scaleout::WorldTick&) { return true; }, 3s))
+        << feed_->stats().last_error;
+    EXPECT_EQ(feed_->stats().world_resyncs, 1u);
+    next = step();
+    ASSERT_TRUE(next.has_value());
+    EXPECT_GT(next->number, forged->number);
     EXPECT_EQ(feed_->stats().world_restarts, 0u);
 }
 

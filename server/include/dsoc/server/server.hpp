@@ -256,9 +256,6 @@ private:
     interest::GameWorld world_;           // role gateway: a mirror of the world process's
     std::unique_ptr<WorldFeed> feed_;     // role gateway, from start()
     std::uint64_t tick_published_ns_ = 0; // role gateway: this tick's WorldTick::published_ns
-    // Role gateway: added to the world's tick numbers so that this server's keep
-    // increasing across world restarts (the last tick served before the latest one).
-    std::uint64_t world_tick_base_ = 0;
     std::vector<scaleout::PlayerInput> outgoing_inputs_; // role gateway: this tick's inputs
     std::vector<std::uint32_t> outgoing_ids_;            // role gateway: joins or leaves
     std::unique_ptr<interest::InterestPolicy> policy_;

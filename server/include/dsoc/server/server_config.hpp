@@ -14,6 +14,10 @@
 
 namespace dsoc::server {
 
+/// The highest tick rate a server or world process runs at (ServerConfig::tick_rate).
+/// [Units: Hz]
+inline constexpr int kMaxTickRate = 240;
+
 /// One [dsoc] entry (dsoc_settings.hpp): a visibility::DSOCConfig field by name, its
 /// value as text, and where it was set ("server.toml:12:1", "--dsoc"), for messages.
 struct DsocSetting {
@@ -58,7 +62,7 @@ struct ServerConfig {
     /// On jemalloc (dsoc-server's allocator where the build found it) they are always
     /// given: reading them costs nothing.
     bool heap_metrics = false;
-    /// Simulation and snapshot rate. [Units: Hz] [Limit: 1..240]
+    /// Simulation and snapshot rate. [Units: Hz] [Limit: 1..kMaxTickRate]
     int tick_rate = visibility::DSOCConfig{}.tick_rate;
     /// Wandering bots. [Limit: 0..100000]
     int bots = interest::WorldSettings{}.bots;

@@ -19,8 +19,19 @@
 // and fresh ids are reserved at once, as many as those sessions held (their clients
 // come back together) and a block more. An id block is taken only of the instance
 // followed: a gateway asks for ids once it follows one (its first tick), of that one
-// alone. The first tick taken of an instance must be plausible (kMaxFirstTick), so that
-// no stray tick makes the gateway's own tick numbers wrap.
+// alone.
+//
+// Tick numbers: the first tick taken of an instance must be plausible (kMaxFirstTick),
+// and each later one newer than the last taken and no further ahead of it than the
+// world can step in the time between them by its own clock (WorldTick::published_ns:
+// kMaxTickRate a second, and a second more), so that no corrupt or hostile tick
+// (numbered 2^64 - 1, say) makes the gateway refuse every tick after it or its own tick
+// numbers wrap; refused ticks are counted as bad, with the reason, and the gateway
+// carries on with the next good one. Should the instance's ticks all go back from the
+// last one taken for kWorldSilence (that one was forged with a publish time to match),
+// the gateway follows the instance anew from its present tick (world_resyncs).
+// The gateway's own tick numbers (TakenTick::number) advance by the world's steps,
+// keep increasing across restarts and resyncs, and stay below kMaxNumber.
 //
 // Whatever the gateway sends names a world instance: joins, inputs and leaves the one
 // whose tick the server took last (so that none of a past world's sessions reaches the
@@ -50,7 +61,8 @@ namespace dsoc::server {
 struct WorldFeedStats {
     std::uint64_t ticks_received = 0; ///< decoded and for this world
     std::uint64_t ticks_skipped = 0;  ///< replaced by a newer one before they were served
-    /// Ticks or id blocks that did not decode, were of another world or went back in time.
+    /// Ticks or id blocks that did not decode, were of another world, went back in time or
+    /// jumped further ahead than the world's clock allows.
     std::uint64_t bad_messages = 0;
     std::uint64_t id_blocks = 0;     ///< blocks of entity ids the world reserved for us
     std::uint64_t ids_left = 0;      ///< of those, not given to a player yet
@@ -63,6 +75,9 @@ struct WorldFeedStats {
     /// Ids not given out yet dropped as void with an abandoned join's block. [Units: ids]
     std::uint64_t ids_voided = 0;
     std::uint64_t world_restarts = 0; ///< new world instances followed after a first one
+    /// The instance followed taken up anew at its present tick: every tick of it had gone
+    /// back from the last one taken for kWorldSilence (that one was forged).
+    std::uint64_t world_resyncs = 0;
     /// Ticks of another world instance, refused while the one followed was live (a
     /// restarted world's first ones; steadily: a second world on this name), and id
     /// blocks of an instance not followed (an answer that came after a switch).
@@ -81,6 +96,10 @@ struct WorldRestart {
 /// A world tick as the server takes it.
 struct TakenTick {
     scaleout::WorldTick tick;
+    /// The gateway's own tick number: greater than every one taken before (across world
+    /// restarts too), ahead of the last by as many steps as the world made (by a guess
+    /// from above after a resync), below WorldFeed::kMaxNumber. [Units: ticks]
+    std::uint64_t number = 0;
     /// Set on the first tick taken after the world process restarted: every entity id the
     /// gateway gave out before is void (the new world hands the same numbers to others),
     /// so every session holding one must end.
@@ -135,6 +154,10 @@ public:
     /// over. Beyond it, the gateway's tick numbers (the world's plus those served under
     /// earlier instances) could wrap. [Units: ticks]
     static constexpr std::uint64_t kMaxFirstTick = std::uint64_t{1} << 40;
+    /// The gateway's own tick numbers stay below this: a tick that would take them past
+    /// it is refused (counted as bad), so that nothing adding a duration to one wraps.
+    /// Out of reach of a world's steps, however long the gateway runs. [Units: ticks]
+    static constexpr std::uint64_t kMaxNumber = std::uint64_t{1} << 62;
 
 private:
     void on_tick_message(const scaleout::NatsMessage& message);
@@ -143,9 +166,19 @@ private:
     /// instance followed, or of another once that one is silent (followed from now on; a
     /// restart when one was followed before: its ids are forgotten).
     bool follow(std::uint64_t instance);
+    /// Counts a refused message as bad and why (under mutex_); logs a warning now and
+    /// then.
+    void refuse(std::string why);
     /// Whether `tick` may be taken as the first of its instance (under mutex_): not beyond
-    /// kMaxFirstTick. Counts it as bad when not.
-    bool plausible_start(const scaleout::WorldTick& tick);
+    /// kMaxFirstTick. Refuses it when not.
+    bool plausible_start(const scaleout::WorldTick& tick, const std::string& subject);
+    /// The gateway's number for `tick`, of the instance followed, arrived at `now` (under
+    /// mutex_): nothing, after refusing it, when it is not newer than the last taken (but
+    /// for a resync), jumps further than the world's clock allows, or its number would
+    /// pass kMaxNumber.
+    std::optional<std::uint64_t> number_of(const scaleout::WorldTick& tick,
+                                           const std::string& subject,
+                                           std::chrono::steady_clock::time_point now);
     /// Asks the instance followed (none before one is) for a block when
     /// GatewayIds::to_reserve() wants one and none was asked for within the last second
     /// (or the one asked for was of a past instance).
@@ -173,6 +206,15 @@ private:
     std::uint64_t instance_ = 0; ///< the world instance followed (0: none heard of yet)
     std::chrono::steady_clock::time_point heard_{}; ///< its last tick or block
     std::uint64_t last_tick_ = 0; ///< the newest tick of it accepted; older ones are refused
+    /// That tick's WorldTick::published_ns, when it arrived, and its TakenTick::number
+    /// (the last number of any instance); newest_'s number.
+    std::uint64_t last_published_ = 0;
+    std::chrono::steady_clock::time_point accepted_at_{};
+    std::uint64_t last_number_ = 0;
+    std::uint64_t newest_number_ = 0;
+    /// When refused messages were last logged, and how many since.
+    std::chrono::steady_clock::time_point refusal_logged_{};
+    std::uint64_t refused_unlogged_ = 0;
     /// The instance of the last tick taken (0: none yet): named in joins, inputs, leaves.
     std::uint64_t served_ = 0;
     std::optional<WorldRestart> restart_; ///< not taken by the server yet
