@@ -65,12 +65,25 @@ Aabb random_box(std::mt19937& rng, const Aabb& area, float min_size, float max_s
     return {lo, lo + size};
 }
 
+/// How many of 64 segments between random points of `region` and `box` no occluder
+/// blocks (brute force).
+int clear_segments(const ReferenceVisibility& reference, const Aabb& region, const Aabb& box,
+                   std::mt19937& rng) {
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    int clear = 0;
+    for (int s = 0; s < 64; ++s) {
+        const glm::vec3 p = region.min + glm::vec3(unit(rng), unit(rng), unit(rng)) * region.size();
+        const glm::vec3 q = box.min + glm::vec3(unit(rng), unit(rng), unit(rng)) * box.size();
+        clear += reference.segment_blocked(p, q) ? 0 : 1;
+    }
+    return clear;
+}
+
 TEST(BakedRegionVisibility, WhatItHidesNoSegmentReachesAndItHidesMuch) {
     const Baked& b = corridor_table();
     const ReferenceVisibility reference(b.scene->world);
     BakedRegionVisibility stage(b.table, nullptr);
     std::mt19937 rng(5);
-    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
     int tests = 0;
     int hidden = 0;
     int clear = 0;
@@ -84,13 +97,7 @@ TEST(BakedRegionVisibility, WhatItHidesNoSegmentReachesAndItHidesMuch) {
                 continue;
             }
             ++hidden;
-            for (int s = 0; s < 64; ++s) {
-                const glm::vec3 p =
-                    region.min + glm::vec3(unit(rng), unit(rng), unit(rng)) * region.size();
-                const glm::vec3 q =
-                    box.min + glm::vec3(unit(rng), unit(rng), unit(rng)) * box.size();
-                clear += reference.segment_blocked(p, q) ? 0 : 1;
-            }
+            clear += clear_segments(reference, region, box, rng);
         }
     }
     EXPECT_EQ(clear, 0) << "clear segments into boxes the table called hidden";
@@ -541,6 +548,18 @@ std::shared_ptr<const CellVisibilityTable> half_covered_table() {
     return half;
 }
 
+/// `table` alone, with the exact stages over `scene` where it does not cover, counting
+/// their builds and tests.
+std::unique_ptr<BakedRegionVisibility>
+table_alone_counting(std::shared_ptr<const CellVisibilityTable> table,
+                     std::shared_ptr<const OccluderScene> scene, int& builds, int& tests) {
+    return std::make_unique<BakedRegionVisibility>(
+        std::move(table),
+        std::make_unique<CountingNext>(occluder_region_visibility(std::move(scene))(), &builds,
+                                       &tests),
+        BakedRegionVisibility::NextFor::where_uncovered);
+}
+
 TEST(BakedRegionVisibility, BehindTheTableAloneTheExactStagesAnswerOnlyWhereItDoesNotCover) {
     // The corridor's table with the lower half of x uncovered: what touches it is asked
     // of the exact stages, built only when needed; the rest is the table's answer.
@@ -551,10 +570,8 @@ TEST(BakedRegionVisibility, BehindTheTableAloneTheExactStagesAnswerOnlyWhereItDo
     // A covered region and covered boxes never build the exact stages.
     int builds = 0;
     int tests = 0;
-    BakedRegionVisibility stage(
-        half,
-        std::make_unique<CountingNext>(occluder_region_visibility(b.scene)(), &builds, &tests),
-        BakedRegionVisibility::NextFor::where_uncovered);
+    const auto owned = table_alone_counting(half, b.scene, builds, tests);
+    BakedRegionVisibility& stage = *owned;
     // The covered half of the play area, a cell clear of the uncovered one.
     Aabb right = b.play_area;
     right.min.x = std::max(right.min.x, grid.origin.x + static_cast<float>(grid.dims.x / 2 + 1) *
@@ -622,13 +639,10 @@ TEST(BakedRegionVisibility, APartialRegionKeepsTheTablesVisibleAndAsksTheExactSt
     const ReferenceVisibility reference(b.scene->world);
     int builds = 0;
     int tests = 0;
-    BakedRegionVisibility stage(
-        half,
-        std::make_unique<CountingNext>(occluder_region_visibility(b.scene)(), &builds, &tests),
-        BakedRegionVisibility::NextFor::where_uncovered);
+    const auto owned = table_alone_counting(half, b.scene, builds, tests);
+    BakedRegionVisibility& stage = *owned;
     const auto exact = occluder_region_visibility(b.scene)();
     std::mt19937 rng(23);
-    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
     std::vector<std::int32_t> words;
     std::vector<std::int32_t> runs;
     int partial_regions = 0;
@@ -667,13 +681,7 @@ TEST(BakedRegionVisibility, APartialRegionKeepsTheTablesVisibleAndAsksTheExactSt
                 continue;
             }
             ++hidden;
-            for (int s = 0; s < 64; ++s) {
-                const glm::vec3 from =
-                    region.min + glm::vec3(unit(rng), unit(rng), unit(rng)) * region.size();
-                const glm::vec3 to =
-                    box.min + glm::vec3(unit(rng), unit(rng), unit(rng)) * box.size();
-                clear += reference.segment_blocked(from, to) ? 0 : 1;
-            }
+            clear += clear_segments(reference, region, box, rng);
         }
     }
     EXPECT_GE(partial_regions, 20);
