@@ -61,7 +61,7 @@ namespace {
     // Acknowledged every tick (t = 1, motion_ticks = 1) is the common case: its divisions
     // by 1 and 2 are exact, so it skips them (the same results, without a division by a
     // number only known at run time, for every entity of every snapshot at both ends).
-    const auto per_tick = [t](std::int64_t change) {
+    const auto per_tick = [t](std::int64_t change) __attribute__((always_inline)) {
         return clamp_coordinate(t == 1 ? change * kVelocityScale
                                        : divide_rounded(change * kVelocityScale, t));
     };
@@ -314,11 +314,61 @@ bool AckedSnapshotEncoder::carry(std::uint32_t id, const QuantizedPose& pose, st
     return true;
 }
 
-AckedSnapshotCounts AckedSnapshotEncoder::finish(pb::Snapshot& out) {
+bool AckedSnapshotEncoder::carry_unwritten(std::uint32_t id, pb::Snapshot& out) {
+    leave_baseline_below(id, out);
+    if (base_ == nullptr || base_at_ == base_->entities.size() ||
+        base_->entities[base_at_].id != id) {
+        return false;
+    }
+    const FrameEntity& b = base_->entities[base_at_++];
+    FrameEntity& n = next_->entities.emplace_back(b);
+    const std::uint64_t t = ticks_since_base_ + b.held_ticks;
+    if (!due_since(id, b.tier, next_->tick - t, next_->tick)) {
+        n.held_ticks = static_cast<std::uint8_t>(t); // as carry(): both ends copy it
+        return true;
+    }
+    // What the decoder makes of a due entity without an entry: its prediction, on the
+    // tier it had. (Through the functions, not inlined here: a third inlined copy made the
+    // compiler take the velocity's helper out of line in the decoder's loop.)
+    const std::uint32_t steps = settings_.angle_steps;
+    n.held_ticks = 0;
+    n.pose = predict(b, t, steps);
+    set_motion(n, b.pose, t, steps);
+    counts_.moved += same_position(n.pose, b.pose) ? 0 : 1;
+    return true;
+}
+
+void AckedSnapshotEncoder::leave_the_rest(pb::Snapshot& out) {
     for (; base_ != nullptr && base_at_ < base_->entities.size(); ++base_at_) {
         out.add_leave(base_->entities[base_at_].id);
         ++counts_.leaves;
     }
+}
+
+void AckedSnapshotEncoder::restart(pb::Snapshot& out, bool against_nothing) {
+    assert(next_ != nullptr);
+    const std::uint64_t tick = next_->tick;
+    out.Clear();
+    out.set_server_tick(tick);
+    if (columns_ != nullptr) {
+        columns_->clear();
+    }
+    if (against_nothing) {
+        base_ = nullptr;
+    }
+    if (base_ != nullptr) {
+        out.set_baseline_tick(base_->tick);
+    }
+    next_->entities.clear();
+    base_at_ = 0;
+    last_entry_id_ = 0;
+    counts_ = {};
+    counts_.coded_against_baseline = base_ != nullptr;
+    counts_.baseline_age = base_ != nullptr ? ticks_since_base_ : 0;
+}
+
+AckedSnapshotCounts AckedSnapshotEncoder::finish(pb::Snapshot& out) {
+    leave_the_rest(out);
     base_ = nullptr; // its slot may be the one the new frame takes
     next_ = nullptr;
     frames_.commit();

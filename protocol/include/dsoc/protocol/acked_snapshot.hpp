@@ -80,8 +80,29 @@ public:
                              pb::Snapshot& out);
     void enter(std::uint32_t id, const QuantizedPose& pose, std::uint8_t tier, std::uint32_t kind,
                const std::array<float, 3>& half_extents, pb::Snapshot& out);
+    /// carry() without an update entry, for a sender out of room: when the baseline holds
+    /// the entity, adds it as the client takes it from a snapshot with no entry for it
+    /// (held when not due, at its prediction when due; on its baseline tier, so a rebase is
+    /// not written either) and returns true; otherwise writes nothing and returns false. The
+    /// frame then holds what the client will hold, and the next snapshot's entry is coded
+    /// against it (or against an older frame, as any entry).
+    [[nodiscard]] bool carry_unwritten(std::uint32_t id, pb::Snapshot& out);
+    /// Writes the leaves of the baseline's entities not added yet: after it, no entity is
+    /// added to this snapshot (finish() or restart() follows). Then `out` (and the columns)
+    /// hold the whole snapshot, to be sized.
+    void leave_the_rest(pb::Snapshot& out);
+    /// Starts the snapshot begun last again, empty (same tick, same columns), coded against
+    /// the same frame, or against nothing when `against_nothing`: for a sender that found
+    /// the first try too large and writes it again with less.
+    void restart(pb::Snapshot& out, bool against_nothing);
     /// Ends the snapshot (the baseline's entities not added leave) and keeps its frame.
     AckedSnapshotCounts finish(pb::Snapshot& out);
+
+    /// What the snapshot holds so far.
+    [[nodiscard]] const AckedSnapshotCounts& counts() const { return counts_; }
+    /// The entity the last carry(), carry_unwritten() or enter() added, as this snapshot's
+    /// frame holds it (held_ticks > 0: carried without being due).
+    [[nodiscard]] const FrameEntity& last_added() const { return next_->entities.back(); }
 
     /// The frame of `tick` as the client holds it once it applies that snapshot, while
     /// this encoder keeps it (not once a newer tick is acknowledged).

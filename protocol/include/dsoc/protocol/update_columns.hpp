@@ -90,6 +90,10 @@ public:
 
     /// Update entries added since clear().
     [[nodiscard]] std::size_t count() const { return count_; }
+    /// Bytes of the masks apart, and of the values, written since clear() (without the
+    /// packed fields' tags and lengths).
+    [[nodiscard]] std::size_t mask_bytes() const { return fields_.used; }
+    [[nodiscard]] std::size_t value_bytes() const { return values_.used; }
     /// Wire bytes of the three packed fields, tags and lengths included (an empty
     /// column costs nothing): update_column_bytes() of the same snapshot.
     [[nodiscard]] std::size_t wire_bytes() const;
