@@ -453,6 +453,7 @@ void Server::send_snapshots() {
                                             : stats_.acked_snapshots_whole);
             stats_.acked_baseline_age_ticks += coded.baseline_age;
             stats_.acked_enters_deferred += client.replication.last_deferred();
+            stats_.acked_updates_deferred += client.replication.last_updates_deferred();
         }
         if (client.session->writable_now()) {
             direct_writes_.push_back(&client);

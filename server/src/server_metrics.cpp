@@ -126,9 +126,14 @@ std::string Server::render_metrics() const {
                     d(stats_.acked_baseline_age_ticks));
         out.counter("dsoc_udp_enters_deferred_total",
                     "Entities left out of a snapshot for want of room: more wanted to enter "
-                    "than one snapshot takes (a crowd comes into view); they enter later, "
-                    "nearest first.",
+                    "than one snapshot takes (a crowd comes into view), or than its "
+                    "datagrams carry; they enter later, nearest first.",
                     d(stats_.acked_enters_deferred));
+        out.counter("dsoc_udp_updates_deferred_total",
+                    "Update entries left out of a snapshot because its datagrams could not "
+                    "carry them all; the entity stays known, at its prediction, and a later "
+                    "snapshot's entry repairs it (nearest first, the longest waiting before).",
+                    d(stats_.acked_updates_deferred));
         out.counter("dsoc_udp_challenges_sent_total",
                     "UDP handshake challenges sent (one per request within its address's budget).",
                     d(udp_->challenges_sent()));

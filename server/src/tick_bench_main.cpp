@@ -178,7 +178,8 @@ int main(int argc, char** argv) {
     std::uint64_t oversized =
         0;                      // snapshots over kMaxSnapshotBytes: not sent, as the server (--udp)
     std::uint64_t deferred = 0; // entities left to enter in a later snapshot (--udp)
-    std::vector<std::uint8_t> datagrams;          // one snapshot's (--udp)
+    std::uint64_t updates_deferred = 0;  // update entries left for a later snapshot (--udp)
+    std::vector<std::uint8_t> datagrams; // one snapshot's (--udp)
     protocol::EnvelopeArena incoming(256 * 1024); // as the simulated clients decode
     for (int t = 1; t <= warm_up + ticks; ++t) {
         const auto tick = static_cast<std::uint64_t>(t);
@@ -264,6 +265,7 @@ int main(int argc, char** argv) {
                     bytes += datagrams.size() - 2 * count; // without the length prefixes
                     fragments += count;
                     deferred += c->replication.last_deferred();
+                    updates_deferred += c->replication.last_updates_deferred();
                 }
                 continue;
             }
@@ -339,9 +341,12 @@ int main(int argc, char** argv) {
         fmt::print("  oversized            {} snapshots over {} bytes, not sent (the server drops "
                    "them too; docs/protocol.md)\n",
                    oversized, protocol::kMaxSnapshotBytes);
-        fmt::print("  deferred enters      {:.2f} per client-tick (over {} entering one snapshot: "
-                   "the rest enter later, nearest first)\n",
+        fmt::print("  deferred enters      {:.2f} per client-tick (over {} entering one snapshot, "
+                   "or over the datagrams' bytes: the rest enter later, nearest first)\n",
                    static_cast<double>(deferred) / client_tick, protocol::kMaxEntersPerSnapshot);
+        fmt::print("  deferred updates     {:.2f} per client-tick (entries over the datagrams' "
+                   "bytes: repaired by a later snapshot, nearest first)\n",
+                   static_cast<double>(updates_deferred) / client_tick);
     }
     return decode_problems == 0 ? cli::exit_ok : cli::exit_failure;
 }

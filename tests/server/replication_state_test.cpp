@@ -3,11 +3,13 @@
 #include "dsoc/protocol/datagram.hpp"
 #include "dsoc/server/interest_setup.hpp"
 #include "dsoc/server/replication_state.hpp"
+#include "dsoc/server/udp_connection.hpp"
 #include "support/test_maps.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -226,6 +228,219 @@ TEST(ReplicationState, ACrowdEntersOverSeveralSnapshotsSeenAndNearestFirst) {
     small.build_acked_snapshot(world, some, eye, 1, std::nullopt, false, snap);
     EXPECT_EQ(small.last_acked().enters, 100u);
     EXPECT_EQ(small.last_deferred(), 0u);
+}
+
+/// A client over UDP, as the server and its clients run one: snapshots built with update
+/// columns (unless `with_columns` is false: in the snapshot's repeated fields), framed as
+/// the server frames them, parsed and applied by the real decoder, each acknowledged before
+/// the next tick.
+struct UdpClient {
+    explicit UdpClient(const protocol::QuantizationSettings& q, bool with_columns = true)
+        : state(q, true), decoder(q), columns(with_columns ? &column_memory : nullptr) {}
+
+    /// Builds, sends and applies the snapshot of `tick`; the snapshot as the client got it.
+    protocol::pb::Snapshot send(const interest::GameWorld& world,
+                                const std::vector<interest::Interest>& interest, glm::vec3 eye,
+                                std::uint64_t tick, bool audit = false) {
+        state.build_acked_snapshot(world, interest, eye, tick, decoder.newest_tick(), audit,
+                                   *envelope.mutable_snapshot(), nullptr, columns);
+        snapshot_frame(tick, envelope, columns, frame);
+        const std::size_t bytes = frame.size() - 8; // after the tick: the datagrams' payload
+        EXPECT_LE(bytes, protocol::kMaxSnapshotBytes) << "tick " << tick;
+        largest = std::max(largest, bytes);
+        protocol::pb::Envelope wire;
+        EXPECT_TRUE(wire.ParseFromArray(frame.data() + 8, static_cast<int>(bytes)));
+        const auto problems = decoder.apply(wire.snapshot());
+        EXPECT_TRUE(problems.empty())
+            << "tick " << tick << ": " << problems.front().kind << ": " << problems.front().detail;
+        return wire.snapshot();
+    }
+
+    ReplicationState state;
+    protocol::AckedSnapshotDecoder decoder;
+    protocol::pb::Envelope envelope;
+    protocol::UpdateColumns column_memory;
+    protocol::UpdateColumns* columns;
+    std::vector<std::uint8_t> frame;
+    std::size_t largest = 0; ///< the largest envelope sent [bytes]
+};
+
+/// `count` bots with ids first, first + 1, ... at random places within `spread` world
+/// units of the origin, facing anywhere.
+std::vector<interest::Entity> scattered(std::uint32_t first, std::uint32_t count, float spread,
+                                        std::mt19937& rng) {
+    std::uniform_real_distribution<float> coordinate(-spread, spread);
+    std::uniform_real_distribution<float> yaw(-180.0f, 180.0f);
+    std::vector<interest::Entity> out(count);
+    for (std::uint32_t k = 0; k < count; ++k) {
+        out[k].id = first + k;
+        out[k].kind = interest::EntityKind::bot;
+        out[k].move.position = {coordinate(rng), coordinate(rng), coordinate(rng)};
+        out[k].yaw_deg = yaw(rng);
+    }
+    return out;
+}
+
+// A client knows 8,000 entities that all jump about their places every tick, never where
+// their motion predicts: their update entries alone (about 12 bytes each) are over the
+// 75,008 bytes a snapshot's datagrams carry. It still gets a snapshot every tick, within
+// the limit; the entries left out are the farthest, yet none waits long (the far ones
+// stay far); once the crowd stands, its replica is the world.
+void updates_beyond_the_datagrams(bool with_columns) {
+    constexpr std::uint32_t kCount = 8000;
+    interest::GameWorld world(world_settings(config_with_bots(0)), testing::rooms_map());
+    std::mt19937 rng(7);
+    std::vector<interest::Entity> crowd = scattered(1, kCount, 8000.0f, rng);
+    world.mirror(crowd, 0, kCount + 1);
+    std::vector<interest::Interest> all;
+    for (const interest::Entity& e : crowd) {
+        all.push_back({e.id, 0});
+    }
+    const glm::vec3 eye(0.0f);
+    const protocol::QuantizationSettings quantization;
+    UdpClient client(quantization, with_columns);
+    std::uint64_t tick = 0;
+    // The crowd enters over a few snapshots (at most 1,024 a snapshot), standing.
+    while (client.decoder.newest() == nullptr ||
+           client.decoder.newest()->entities.size() < kCount) {
+        ASSERT_LT(tick, 12u);
+        client.send(world, all, eye, ++tick);
+        EXPECT_EQ(client.state.last_updates_deferred(), 0u);
+    }
+
+    // It moves: every entity needs an entry every tick.
+    std::vector<std::uint64_t> last_written(kCount + 1, tick);
+    std::uint64_t longest_wait = 0;
+    std::size_t deferred = 0;
+    std::size_t audited = 0;
+    const std::vector<interest::Entity> places = crowd;
+    std::uniform_real_distribution<float> jump(-2000.0f, 2000.0f);
+    std::uniform_real_distribution<float> facing(-180.0f, 180.0f);
+    for (int moving = 0; moving < 16; ++moving) {
+        for (std::size_t k = 0; k < crowd.size(); ++k) {
+            crowd[k].move.position =
+                places[k].move.position + glm::vec3(jump(rng), jump(rng), jump(rng));
+            crowd[k].yaw_deg = facing(rng);
+        }
+        world.mirror(crowd, 0, kCount + 1);
+        const bool audit = moving % 5 == 4;
+        const protocol::pb::Snapshot got = client.send(world, all, eye, ++tick, audit);
+        ASSERT_EQ(got.server_tick(), tick);
+        ASSERT_TRUE(got.has_baseline_tick());
+        const std::vector<std::uint32_t> written = updated_ids(got);
+        EXPECT_EQ(written.size() + client.state.last_updates_deferred(), kCount);
+        EXPECT_GT(client.state.last_updates_deferred(), 0u) << "tick " << tick;
+        EXPECT_EQ(client.state.known_count(), kCount); // deferred entries stay known
+        deferred += client.state.last_updates_deferred();
+        if (moving == 0) {
+            // Nothing waited before: the written entries are the nearest.
+            std::vector<std::uint8_t> in(kCount + 1, 0);
+            for (const auto id : written) {
+                in[id] = 1;
+            }
+            float farthest_in = 0.0f;
+            float nearest_out = 1e30f;
+            for (const interest::Entity& e : crowd) {
+                const float d = glm::length(e.move.position - eye);
+                if (in[e.id] != 0) {
+                    farthest_in = std::max(farthest_in, d);
+                } else {
+                    nearest_out = std::min(nearest_out, d);
+                }
+            }
+            EXPECT_LE(farthest_in, nearest_out);
+        }
+        if (audit) {
+            // Audit poses only of what the snapshot made current, each within the quantum.
+            double worst = 0.0;
+            const auto problems = client.decoder.check_audit(got, worst);
+            EXPECT_TRUE(problems.empty()) << problems.front().detail;
+            EXPECT_LE(worst, 0.5 + 1e-3);
+            audited += static_cast<std::size_t>(got.audit_size());
+        }
+        for (const auto id : written) {
+            longest_wait = std::max(longest_wait, tick - last_written[id]);
+            last_written[id] = tick;
+        }
+    }
+    for (std::uint32_t id = 1; id <= kCount; ++id) {
+        longest_wait = std::max(longest_wait, tick - last_written[id]);
+    }
+    // Under a load that never fits, an entity left out ReplicationState::kPromoteAfter (3)
+    // times goes first: none waits much longer (here 4 ticks; by distance alone, the
+    // farthest would wait for good).
+    static_assert(ReplicationState::kPromoteAfter <= 3);
+    EXPECT_LE(longest_wait, 6u);
+    EXPECT_GT(deferred, 16u * 1000u);
+    EXPECT_GT(client.largest, protocol::kMaxSnapshotBytes * 9 / 10); // the room is used
+    EXPECT_GT(audited, 0u);
+
+    // The crowd stands: within a few snapshots every entity is where the world has it.
+    for (int standing = 0; standing < 8; ++standing) {
+        client.send(world, all, eye, ++tick);
+    }
+    EXPECT_EQ(client.state.last_updates_deferred(), 0u);
+    ASSERT_EQ(client.decoder.newest()->entities.size(), kCount);
+    const float half = 0.5f * quantization.quantum(0) + 1e-3f;
+    const float half_step = 180.0f / static_cast<float>(quantization.angle_steps) + 1e-3f;
+    for (const interest::Entity& e : crowd) {
+        const auto pose = client.decoder.pose(e.id);
+        ASSERT_TRUE(pose.has_value()) << "entity " << e.id;
+        ASSERT_NEAR(pose->x, e.move.position.x, half) << "entity " << e.id;
+        ASSERT_NEAR(pose->y, e.move.position.y, half) << "entity " << e.id;
+        ASSERT_NEAR(pose->z, e.move.position.z, half) << "entity " << e.id;
+        const float yaw = std::remainder(pose->yaw_deg - e.yaw_deg, 360.0f);
+        ASSERT_LE(std::abs(yaw), half_step) << "entity " << e.id;
+    }
+}
+
+TEST(ReplicationState, UpdatesBeyondTheDatagramsAreDeferredNearestFirstThenRepaired) {
+    for (const bool with_columns : {true, false}) {
+        SCOPED_TRACE(with_columns ? "update columns" : "repeated fields");
+        updates_beyond_the_datagrams(with_columns);
+    }
+}
+
+TEST(ReplicationState, LeavesBeyondTheDatagramsCodeTheSnapshotAgainstNothing) {
+    // A client that knows 20,000 entities with 4-byte ids turns away from all of them at
+    // once: their leaves alone are over what a snapshot's datagrams carry. The snapshot is
+    // coded against nothing instead (it leaves nothing: the client forgets what it does
+    // not hold), and the client knows exactly its new set.
+    constexpr std::uint32_t kFar = 20000;
+    constexpr std::uint32_t kFirstFar = std::uint32_t{1} << 21; // a 4-byte varint
+    interest::GameWorld world(world_settings(config_with_bots(0)), testing::rooms_map());
+    std::mt19937 rng(9);
+    std::vector<interest::Entity> entities = scattered(1, 50, 500.0f, rng);
+    for (const interest::Entity& e : scattered(kFirstFar, kFar, 4000.0f, rng)) {
+        entities.push_back(e);
+    }
+    world.mirror(entities, 0, kFirstFar + kFar);
+    std::vector<interest::Interest> all;
+    std::vector<interest::Interest> near_ones;
+    for (const interest::Entity& e : entities) {
+        all.push_back({e.id, 0});
+        if (e.id < kFirstFar) {
+            near_ones.push_back({e.id, 0});
+        }
+    }
+    const protocol::QuantizationSettings quantization;
+    UdpClient client(quantization);
+    std::uint64_t tick = 0;
+    while (client.decoder.newest() == nullptr ||
+           client.decoder.newest()->entities.size() < all.size()) {
+        ASSERT_LT(tick, 30u);
+        client.send(world, all, glm::vec3(0.0f), ++tick);
+    }
+    const protocol::pb::Snapshot got = client.send(world, near_ones, glm::vec3(0.0f), ++tick);
+    EXPECT_FALSE(got.has_baseline_tick());
+    EXPECT_EQ(got.leave_size(), 0);
+    EXPECT_EQ(got.enter_size(), static_cast<int>(near_ones.size()));
+    EXPECT_EQ(client.state.known(), id_list(near_ones));
+    ASSERT_EQ(client.decoder.newest()->entities.size(), near_ones.size());
+    // Back to deltas once that frame is acknowledged.
+    const protocol::pb::Snapshot next = client.send(world, near_ones, glm::vec3(0.0f), ++tick);
+    EXPECT_TRUE(next.has_baseline_tick());
+    EXPECT_EQ(next.enter_size() + next.leave_size(), 0);
 }
 
 } // namespace

@@ -93,6 +93,16 @@ public:
     /// the lowest tier (seen before heard) and, within a tier, nearest `eye` enter, and the
     /// rest are left for later snapshots (last_deferred()); the client then knows
     /// `interest` less those.
+    /// The snapshot's envelope never takes more than protocol::kMaxSnapshotBytes (what its
+    /// datagrams carry): when it would, every leave is written, and the enters and update
+    /// entries that fit, in the same order (those deferred snapshots in a row
+    /// kPromoteAfter times or more first, the longest waiting first), the rest deferred:
+    /// an entity whose entry is left out stays known, as the client takes it from a
+    /// snapshot without its entry (at its prediction, or held on a tick it is not due),
+    /// and its next entry repairs it (last_updates_deferred()). Audit poses go in while
+    /// there is room, never of an entity whose entry was left out. When the leaves alone
+    /// do not fit, the snapshot is coded against nothing: it leaves nothing and enters
+    /// what fits (the client forgets the rest, as any snapshot coded against nothing).
     void build_acked_snapshot(const interest::GameWorld& world,
                               std::span<const interest::Interest> interest, glm::vec3 eye,
                               std::uint64_t tick, std::optional<std::uint64_t> acked_tick,
@@ -107,6 +117,13 @@ public:
     /// Entities of the last build_acked_snapshot()'s interest that did not enter for want of
     /// room (protocol::kMaxEntersPerSnapshot).
     [[nodiscard]] std::size_t last_deferred() const { return last_deferred_; }
+    /// Update entries of the last build_acked_snapshot() left out for want of room (bytes):
+    /// those entities are known, at their prediction until a later entry.
+    [[nodiscard]] std::size_t last_updates_deferred() const { return last_updates_deferred_; }
+    /// An entity deferred this many snapshots in a row goes before every one deferred
+    /// fewer times, whatever its distance or tier: under a load that never fits, each
+    /// entity is still written within a few snapshots. [Units: snapshots]
+    static constexpr std::uint16_t kPromoteAfter = 3;
     [[nodiscard]] std::size_t known_count() const { return known_.size(); }
     [[nodiscard]] const std::vector<std::uint32_t>& known() const { return known_; }
 
@@ -116,6 +133,11 @@ private:
     void choose_enters(const interest::GameWorld& world,
                        std::span<const interest::Interest> interest, glm::vec3 eye,
                        const protocol::DeltaFrame* baseline);
+    /// build_acked_snapshot() for a snapshot that may not fit (replication_state.cpp).
+    void build_measured(const interest::GameWorld& world,
+                        std::span<const interest::Interest> interest, glm::vec3 eye, bool audit,
+                        protocol::pb::Snapshot& snapshot, const SharedPoses* poses,
+                        protocol::UpdateColumns* columns);
 
     protocol::SnapshotEncoder encoder_;
     std::unique_ptr<protocol::AckedSnapshotEncoder> acked_encoder_; // when acked()
@@ -124,6 +146,17 @@ private:
     std::vector<std::uint32_t> known_; // increasing
     std::vector<std::uint32_t> next_known_;
     std::size_t last_deferred_ = 0;
+    std::size_t last_updates_deferred_ = 0;
+    /// The entities the last snapshot that did not fit left out (enters and entries), and
+    /// those still waiting for the tick they are due, with how many snapshots in a row they
+    /// were left out; increasing ids. Empty after a snapshot that fitted.
+    struct Waiting {
+        std::uint32_t id = 0;
+        std::uint16_t snapshots = 0;
+    };
+    std::vector<Waiting> waiting_;
+    /// The last snapshot did not fit as first written: the next is measured at once.
+    bool measure_first_ = false;
     std::vector<std::uint8_t> enter_allowed_; ///< choose_enters()'s, by interest index
     struct EnterCandidate {
         std::uint8_t tier = 0;

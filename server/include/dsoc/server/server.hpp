@@ -133,6 +133,9 @@ struct ServerStats {
     /// Entities a client was to know that did not enter its snapshot for want of room
     /// (protocol::kMaxEntersPerSnapshot): they enter in its later snapshots.
     std::uint64_t acked_enters_deferred = 0;
+    /// Update entries left out of a client's snapshot for want of room (its datagrams'
+    /// bytes): the entity stays known, at its prediction until a later snapshot's entry.
+    std::uint64_t acked_updates_deferred = 0;
     /// Role gateway, per tick: from the world process encoding the tick to this gateway
     /// handing the tick's last snapshot to the kernel (both clocks CLOCK_MONOTONIC, so
     /// meaningful when both run on one host). Microseconds, and as a histogram.
