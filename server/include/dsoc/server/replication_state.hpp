@@ -115,7 +115,7 @@ public:
     /// What the last build_acked_snapshot() coded against.
     [[nodiscard]] const protocol::AckedSnapshotCounts& last_acked() const { return last_acked_; }
     /// Entities of the last build_acked_snapshot()'s interest that did not enter for want of
-    /// room (protocol::kMaxEntersPerSnapshot).
+    /// room (protocol::kMaxEntersPerSnapshot, or the datagrams' bytes).
     [[nodiscard]] std::size_t last_deferred() const { return last_deferred_; }
     /// Update entries of the last build_acked_snapshot() left out for want of room (bytes):
     /// those entities are known, at their prediction until a later entry.
