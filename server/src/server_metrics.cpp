@@ -176,9 +176,11 @@ std::string Server::render_metrics() const {
                     "leave was sent.",
                     d(w.leaves_resent));
         out.counter("dsoc_gateway_joins_abandoned_total",
-                    "Joins given up after 5 re-sends no world tick showed: the world no longer "
-                    "held the player's id for this gateway (it forgot the gateway while it was "
-                    "cut off); the session ended with try_again.",
+                    fmt::format("Joins given up after {} re-sends no world tick showed: the "
+                                "world no longer held the player's id for this gateway (it "
+                                "forgot the gateway while it was cut off); the session ended "
+                                "with try_again.",
+                                GatewayIds::kJoinResends),
                     d(w.joins_abandoned));
         out.counter("dsoc_gateway_ids_voided_total",
                     "Reserved entity ids not given out yet, dropped as void with an abandoned "
