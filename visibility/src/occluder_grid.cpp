@@ -173,33 +173,52 @@ bool OccluderGrid::walk_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch, 
         return false;
     }
     const glm::vec3 start = from + dir * t0;
-    int cell[3];
-    int step[3];
+    // The walk's state: the cell's index, and per axis the parameter t at which the
+    // segment leaves the cell's slab (t_max), the step between slabs (t_delta), the
+    // index step (stride) and the cells left before the grid's edge. Every float below
+    // is what a plain 3D DDA computes, in the same order, so the cells and the
+    // occluders found are the same; only the bookkeeping is cheaper (no index
+    // arithmetic per cell, no branch on which axis steps).
     float t_max[3];
     float t_delta[3];
+    std::ptrdiff_t stride[3];
+    int left[3];
+    std::ptrdiff_t index = 0;
+    const std::ptrdiff_t axis_stride[3] = {1, dims_[0],
+                                           static_cast<std::ptrdiff_t>(dims_[0]) * dims_[1]};
     for (int a = 0; a < 3; ++a) {
-        cell[a] = cell_at(start[a], bounds_.min[a], cell_size_, dims_[a]);
+        const int cell = cell_at(start[a], bounds_.min[a], cell_size_, dims_[a]);
+        index += cell * axis_stride[a];
         if (dir[a] > 0.0f) {
-            step[a] = 1;
-            const float border = bounds_.min[a] + static_cast<float>(cell[a] + 1) * cell_size_;
+            const float border = bounds_.min[a] + static_cast<float>(cell + 1) * cell_size_;
             t_max[a] = (border - from[a]) / dir[a];
             t_delta[a] = cell_size_ / dir[a];
+            stride[a] = axis_stride[a];
+            left[a] = dims_[a] - 1 - cell;
         } else if (dir[a] < 0.0f) {
-            step[a] = -1;
-            const float border = bounds_.min[a] + static_cast<float>(cell[a]) * cell_size_;
+            const float border = bounds_.min[a] + static_cast<float>(cell) * cell_size_;
             t_max[a] = (border - from[a]) / dir[a];
             t_delta[a] = -cell_size_ / dir[a];
+            stride[a] = -axis_stride[a];
+            left[a] = cell;
         } else {
-            step[a] = 0;
+            // Never steps: its t_max is never the least but when all are infinite,
+            // and then the walk ends at the t1 check first.
             t_max[a] = std::numeric_limits<float>::infinity();
             t_delta[a] = std::numeric_limits<float>::infinity();
+            stride[a] = 0;
+            left[a] = 0;
         }
     }
+    const std::uint32_t* starts = cell_start_.data();
+    float tx = t_max[0];
+    float ty = t_max[1];
+    float tz = t_max[2];
     // Every cell is visited at most once per axis step: dims sum bounds the walk.
     for (int guard = dims_[0] + dims_[1] + dims_[2] + 3; guard > 0; --guard) {
-        const std::size_t index =
-            static_cast<std::size_t>((cell[2] * dims_[1] + cell[1]) * dims_[0] + cell[0]);
-        for (std::uint32_t i = cell_start_[index]; i < cell_start_[index + 1]; ++i) {
+        const std::uint32_t first = starts[index];
+        const std::uint32_t last = starts[index + 1];
+        for (std::uint32_t i = first; i < last; ++i) {
             const OccluderId id = cell_items_[i];
             if (scratch.stamp[id] != scratch.epoch) {
                 scratch.stamp[id] = scratch.epoch;
@@ -208,21 +227,23 @@ bool OccluderGrid::walk_segment(glm::vec3 from, glm::vec3 to, Scratch& scratch, 
                 }
             }
         }
-        int axis = 0;
-        if (t_max[1] < t_max[axis]) {
-            axis = 1;
-        }
-        if (t_max[2] < t_max[axis]) {
-            axis = 2;
-        }
-        if (t_max[axis] > t1) {
+        // The axis whose slab ends first (ties to the lower axis), chosen and stepped
+        // without branches: the other axes' t_max get + 0, which leaves them as they are.
+        const bool y_first = ty < tx;
+        const float t_least = y_first ? ty : tx;
+        const bool step_z = tz < t_least;
+        const bool step_y = y_first && !step_z;
+        const bool step_x = !y_first && !step_z;
+        if ((step_z ? tz : t_least) > t1 || (step_z ? left[2] : step_y ? left[1] : left[0]) == 0) {
             return false;
         }
-        cell[axis] += step[axis];
-        if (cell[axis] < 0 || cell[axis] >= dims_[axis]) {
-            return false;
-        }
-        t_max[axis] += t_delta[axis];
+        index += step_z ? stride[2] : step_y ? stride[1] : stride[0];
+        left[0] -= static_cast<int>(step_x);
+        left[1] -= static_cast<int>(step_y);
+        left[2] -= static_cast<int>(step_z);
+        tx += step_x ? t_delta[0] : 0.0f;
+        ty += step_y ? t_delta[1] : 0.0f;
+        tz += step_z ? t_delta[2] : 0.0f;
     }
     return false;
 }
