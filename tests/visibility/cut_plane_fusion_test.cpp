@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <random>
 
@@ -130,6 +131,70 @@ TEST(CutPlaneFusion, TheCrossingRectangleHoldsEveryCrossing) {
         }
     }
     EXPECT_GT(checked, 10000);
+}
+
+/// The noise rule written plainly: twice the area over the summed edge lengths.
+bool negligible_plainly(const CutPlaneFusion::Polygon& poly) {
+    if (poly.n < 3) {
+        return true;
+    }
+    double area2 = 0.0;
+    double perimeter = 0.0;
+    for (int i = 0; i < poly.n; ++i) {
+        const glm::dvec2& p = poly.v[static_cast<std::size_t>(i)];
+        const glm::dvec2& q = poly.v[static_cast<std::size_t>((i + 1) % poly.n)];
+        area2 += p.x * q.y - q.x * p.y;
+        perimeter += glm::length(q - p);
+    }
+    return perimeter <= 0.0 || std::abs(area2) / perimeter < CutPlaneFusion::kNoiseWidth;
+}
+
+TEST(CutPlaneFusion, TheNoiseRuleAnswersAsTheEdgeLengthsDo) {
+    // Slivers whose width lies within a few ulps of kNoiseWidth either way, thin and wide
+    // rectangles, tilted ones, triangles and degenerate polygons, far from the origin too:
+    // the bounds-first rule must give the plain rule's answer every time.
+    std::mt19937 rng(41);
+    std::uniform_real_distribution<double> pos(-5000.0, 5000.0);
+    std::uniform_real_distribution<double> length(0.0, 400.0);
+    std::uniform_real_distribution<double> turn(0.0, 6.283185307179586);
+    std::uniform_real_distribution<double> near_one(1.0 - 1e-12, 1.0 + 1e-12);
+    int negligible = 0;
+    int kept = 0;
+    for (int i = 0; i < 200000; ++i) {
+        CutPlaneFusion::Polygon poly;
+        const glm::dvec2 o(pos(rng), pos(rng));
+        const int shape = static_cast<int>(rng() % 4);
+        if (shape < 3) {
+            // A rectangle of length l and width w, axis-aligned or tilted; shapes 0 and 1
+            // have the rule's width l w / (l + w) within a few ulps of kNoiseWidth.
+            const double l = length(rng);
+            double w = CutPlaneFusion::kNoiseWidth;
+            if (shape < 2 && l > 2.0 * w) {
+                w = w * l / (l - w) * near_one(rng);
+            } else if (shape == 2) {
+                w *= std::exp2(static_cast<double>(static_cast<int>(rng() % 20)) - 10.0);
+            }
+            const double a = rng() % 2 == 0 ? 0.0 : turn(rng);
+            const glm::dvec2 along(std::cos(a), std::sin(a));
+            const glm::dvec2 across(-along.y, along.x);
+            poly.n = 4;
+            poly.v[0] = o;
+            poly.v[1] = o + along * l;
+            poly.v[2] = o + along * l + across * w;
+            poly.v[3] = o + across * w;
+        } else {
+            poly.n = static_cast<int>(rng() % 6); // 0 to 5 points, possibly all one
+            for (int k = 0; k < poly.n; ++k) {
+                poly.v[static_cast<std::size_t>(k)] =
+                    rng() % 3 == 0 ? o : o + glm::dvec2(length(rng), length(rng)) * 1e-3;
+            }
+        }
+        const bool plain = negligible_plainly(poly);
+        ASSERT_EQ(CutPlaneFusion::negligible(poly), plain) << "polygon " << i;
+        (plain ? negligible : kept) += 1;
+    }
+    EXPECT_GT(negligible, 20000); // both answers are well represented
+    EXPECT_GT(kept, 20000);
 }
 
 TEST(CutPlaneFusion, RandomRegionsNeverHideWhatAnEyeSeesAndFusionCullsMore) {

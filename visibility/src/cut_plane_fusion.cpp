@@ -64,22 +64,42 @@ bool split(const Polygon& in, const HalfPlane& h, Polygon& inside, Polygon& outs
     return true;
 }
 
-/// True for an empty polygon or one narrower than kNoiseWidth (twice the area over
-/// the perimeter is the width of a thin sliver).
-bool negligible(const Polygon& poly) {
+} // namespace
+
+bool CutPlaneFusion::negligible(const Polygon& poly) {
     if (poly.n < 3) {
         return true;
     }
     double area2 = 0.0;
+    // The perimeter's edges measured as |dx| + |dy|: at least each edge's length and at
+    // most sqrt(2) times it, so it decides most pieces without a square root.
+    double perimeter_l1 = 0.0;
+    for (int i = 0; i < poly.n; ++i) {
+        const glm::dvec2& p = poly.v[static_cast<std::size_t>(i)];
+        const glm::dvec2& q = poly.v[static_cast<std::size_t>(i + 1 == poly.n ? 0 : i + 1)];
+        area2 += p.x * q.y - q.x * p.y;
+        perimeter_l1 += std::abs(q.x - p.x) + std::abs(q.y - p.y);
+    }
+    const double width2 = std::abs(area2);
+    // Decided by the bounds only with a relative margin far above the rounding of either
+    // sum, so the answer is the one the true perimeter gives below, bit for bit.
+    constexpr double kMargin = 1.0 + 1e-9;
+    if (perimeter_l1 > 0.0 && width2 >= CutPlaneFusion::kNoiseWidth * perimeter_l1 * kMargin) {
+        return false; // wider by the longer measure, so by the true one too
+    }
+    if (width2 * std::sqrt(2.0) * kMargin < CutPlaneFusion::kNoiseWidth * perimeter_l1) {
+        return true; // narrower even by the shortest measure the true perimeter allows
+    }
     double perimeter = 0.0;
     for (int i = 0; i < poly.n; ++i) {
         const glm::dvec2& p = poly.v[static_cast<std::size_t>(i)];
-        const glm::dvec2& q = poly.v[static_cast<std::size_t>((i + 1) % poly.n)];
-        area2 += p.x * q.y - q.x * p.y;
+        const glm::dvec2& q = poly.v[static_cast<std::size_t>(i + 1 == poly.n ? 0 : i + 1)];
         perimeter += glm::length(q - p);
     }
-    return perimeter <= 0.0 || std::abs(area2) / perimeter < CutPlaneFusion::kNoiseWidth;
+    return perimeter <= 0.0 || width2 / perimeter < CutPlaneFusion::kNoiseWidth;
 }
+
+namespace {
 
 void bounds_of(const Polygon& poly, glm::dvec2& lo, glm::dvec2& hi) {
     lo = hi = poly.v[0];

@@ -101,6 +101,12 @@ public:
     /// The bounding rectangle of `poly` in its (u, v) axes.
     static void bounds(const Polygon& poly, glm::dvec2& lo, glm::dvec2& hi);
 
+    /// True for an empty polygon, or one narrower than kNoiseWidth by twice its area
+    /// over its perimeter (the width of a thin sliver): such a piece of S counts as
+    /// covered. Decided without square roots where bounds on the perimeter allow; the
+    /// same answer, bit for bit, as the perimeter's edge lengths summed.
+    [[nodiscard]] static bool negligible(const Polygon& poly);
+
     static constexpr double kNoiseWidth = 1e-3;
     static constexpr std::size_t kMaxPieces = 64;
     static constexpr std::size_t kMaxOccluders = 64;
