@@ -1,5 +1,6 @@
 #include "dsoc/maps/bake_cache.hpp"
 
+#include "dsoc/maps/bake_partial.hpp"
 #include "dsoc/maps/pvs_bake_pruner.hpp"
 
 #include <algorithm>
@@ -10,6 +11,11 @@
 namespace dsoc::maps {
 
 namespace {
+
+/// Thrown by a save when the request's stop() says so: ends the bake between pairs.
+struct BakeStopped {
+    double fraction;
+};
 
 std::string file_stem(const std::string& name) {
     std::string out;
@@ -153,10 +159,69 @@ Result<BakedTable> load_or_bake(const Map& map, const visibility::OccluderScene&
     const auto boxes = request.player_space ? player_space_boxes(map, *request.player_space)
                                             : std::vector<visibility::Aabb>{};
     const auto covered = covered_cells(grid, request.player_space ? &boxes : nullptr);
-    auto table = visibility::bake_cell_visibility(scene, grid, request.config, pruner.get(),
-                                                  &out.stats, progress, covered);
+    // A bake stopped part way (a restart) goes on from its partial file.
+    const auto partial_file = partial_file_of(out.file);
+    const auto note_problem = [&](const std::string& problem) {
+        out.cache_problem += (out.cache_problem.empty() ? "" : "; ") + problem;
+    };
+    std::optional<PartialBake> partial;
+    if (!request.force && std::filesystem::exists(partial_file, ec)) {
+        auto read = read_partial_file(partial_file, out.key);
+        if (read) {
+            partial = std::move(read).value();
+        } else {
+            note_problem(read.error().message() + "; baking from the start");
+        }
+    }
+    visibility::BakeState resume;
+    visibility::BakeCheckpoints checkpoints;
+    if (request.checkpoint_seconds > 0.0) {
+        checkpoints.interval_seconds = request.checkpoint_seconds;
+        checkpoints.save = [&](const visibility::BakeState& state) {
+            if (auto problem = write_partial_file(partial_file, state, out.key)) {
+                out.write_problem = *problem;
+            } else if (request.stop && request.stop()) {
+                throw BakeStopped{state.pairs_total > 0 ? static_cast<double>(state.pairs_done) /
+                                                              static_cast<double>(state.pairs_total)
+                                                        : 0.0};
+            }
+        };
+    }
+    if (partial) {
+        resume = partial->state();
+        checkpoints.resume = &resume;
+        out.resumed_fraction = resume.pairs_total > 0 ? static_cast<double>(resume.pairs_done) /
+                                                            static_cast<double>(resume.pairs_total)
+                                                      : 0.0;
+    }
+    const auto bake = [&] {
+        return visibility::bake_cell_visibility(scene, grid, request.config, pruner.get(),
+                                                &out.stats, progress, covered, checkpoints);
+    };
+    std::optional<visibility::CellVisibilityTable> baked;
+    try {
+        baked.emplace(bake());
+    } catch (const BakeStopped& stopped) {
+        char done[32];
+        std::snprintf(done, sizeof done, "%.1f%%", 100.0 * stopped.fraction);
+        return LoadError{map.name, "",
+                         std::string("bake stopped at ") + done + "; " + partial_file.string() +
+                             " goes on from there next time"};
+    } catch (const std::invalid_argument& e) {
+        if (checkpoints.resume == nullptr) {
+            throw;
+        }
+        // Checksummed and of this key, yet not of this bake's size: never trusted.
+        note_problem(partial_file.string() + ": " + e.what() + "; baking from the start");
+        checkpoints.resume = nullptr;
+        out.resumed_fraction = 0.0;
+        baked.emplace(bake());
+    }
+    auto& table = *baked;
     if (auto problem = write_bake_file(out.file, table, out.key)) {
         out.write_problem = *problem;
+    } else {
+        std::filesystem::remove(partial_file, ec);
     }
     out.table = std::make_shared<const visibility::CellVisibilityTable>(std::move(table));
     return out;

@@ -341,8 +341,7 @@ Result<visibility::CellVisibilityTable> decode_bake(std::span<const std::byte> b
     return table;
 }
 
-Result<visibility::CellVisibilityTable> read_bake_file(const std::filesystem::path& path,
-                                                       std::optional<std::uint64_t> expected_key) {
+Result<std::vector<std::byte>> read_cache_file(const std::filesystem::path& path) {
     std::error_code ec;
     const auto size = std::filesystem::file_size(path, ec);
     if (ec) {
@@ -358,13 +357,11 @@ Result<visibility::CellVisibilityTable> read_bake_file(const std::filesystem::pa
     if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size))) {
         return LoadError{path.string(), "", "cannot read the file"};
     }
-    return decode_bake(bytes, path.string(), expected_key);
+    return bytes;
 }
 
-std::optional<std::string> write_bake_file(const std::filesystem::path& path,
-                                           const visibility::CellVisibilityTable& table,
-                                           std::uint64_t key) {
-    const auto bytes = encode_bake(table, key);
+std::optional<std::string> write_cache_file(const std::filesystem::path& path,
+                                            std::span<const std::byte> bytes) {
     std::error_code ec;
     if (path.has_parent_path()) {
         std::filesystem::create_directories(path.parent_path(), ec);
@@ -396,6 +393,21 @@ std::optional<std::string> write_bake_file(const std::filesystem::path& path,
         return "cannot rename " + temp.string() + " to " + path.string() + ": " + ec.message();
     }
     return std::nullopt;
+}
+
+Result<visibility::CellVisibilityTable> read_bake_file(const std::filesystem::path& path,
+                                                       std::optional<std::uint64_t> expected_key) {
+    auto bytes = read_cache_file(path);
+    if (!bytes) {
+        return bytes.error();
+    }
+    return decode_bake(bytes.value(), path.string(), expected_key);
+}
+
+std::optional<std::string> write_bake_file(const std::filesystem::path& path,
+                                           const visibility::CellVisibilityTable& table,
+                                           std::uint64_t key) {
+    return write_cache_file(path, encode_bake(table, key));
 }
 
 } // namespace dsoc::maps

@@ -73,7 +73,12 @@ int main(int argc, char** argv) {
     app.add_option("--cache-dir", dir,
                    "where tables are kept (default: $DSOC_BAKE_DIR, "
                    "$XDG_CACHE_HOME/dsoc/bakes or ~/.cache/dsoc/bakes)");
-    app.add_flag("--force", request.force, "bake again even when the cache holds a good table");
+    app.add_flag("--force", request.force,
+                 "bake again even when the cache holds a good table (and do not go on from a "
+                 "partial bake)");
+    dsoc::cli::add_setting(app, "--checkpoint-seconds", request.checkpoint_seconds,
+                           "save where the bake stands this often, so that it goes on after a "
+                           "restart (0: never)");
     app.add_flag("--whole-box", whole_box,
                  "cover every open cell of the map's box, not only where walkers can be "
                  "(a table the server does not look for)");
@@ -145,6 +150,7 @@ int main(int argc, char** argv) {
             out["pruned"] = s.pruned;
             out["witness_rays"] = s.witness_rays;
             out["witness_clear"] = s.witness_clear;
+            out["resumed_fraction"] = baked->resumed_fraction;
             std::cout << out.dump() << std::endl;
         } else {
             std::printf("%s: %s %s\n", map->name.c_str(), baked->from_cache ? "loaded" : "baked",
@@ -155,6 +161,11 @@ int main(int argc, char** argv) {
                         t.open_count(), t.uncovered_cells().size(), 100.0 * hidden,
                         ec ? 0.0 : static_cast<double>(file_bytes) / (1 << 20),
                         static_cast<double>(t.memory_bytes()) / (1 << 20));
+            if (baked->resumed_fraction > 0.0) {
+                std::printf("  went on from a partial bake %.1f%% done (the bake's time counts "
+                            "every run, the CPU this one)\n",
+                            100.0 * baked->resumed_fraction);
+            }
             if (!baked->from_cache) {
                 std::printf("  bake %.1f s (%.1f s of CPU): %llu pair visits, %llu pruned by the "
                             "PVS, %llu witness rays (%llu clear), %llu exact tests (%llu hidden)\n",

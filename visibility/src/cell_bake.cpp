@@ -61,7 +61,11 @@ public:
         build_samples();
     }
 
-    void run(CellBakeStats& stats, const BakeProgress& progress);
+    /// Resolves the top pairs from checkpoints.resume's (or from the first), saving
+    /// the state every checkpoints.interval_seconds; `stats` gets this run's counts
+    /// added to the resumed ones.
+    void run(CellBakeStats& stats, const BakeProgress& progress,
+             const BakeCheckpoints& checkpoints);
 
 private:
     struct Worker {
@@ -369,7 +373,8 @@ void Baker::resolve(Worker& w, Node a, Node b) {
     }
 }
 
-void Baker::run(CellBakeStats& stats, const BakeProgress& progress) {
+void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
+                const BakeCheckpoints& checkpoints) {
     const auto start = std::chrono::steady_clock::now();
     const int top = config_.top_level;
     const Level& level = levels_[static_cast<std::size_t>(top)];
@@ -382,18 +387,49 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress) {
     // Every unordered pair of top blocks, a block with itself included, in a scattered
     // order (ShuffledPairs: no list of n² pairs is held).
     const ShuffledPairs work(blocks.size());
+    CellBakeStats before; // of the runs a resumed state stands for
+    std::uint64_t first = 0;
+    if (const BakeState* resume = checkpoints.resume; resume != nullptr) {
+        if (resume->pairs_total != work.count() || resume->pairs_done > work.count() ||
+            resume->rows.size() != table_.words().size()) {
+            throw std::invalid_argument("bake_cell_visibility: the state to resume is of "
+                                        "another bake (its pairs or rows do not fit)");
+        }
+        // No bit past the last open cell in any row (the table's own invariant).
+        const std::size_t per_row = table_.words_per_row();
+        const std::size_t tail = table_.open_count() % 64;
+        for (std::size_t r = 0; tail != 0 && r < table_.open_count(); ++r) {
+            if ((resume->rows[r * per_row + per_row - 1] >> tail) != 0) {
+                throw std::invalid_argument("bake_cell_visibility: the state to resume has "
+                                            "bits past the last open cell");
+            }
+        }
+        std::copy(resume->rows.begin(), resume->rows.end(), table_.words().begin());
+        first = resume->pairs_done;
+        before = resume->stats;
+    }
 
     unsigned threads = config_.threads > 0 ? static_cast<unsigned>(config_.threads)
                                            : std::max(1u, std::thread::hardware_concurrency());
     threads = static_cast<unsigned>(
         std::min<std::uint64_t>(threads, std::max<std::uint64_t>(1, work.count())));
-    std::atomic<std::uint64_t> next{0};
-    std::atomic<std::uint64_t> done{0};
+    std::atomic<std::uint64_t> next{first};
+    std::atomic<std::uint64_t> done{first};
+    // Set when a save is due: each worker stops before taking another pair, so that
+    // the pairs resolved are exactly those below `next`.
+    std::atomic<bool> pause{false};
     std::vector<Worker> workers(threads);
     const auto body = [&](unsigned t) {
         Worker& w = workers[t];
         auto last_report = std::chrono::steady_clock::now();
-        for (std::uint64_t k = next.fetch_add(1); k < work.count(); k = next.fetch_add(1)) {
+        // At least one pair a round, so that rounds always move on however short the
+        // interval between saves.
+        for (bool first_pair = true; first_pair || !pause.load(std::memory_order_relaxed);
+             first_pair = false) {
+            const std::uint64_t k = next.fetch_add(1);
+            if (k >= work.count()) {
+                break;
+            }
             const auto [a, b] = work.at(k);
             const std::uint32_t i = blocks[a];
             const std::uint32_t j = blocks[b];
@@ -408,32 +444,70 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress) {
                 if (now - last_report > std::chrono::milliseconds(500)) {
                     last_report = now;
                     progress(static_cast<double>(finished) / static_cast<double>(work.count()),
-                             std::chrono::duration<double>(now - start).count());
+                             before.seconds + std::chrono::duration<double>(now - start).count());
                 }
             }
         }
     };
-    std::vector<std::thread> pool;
-    for (unsigned t = 1; t < threads; ++t) {
-        pool.emplace_back(body, t);
-    }
-    body(0);
-    for (auto& th : pool) {
-        th.join();
-    }
-    for (const Worker& w : workers) {
-        stats.pair_visits += w.stats.pair_visits;
-        stats.pruned += w.stats.pruned;
-        stats.witness_rays += w.stats.witness_rays;
-        stats.witness_clear += w.stats.witness_clear;
-        stats.exact_tests += w.stats.exact_tests;
-        stats.exact_hidden += w.stats.exact_hidden;
-        for (int l = 0; l < 7; ++l) {
-            stats.exact_by_level[l] += w.stats.exact_by_level[l];
-            stats.hidden_by_level[l] += w.stats.hidden_by_level[l];
+    const auto counts = [&] {
+        CellBakeStats sum = before;
+        for (const Worker& w : workers) {
+            sum.pair_visits += w.stats.pair_visits;
+            sum.pruned += w.stats.pruned;
+            sum.witness_rays += w.stats.witness_rays;
+            sum.witness_clear += w.stats.witness_clear;
+            sum.exact_tests += w.stats.exact_tests;
+            sum.exact_hidden += w.stats.exact_hidden;
+            for (int l = 0; l < 7; ++l) {
+                sum.exact_by_level[l] += w.stats.exact_by_level[l];
+                sum.hidden_by_level[l] += w.stats.hidden_by_level[l];
+            }
         }
+        sum.seconds =
+            before.seconds +
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        return sum;
+    };
+    const auto interval = std::chrono::duration<double>(
+        checkpoints.save ? checkpoints.interval_seconds : std::numeric_limits<double>::infinity());
+    while (true) {
+        // Worker 0 (this thread) runs alone; the others until a save is due.
+        pause.store(false);
+        std::vector<std::thread> pool;
+        for (unsigned t = 1; t < threads; ++t) {
+            pool.emplace_back(body, t);
+        }
+        const auto since = std::chrono::steady_clock::now();
+        std::thread timer;
+        std::atomic<bool> stop_timer{false};
+        if (checkpoints.save) {
+            timer = std::thread([&] {
+                while (!stop_timer.load() && !pause.load()) {
+                    if (std::chrono::steady_clock::now() - since >= interval) {
+                        pause.store(true);
+                        break;
+                    }
+                    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+                }
+            });
+        }
+        body(0);
+        for (auto& th : pool) {
+            th.join();
+        }
+        stop_timer.store(true);
+        if (timer.joinable()) {
+            timer.join();
+        }
+        // Every pair handed out was resolved: the first min(next, count) are done.
+        const std::uint64_t resolved = std::min<std::uint64_t>(next.load(), work.count());
+        next.store(resolved);
+        if (resolved == work.count()) {
+            break;
+        }
+        checkpoints.save(BakeState{resolved, work.count(), table_.words(), counts()});
     }
-    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    stats = counts();
     if (progress) {
         progress(1.0, stats.seconds);
     }
@@ -522,7 +596,8 @@ split_covered(std::vector<std::uint32_t> open, std::span<const std::uint8_t> cov
 CellVisibilityTable bake_cell_visibility(const OccluderScene& scene, const CellGrid& grid,
                                          const CellBakeConfig& config, const BakePruner* pruner,
                                          CellBakeStats* stats, const BakeProgress& progress,
-                                         std::span<const std::uint8_t> covered) {
+                                         std::span<const std::uint8_t> covered,
+                                         const BakeCheckpoints& checkpoints) {
     if (const auto problems = validate(config); !problems.empty()) {
         throw std::invalid_argument("CellBakeConfig: " + problems.front());
     }
@@ -537,7 +612,13 @@ CellVisibilityTable bake_cell_visibility(const OccluderScene& scene, const CellG
     local.uncovered_cells = table.uncovered_cells().size();
     if (table.open_count() > 0) {
         Baker baker(scene, grid, config, pruner, table);
-        baker.run(local, progress);
+        const std::uint64_t cells = local.cells;
+        const std::uint64_t open_cells = local.open_cells;
+        const std::uint64_t uncovered_cells = local.uncovered_cells;
+        baker.run(local, progress, checkpoints);
+        local.cells = cells;
+        local.open_cells = open_cells;
+        local.uncovered_cells = uncovered_cells;
     }
     table.compress();
     if (stats != nullptr) {

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -31,8 +32,17 @@ struct BakeRequest {
     /// after loading, has compressed rows: a fraction of this.) [Units: bytes]
     /// [Limit: >= 1 MiB]
     std::uint64_t max_table_bytes = std::uint64_t{128} << 20;
-    /// Bake again even when a good file exists.
+    /// Bake again even when a good file exists (a partial bake is not taken up either).
     bool force = false;
+    /// A bake saves where it stands this often, in a partial file beside the table's
+    /// (bake_partial.hpp), and a later bake of the same key goes on from there; the
+    /// file is removed once the table is written. 0: no partial file. [Units: s]
+    /// [Limit: >= 0]
+    double checkpoint_seconds = 120.0;
+    /// Asked after each save (on the baking thread): true ends the bake there, the
+    /// partial file kept for the next one, and load_or_bake() answers an error saying
+    /// so.
+    std::function<bool()> stop;
     /// Where the table must answer (its covered cells); the other open cells are left
     /// uncovered (no row, no answer). Nothing: the whole map's box.
     std::optional<PlayerSpace> player_space;
@@ -47,6 +57,9 @@ struct BakedTable {
     std::string cache_problem;
     /// Why the new table could not be written (one line); the table is still usable.
     std::string write_problem;
+    /// The share of the bake's top pairs a partial file had already resolved (0: it
+    /// started from the beginning).
+    double resumed_fraction = 0.0;
     visibility::CellBakeStats stats; ///< of the bake, when one ran
 };
 

@@ -67,6 +67,14 @@ inline constexpr std::uint64_t kMaxBakeFileBytes = std::uint64_t{1} << 30;
 decode_bake(std::span<const std::byte> bytes, const std::string& name,
             std::optional<std::uint64_t> expected_key = std::nullopt);
 
+/// The whole of `path`, at most kMaxBakeFileBytes (a cache file of any kind).
+[[nodiscard]] Result<std::vector<std::byte>> read_cache_file(const std::filesystem::path& path);
+
+/// Writes `bytes` to `path` atomically (a temporary file beside it, then a rename), so
+/// that a reader never sees half a file. Returns an error message, or nothing.
+[[nodiscard]] std::optional<std::string> write_cache_file(const std::filesystem::path& path,
+                                                          std::span<const std::byte> bytes);
+
 /// Reads and decodes `path`.
 [[nodiscard]] Result<visibility::CellVisibilityTable>
 read_bake_file(const std::filesystem::path& path,

@@ -84,6 +84,33 @@ struct CellBakeStats {
 /// seconds since the bake started.
 using BakeProgress = std::function<void(double fraction, double elapsed_seconds)>;
 
+/// Where a bake stands between top pairs. The bake resolves its top pairs in a fixed
+/// order and a pair's bits do not depend on any other pair's, so a bake taken up from
+/// a saved state gives the same table as one that never stopped.
+struct BakeState {
+    /// The first pairs_done top pairs, in the bake's order, are resolved; no later one
+    /// has set a bit. [Limit: <= pairs_total]
+    std::uint64_t pairs_done = 0;
+    /// Top pairs in all (depends on the grid, the open and covered cells and top_level).
+    std::uint64_t pairs_total = 0;
+    /// The dense rows as those pairs left them: open_count() * words_per_row() words.
+    std::span<const std::uint64_t> rows;
+    /// The counts so far (`seconds`: the time of every run so far).
+    CellBakeStats stats;
+};
+
+/// A bake that can stop and go on: every `interval_seconds` the workers pause between
+/// top pairs and `save` gets the state (on the calling thread; the rows are valid
+/// during the call only). With `resume`, the bake starts from that state, which must
+/// come from a bake of the same scene, grid, settings and covered cells (the caller's
+/// key says so): sizes that do not fit throw std::invalid_argument.
+struct BakeCheckpoints {
+    /// [Units: s] [Limit: > 0]
+    double interval_seconds = 60.0;
+    std::function<void(const BakeState&)> save;
+    const BakeState* resume = nullptr;
+};
+
 /// The grid cells that are open: not inside the interior of one occluder (every corner
 /// 1/64 unit inside all of its planes) and not empty space to `pruner` (may be null).
 /// Increasing grid indexes.
@@ -103,6 +130,7 @@ split_covered(std::vector<std::uint32_t> open, std::span<const std::uint8_t> cov
 [[nodiscard]] CellVisibilityTable
 bake_cell_visibility(const OccluderScene& scene, const CellGrid& grid, const CellBakeConfig& config,
                      const BakePruner* pruner = nullptr, CellBakeStats* stats = nullptr,
-                     const BakeProgress& progress = {}, std::span<const std::uint8_t> covered = {});
+                     const BakeProgress& progress = {}, std::span<const std::uint8_t> covered = {},
+                     const BakeCheckpoints& checkpoints = {});
 
 } // namespace dsoc::visibility
