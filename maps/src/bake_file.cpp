@@ -362,6 +362,12 @@ Result<std::vector<std::byte>> read_cache_file(const std::filesystem::path& path
 
 std::optional<std::string> write_cache_file(const std::filesystem::path& path,
                                             std::span<const std::byte> bytes) {
+    return write_cache_file(path, {bytes});
+}
+
+std::optional<std::string>
+write_cache_file(const std::filesystem::path& path,
+                 std::initializer_list<std::span<const std::byte>> parts) {
     std::error_code ec;
     if (path.has_parent_path()) {
         std::filesystem::create_directories(path.parent_path(), ec);
@@ -380,8 +386,10 @@ std::optional<std::string> write_cache_file(const std::filesystem::path& path,
     temp += suffix;
     {
         std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-        out.write(reinterpret_cast<const char*>(bytes.data()),
-                  static_cast<std::streamsize>(bytes.size()));
+        for (const auto& bytes : parts) {
+            out.write(reinterpret_cast<const char*>(bytes.data()),
+                      static_cast<std::streamsize>(bytes.size()));
+        }
         out.close();
         if (!out) {
             std::filesystem::remove(temp, ec);

@@ -54,8 +54,12 @@ std::filesystem::path partial_file_of(const std::filesystem::path& table_file) {
     return p;
 }
 
-std::vector<std::byte> encode_partial(const visibility::BakeState& state, std::uint64_t key) {
-    std::vector<std::byte> out(kHeaderBytes + 8 * state.rows.size());
+namespace {
+
+/// The header, its checksum taken over it and the rows that follow it in the file (so
+/// that a save writes the rows where they are, without a copy).
+std::vector<std::byte> header_of(const visibility::BakeState& state, std::uint64_t key) {
+    std::vector<std::byte> out(kHeaderBytes);
     std::memcpy(out.data(), kMagic, sizeof kMagic);
     const std::uint32_t version = kBakePartialVersion;
     const auto header = static_cast<std::uint32_t>(kHeaderBytes);
@@ -72,10 +76,22 @@ std::vector<std::byte> encode_partial(const visibility::BakeState& state, std::u
         at += 8;
     }
     put(out, at, std::bit_cast<std::uint64_t>(stats.seconds));
-    if (!state.rows.empty()) {
-        std::memcpy(out.data() + kHeaderBytes, state.rows.data(), 8 * state.rows.size());
-    }
-    put(out, kChecksumOffset, checksum_of(out));
+    const std::span<const std::byte> head(out);
+    std::uint64_t h = bake_checksum(head.first(kChecksumOffset));
+    h = bake_checksum(head.subspan(kChecksumOffset + 8), h);
+    // The header is a whole number of words, so the rows continue the same sum.
+    static_assert(kHeaderBytes % 8 == 0);
+    h = bake_checksum(std::as_bytes(state.rows), h);
+    put(out, kChecksumOffset, h);
+    return out;
+}
+
+} // namespace
+
+std::vector<std::byte> encode_partial(const visibility::BakeState& state, std::uint64_t key) {
+    std::vector<std::byte> out = header_of(state, key);
+    const auto rows = std::as_bytes(state.rows);
+    out.insert(out.end(), rows.begin(), rows.end());
     return out;
 }
 
@@ -144,7 +160,8 @@ Result<PartialBake> read_partial_file(const std::filesystem::path& path,
 std::optional<std::string> write_partial_file(const std::filesystem::path& path,
                                               const visibility::BakeState& state,
                                               std::uint64_t key) {
-    return write_cache_file(path, encode_partial(state, key));
+    const std::vector<std::byte> header = header_of(state, key);
+    return write_cache_file(path, {std::span<const std::byte>(header), std::as_bytes(state.rows)});
 }
 
 } // namespace dsoc::maps

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <initializer_list>
 #include <optional>
 #include <span>
 #include <string>
@@ -74,6 +75,10 @@ decode_bake(std::span<const std::byte> bytes, const std::string& name,
 /// that a reader never sees half a file. Returns an error message, or nothing.
 [[nodiscard]] std::optional<std::string> write_cache_file(const std::filesystem::path& path,
                                                           std::span<const std::byte> bytes);
+/// The same for a file of several parts written one after another (no copy of them).
+[[nodiscard]] std::optional<std::string>
+write_cache_file(const std::filesystem::path& path,
+                 std::initializer_list<std::span<const std::byte>> parts);
 
 /// Reads and decodes `path`.
 [[nodiscard]] Result<visibility::CellVisibilityTable>
