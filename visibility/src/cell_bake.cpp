@@ -452,16 +452,7 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
     const auto counts = [&] {
         CellBakeStats sum = before;
         for (const Worker& w : workers) {
-            sum.pair_visits += w.stats.pair_visits;
-            sum.pruned += w.stats.pruned;
-            sum.witness_rays += w.stats.witness_rays;
-            sum.witness_clear += w.stats.witness_clear;
-            sum.exact_tests += w.stats.exact_tests;
-            sum.exact_hidden += w.stats.exact_hidden;
-            for (int l = 0; l < 7; ++l) {
-                sum.exact_by_level[l] += w.stats.exact_by_level[l];
-                sum.hidden_by_level[l] += w.stats.hidden_by_level[l];
-            }
+            sum.add_work(w.stats);
         }
         sum.seconds =
             before.seconds +

@@ -78,6 +78,22 @@ struct CellBakeStats {
     std::uint64_t exact_by_level[7] = {};
     std::uint64_t hidden_by_level[7] = {};
     double seconds = 0.0;
+
+    /// Adds the work counts of `other` (pair visits to proofs by level); the cell
+    /// counts and the seconds are left as they are.
+    CellBakeStats& add_work(const CellBakeStats& other) {
+        pair_visits += other.pair_visits;
+        pruned += other.pruned;
+        witness_rays += other.witness_rays;
+        witness_clear += other.witness_clear;
+        exact_tests += other.exact_tests;
+        exact_hidden += other.exact_hidden;
+        for (int l = 0; l < 7; ++l) {
+            exact_by_level[l] += other.exact_by_level[l];
+            hidden_by_level[l] += other.hidden_by_level[l];
+        }
+        return *this;
+    }
 };
 
 /// Called from one worker now and then: fraction of the work done (0..1) and the
