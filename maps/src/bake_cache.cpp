@@ -177,6 +177,7 @@ Result<BakedTable> load_or_bake(const Map& map, const visibility::OccluderScene&
     visibility::BakeCheckpoints checkpoints;
     if (request.checkpoint_seconds > 0.0) {
         checkpoints.interval_seconds = request.checkpoint_seconds;
+        checkpoints.save_now = request.stop;
         checkpoints.save = [&](const visibility::BakeState& state) {
             if (auto problem = write_partial_file(partial_file, state, out.key)) {
                 out.write_problem = *problem;

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -121,8 +122,8 @@ protected:
     /// Bakes into dir_ until the third save, leaving the partial file; returns its path.
     [[nodiscard]] fs::path stopped_bake() const {
         BakeRequest r = request(dir_);
-        int saves = 0;
-        r.stop = [&] { return ++saves == 3; };
+        std::atomic<int> asked{0}; // by the bake's watcher and after each save
+        r.stop = [&] { return ++asked >= 3; };
         const auto stopped = load_or_bake(corridor(), corridor_scene(), r);
         EXPECT_FALSE(stopped.ok());
         const std::string message = stopped.ok() ? "" : stopped.error().message();
@@ -158,6 +159,23 @@ TEST_F(PartialBakeFile, TheCacheGoesOnFromItsPartialFileAndRemovesIt) {
     EXPECT_FALSE(fs::exists(partial)); // removed once the table is written
     EXPECT_TRUE(*went_on->table == *fresh().table);
     EXPECT_TRUE(read_bake_file(went_on->file, went_on->key).ok());
+}
+
+TEST_F(PartialBakeFile, AStopAsksForASaveAtOnceAndTheNextBakeGoesOnFromIt) {
+    // Saves an hour apart: only the stop (a signal to dsoc-bake) brings one about.
+    BakeRequest r = request(dir_);
+    r.checkpoint_seconds = 3600.0;
+    r.stop = [] { return true; };
+    const auto stopped = load_or_bake(corridor(), corridor_scene(), r);
+    ASSERT_FALSE(stopped.ok());
+    EXPECT_NE(stopped.error().message().find("goes on from there next time"), std::string::npos)
+        << stopped.error().message();
+    r.stop = nullptr;
+    const auto went_on = load_or_bake(corridor(), corridor_scene(), r);
+    ASSERT_TRUE(went_on.ok()) << went_on.error().message();
+    EXPECT_GT(went_on->resumed_fraction, 0.0); // each worker resolved a pair first
+    EXPECT_LT(went_on->resumed_fraction, 1.0);
+    EXPECT_TRUE(*went_on->table == *fresh().table);
 }
 
 TEST_F(PartialBakeFile, ADamagedPartialFileIsRefusedInOneLineAndTheBakeStartsOver) {

@@ -16,6 +16,8 @@
 
 #include <sys/resource.h>
 
+#include <atomic>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 
@@ -36,6 +38,15 @@ std::uint64_t peak_rss_bytes() {
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
     return static_cast<std::uint64_t>(usage.ru_maxrss) * 1024; // ru_maxrss is in KiB
+}
+
+/// Set by SIGINT or SIGTERM: the bake saves where it stands and stops. (Lock-free, so
+/// a signal handler may store it and the bake's threads read it.)
+std::atomic<bool> g_stop_requested{false};
+static_assert(std::atomic<bool>::is_always_lock_free);
+
+extern "C" void request_stop(int /*signal*/) {
+    g_stop_requested.store(true, std::memory_order_relaxed);
 }
 
 } // namespace
@@ -96,6 +107,10 @@ int main(int argc, char** argv) {
         request.player_space.reset();
     }
 
+    // Ctrl-C or a TERM during a bake keeps its partial file, so the next run goes on.
+    std::signal(SIGINT, request_stop);
+    std::signal(SIGTERM, request_stop);
+    request.stop = [] { return g_stop_requested.load(std::memory_order_relaxed); };
     const auto search = dsoc::maps::MapSearch::from_environment();
     int failures = 0;
     for (const std::string& spec : specs) {
@@ -115,6 +130,9 @@ int main(int argc, char** argv) {
         if (!baked) {
             std::cerr << "dsoc-bake: " << baked.error().message() << "\n";
             ++failures;
+            if (g_stop_requested.load()) {
+                break; // the maps after it are not started
+            }
             continue;
         }
         if (!baked->cache_problem.empty()) {

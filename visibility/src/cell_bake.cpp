@@ -474,7 +474,8 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
         if (checkpoints.save) {
             timer = std::thread([&] {
                 while (!stop_timer.load() && !pause.load()) {
-                    if (std::chrono::steady_clock::now() - since >= interval) {
+                    if (std::chrono::steady_clock::now() - since >= interval ||
+                        (checkpoints.save_now && checkpoints.save_now())) {
                         pause.store(true);
                         break;
                     }

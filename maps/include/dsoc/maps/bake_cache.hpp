@@ -39,9 +39,9 @@ struct BakeRequest {
     /// file is removed once the table is written. 0: no partial file. [Units: s]
     /// [Limit: >= 0]
     double checkpoint_seconds = 120.0;
-    /// Asked after each save (on the baking thread): true ends the bake there, the
-    /// partial file kept for the next one, and load_or_bake() answers an error saying
-    /// so.
+    /// Asked every few milliseconds while the bake runs (thread-safe): true saves the
+    /// partial file at once (with checkpoint_seconds > 0) and ends the bake there,
+    /// kept for the next one; load_or_bake() then answers an error saying so.
     std::function<bool()> stop;
     /// Where the table must answer (its covered cells); the other open cells are left
     /// uncovered (no row, no answer). Nothing: the whole map's box.

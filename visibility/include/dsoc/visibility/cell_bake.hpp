@@ -125,6 +125,10 @@ struct BakeCheckpoints {
     double interval_seconds = 60.0;
     std::function<void(const BakeState&)> save;
     const BakeState* resume = nullptr;
+    /// Asked every few milliseconds while the workers run (from a thread of the
+    /// bake's; must be thread-safe): true brings the next save forward to now (a
+    /// signal, say, after which `save` ends the bake by throwing).
+    std::function<bool()> save_now;
 };
 
 /// The grid cells that are open: not inside the interior of one occluder (every corner
