@@ -62,8 +62,8 @@ public:
     }
 
     /// Resolves the top pairs from checkpoints.resume's (or from the first), saving
-    /// the state every checkpoints.interval_seconds; `stats` gets this run's counts
-    /// added to the resumed ones.
+    /// the state every checkpoints.interval_seconds; adds to `stats` the work counts
+    /// of this run and of the resumed ones, and sets its seconds to all of theirs.
     void run(CellBakeStats& stats, const BakeProgress& progress,
              const BakeCheckpoints& checkpoints);
 
@@ -462,7 +462,8 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
     const auto interval = std::chrono::duration<double>(
         checkpoints.save ? checkpoints.interval_seconds : std::numeric_limits<double>::infinity());
     while (true) {
-        // Worker 0 (this thread) runs alone; the others until a save is due.
+        // A round: every worker (this thread is worker 0) takes pairs until they run
+        // out or a save is due, then the state is saved and the next round begins.
         pause.store(false);
         std::vector<std::thread> pool;
         for (unsigned t = 1; t < threads; ++t) {
@@ -499,7 +500,9 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
         }
         checkpoints.save(BakeState{resolved, work.count(), table_.words(), counts()});
     }
-    stats = counts();
+    const CellBakeStats all = counts();
+    stats.add_work(all);
+    stats.seconds = all.seconds;
     if (progress) {
         progress(1.0, stats.seconds);
     }
@@ -604,13 +607,7 @@ CellVisibilityTable bake_cell_visibility(const OccluderScene& scene, const CellG
     local.uncovered_cells = table.uncovered_cells().size();
     if (table.open_count() > 0) {
         Baker baker(scene, grid, config, pruner, table);
-        const std::uint64_t cells = local.cells;
-        const std::uint64_t open_cells = local.open_cells;
-        const std::uint64_t uncovered_cells = local.uncovered_cells;
         baker.run(local, progress, checkpoints);
-        local.cells = cells;
-        local.open_cells = open_cells;
-        local.uncovered_cells = uncovered_cells;
     }
     table.compress();
     if (stats != nullptr) {
