@@ -1,5 +1,7 @@
 #include "dsoc/interest/game_world.hpp"
 
+#include "dsoc/sim/footing.hpp"
+
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
 
@@ -32,8 +34,10 @@ GameWorld::GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::
     sounds_ = settings.sounds;
     shots_ = settings.shots;
     seed_ = settings.seed;
+    spawns_ = sim::spawn_points_with_footing(collision_, move_, map_->spawn_points,
+                                             wander_.max_safe_drop, map_->hazards);
     entities_.reserve(static_cast<std::size_t>(settings.bots) + 64);
-    bots_ = sim::spawn_wander_bots(collision_, move_, map_->spawn_points,
+    bots_ = sim::spawn_wander_bots(collision_, move_, spawns_,
                                    static_cast<std::size_t>(settings.bots), settings.seed);
     for (std::size_t i = 0; i < bots_.size(); ++i) {
         Entity& bot = insert(Entity{.id = next_id_++, .kind = EntityKind::bot});
@@ -41,7 +45,7 @@ GameWorld::GameWorld(const WorldSettings& settings, std::shared_ptr<const maps::
         bot.move = bots_[i].state;
         bot.team = team_for(bot.id);
     }
-    next_spawn_ = static_cast<std::uint32_t>(settings.seed % map_->spawn_points.size());
+    next_spawn_ = static_cast<std::uint32_t>(settings.seed % spawns_.size());
 }
 
 Entity& GameWorld::insert(Entity e) {
@@ -82,7 +86,7 @@ std::uint32_t GameWorld::spawn_player() {
 
 Entity GameWorld::new_player(std::uint32_t id) {
     assert(id != 0 && id < next_id_ && find(id) == nullptr); // reserved, not spawned yet
-    const auto& spawn = map_->spawn_points[next_spawn_++ % map_->spawn_points.size()];
+    const auto& spawn = spawns_[next_spawn_++ % spawns_.size()];
     Entity p{.id = id, .kind = EntityKind::player};
     p.move = sim::spawn_state(collision_, move_, spawn.origin);
     p.yaw_deg = wrap_degrees(spawn.yaw_degrees);
@@ -234,8 +238,7 @@ void GameWorld::step(float dt, const ParallelFor& parallel) {
             e.firing = sim::bot_fires(seed_, e.id, step, sounds_, dt);
             sim::WanderBot& brain = bots_[static_cast<std::size_t>(e.bot)];
             const std::uint32_t deaths = brain.deaths;
-            sim::wander_step(brain, collision_, wander_, move_, map_->spawn_points, map_->hazards,
-                             dt);
+            sim::wander_step(brain, collision_, wander_, move_, spawns_, map_->hazards, dt);
             if (brain.deaths != deaths) {
                 e.health = sim::kMaxHealth; // a hazard: full again, as it will respawn
             }
@@ -256,7 +259,7 @@ void GameWorld::step(float dt, const ParallelFor& parallel) {
             sim::player_move(collision_, move_, e.input, dt, e.move);
             e.teleported = false;
             // A player who touches a hazard dies (its spawn point is picked below).
-            died_[i] = static_cast<std::uint8_t>(!map_->spawn_points.empty() &&
+            died_[i] = static_cast<std::uint8_t>(!spawns_.empty() &&
                                                  sim::touches_hazard(move_, e.move, map_->hazards));
         }
         const bool alive = !e.respawn && died_[i] == 0;
@@ -283,13 +286,13 @@ void GameWorld::step(float dt, const ParallelFor& parallel) {
         e.health = sim::kMaxHealth; // as it will respawn
         if (e.bot >= 0) {
             sim::WanderBot& brain = bots_[static_cast<std::size_t>(e.bot)];
-            sim::kill_bot(brain, collision_, wander_, move_, map_->spawn_points);
+            sim::kill_bot(brain, collision_, wander_, move_, spawns_);
             e.move = brain.state;
             e.teleported = brain.respawned;
             e.respawn = brain.respawn;
             continue;
         }
-        const auto& spawn = map_->spawn_points[next_spawn_++ % map_->spawn_points.size()];
+        const auto& spawn = spawns_[next_spawn_++ % spawns_.size()];
         // Shot on the step it arrived at a spawn point: it still jumped there this step.
         e.teleported = sim::die(e.move, sim::spawn_state(collision_, move_, spawn.origin),
                                 spawn.yaw_degrees, respawn_delay_ticks_, e.respawn) ||
@@ -301,7 +304,7 @@ void GameWorld::step(float dt, const ParallelFor& parallel) {
 }
 
 void GameWorld::resolve_shots() {
-    if (shots_.damage <= 0 || map_->spawn_points.empty() ||
+    if (shots_.damage <= 0 || spawns_.empty() ||
         std::find(fired_.begin(), fired_.end(), 1) == fired_.end()) {
         return; // nothing can be hit, or nobody fired: no boxes to gather this step
     }

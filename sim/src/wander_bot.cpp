@@ -1,7 +1,10 @@
 #include "dsoc/sim/wander_bot.hpp"
 
+#include "dsoc/sim/footing.hpp"
+
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace dsoc::sim {
@@ -33,6 +36,34 @@ void pick_goal(WanderBot& bot, const WanderConfig& config,
     }
     bot.best_goal_distance = horizontal_distance(bot.state.position, bot.goal);
     bot.since_progress = 0.0f;
+}
+
+/// Whether `input`, given on the ground, takes the bot off a ledge it should not walk
+/// off: on its way ahead, where it slides while it turns, or where a jump at full speed
+/// comes down.
+bool leads_off_a_ledge(const WanderBot& bot, const CollisionWorld& world,
+                       const WanderConfig& config, const MoveConfig& move, const MoveInput& input,
+                       std::span<const maps::Hazard> hazards) {
+    const auto unsafe_along = [&](glm::vec3 direction, float lookahead) {
+        return unsafe_ledge_ahead(world, move, bot.state.position, direction, lookahead,
+                                  config.max_safe_drop, hazards);
+    };
+    if (unsafe_along(input.wish_direction, config.ledge_lookahead)) {
+        return true;
+    }
+    const glm::vec3 sliding(bot.state.velocity.x, bot.state.velocity.y, 0.0f);
+    const float speed = glm::length(sliding);
+    // Turning by more than about 25 degrees: the slide goes elsewhere for a while.
+    if (speed > move.stop_speed && glm::dot(sliding / speed, input.wish_direction) < 0.9f &&
+        unsafe_along(sliding / speed, config.ledge_lookahead)) {
+        return true;
+    }
+    if (!input.jump || move.gravity <= 0.0f) {
+        return false;
+    }
+    const float airtime = 2.0f * move.jump_velocity / move.gravity; // [Units: s]
+    return unsafe_along(input.wish_direction,
+                        std::max(config.ledge_lookahead, move.max_speed * airtime));
 }
 
 } // namespace
@@ -117,7 +148,21 @@ void wander_step(WanderBot& bot, const CollisionWorld& world, const WanderConfig
         }
         return;
     }
-    const MoveInput input = wander_think(bot, config, move, spawns, dt);
+    MoveInput input = wander_think(bot, config, move, spawns, dt);
+    if (config.max_safe_drop > 0.0f && bot.state.on_ground &&
+        (input.wish_direction.x != 0.0f || input.wish_direction.y != 0.0f) &&
+        leads_off_a_ledge(bot, world, config, move, input, hazards)) {
+        ++bot.ledges_avoided;
+        // Brakes (ground acceleration against its slide, on top of friction) and looks
+        // for another goal.
+        const glm::vec3 sliding(bot.state.velocity.x, bot.state.velocity.y, 0.0f);
+        const float speed = glm::length(sliding);
+        input = {};
+        if (speed > 1e-3f) {
+            input.wish_direction = -sliding / speed;
+        }
+        pick_goal(bot, config, spawns);
+    }
     player_move(world, move, input, dt, bot.state);
     if (!spawns.empty() && touches_hazard(move, bot.state, hazards)) {
         kill_bot(bot, world, config, move, spawns);

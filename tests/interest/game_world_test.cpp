@@ -167,12 +167,41 @@ struct DyingPlayer {
         WorldSettings settings;
         settings.bots = 0;
         settings.respawn_delay_ticks = respawn_delay_ticks;
-        // The world hands out spawn points round robin from seed % count.
-        pit = testing::add_pit_at_spawn(*map, settings.seed % map->spawn_points.size());
         world = std::make_unique<GameWorld>(settings, map);
+        // The world hands out spawn points round robin from seed % count. The pit comes
+        // after the world chose its spawn points (one in a hazard would not be used:
+        // sim/footing.hpp), so the player is put into it.
+        pit = testing::add_pit_at_spawn(*map, settings.seed % map->spawn_points.size());
         id = world->spawn_player();
     }
 };
+
+TEST(GameWorld, NoPlayerIsPutAtASpawnPointWithoutFooting) {
+    // A pit at every other spawn point before the world starts: no player is put there
+    // (round robin over the rest), and so none dies on its first step.
+    auto map = std::make_shared<maps::Map>(*testing::rooms_map());
+    ASSERT_GE(map->spawn_points.size(), 4u);
+    std::vector<glm::vec3> pits;
+    for (std::size_t i = 0; i < map->spawn_points.size(); i += 2) {
+        pits.push_back(testing::add_pit_at_spawn(*map, i));
+    }
+    WorldSettings settings;
+    settings.bots = 0;
+    GameWorld world(settings, map);
+    std::vector<std::uint32_t> players;
+    for (std::size_t i = 0; i < 2 * map->spawn_points.size(); ++i) {
+        players.push_back(world.spawn_player());
+    }
+    world.step(1.0f / 30.0f);
+    for (const std::uint32_t id : players) {
+        const Entity* e = world.find(id);
+        ASSERT_NE(e, nullptr);
+        EXPECT_FALSE(e->teleported) << "player " << id << " died on its first step";
+        for (const glm::vec3& pit : pits) {
+            EXPECT_GT(glm::length(e->move.position - pit), 100.0f) << "player " << id;
+        }
+    }
+}
 
 TEST(GameWorld, APlayerWhoTouchesAHazardRespawnsAtTheNextSpawnPoint) {
     // Without a delay the player is back at the next spawn point at once, flagged as a
@@ -326,15 +355,16 @@ TEST(GameWorld, MovesThroughAParallelForGiveTheSameWorldAsOneByOne) {
     // Pits under half the spawn points, so players die and respawn (the one step that
     // is not per entity); the parallel world's moves run on four threads, in blocks.
     auto map = std::make_shared<maps::Map>(*testing::rooms_map());
-    for (std::size_t i = 0; i < map->spawn_points.size(); i += 2) {
-        testing::add_pit_at_spawn(*map, i);
-    }
     WorldSettings settings;
     settings.bots = 40;
     settings.respawn_delay_ticks = 3;
     settings.shots.damage = sim::kMaxHealth / 2; // two hits kill: deaths by shots too
     GameWorld serial(settings, map);
     GameWorld parallel(settings, map);
+    // After the worlds chose their spawn points (they leave out any in a hazard).
+    for (std::size_t i = 0; i < map->spawn_points.size(); i += 2) {
+        testing::add_pit_at_spawn(*map, i);
+    }
     std::vector<std::uint32_t> players;
     for (int i = 0; i < 40; ++i) {
         players.push_back(serial.spawn_player());

@@ -306,10 +306,12 @@ std::optional<DyingViewer> dying_viewer_on_oa_dm4() {
     }
     auto map = std::make_shared<maps::Map>(std::move(loaded).value());
     const interest::WorldSettings settings = world_settings(bots(200));
-    testing::add_pit_at_spawn(*map, settings.seed % map->spawn_points.size());
     DyingViewer d;
     d.map = map;
     d.world = std::make_unique<GameWorld>(settings, map);
+    // After the world chose its spawn points (it leaves out any in a hazard), so that
+    // the player is put into the pit.
+    testing::add_pit_at_spawn(*map, settings.seed % map->spawn_points.size());
     d.player = d.world->spawn_player();
     return d;
 }

@@ -3,6 +3,7 @@
 #include "dsoc/maps/generators.hpp"
 #include "dsoc/maps/map_source.hpp"
 #include "dsoc/maps/map_spec.hpp"
+#include "dsoc/sim/footing.hpp"
 
 #include <cmath>
 #include <stdexcept>
@@ -36,7 +37,9 @@ WorldSim::WorldSim(const maps::Map& map, const Scenario& scenario, int lookahead
     }
     const std::size_t count =
         static_cast<std::size_t>(scenario.viewers) + static_cast<std::size_t>(scenario.bots);
-    bots_ = sim::spawn_wander_bots(collision_, move_, map.spawn_points, count, scenario.seed);
+    spawns_ = sim::spawn_points_with_footing(collision_, move_, map.spawn_points,
+                                             wander_.max_safe_drop, map.hazards);
+    bots_ = sim::spawn_wander_bots(collision_, move_, spawns_, count, scenario.seed);
     sounds_.resize(count);
     frames_.push_back(snapshot(next_tick_++, nullptr));
     for (int k = 0; k < lookahead; ++k) {
@@ -49,7 +52,7 @@ void WorldSim::step() {
     const std::uint64_t step = steps_++;
     for (std::size_t i = 0; i < bots_.size(); ++i) {
         sim::WanderBot& bot = bots_[i];
-        sim::wander_step(bot, collision_, wander_, move_, map_->spawn_points, map_->hazards, dt_);
+        sim::wander_step(bot, collision_, wander_, move_, spawns_, map_->hazards, dt_);
         const bool fired =
             sim::bot_fires(seed_, static_cast<std::uint32_t>(i), step, sound_settings_, dt_);
         sim::step_sounds(sounds_[i], bot.state, !bot.respawn, fired, move_.max_speed,

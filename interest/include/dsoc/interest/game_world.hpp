@@ -187,6 +187,8 @@ private:
     sim::CollisionWorld shot_walls_; ///< solid brushes only: a player clip stops no shot
     sim::MoveConfig move_;
     sim::WanderConfig wander_;
+    /// The map's spawn points a walker has footing at (sim/footing.hpp).
+    std::vector<maps::SpawnPoint> spawns_;
     std::vector<Entity> entities_;
     std::vector<sim::WanderBot> bots_;
     std::unordered_map<std::uint32_t, std::size_t> index_;

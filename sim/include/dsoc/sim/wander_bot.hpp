@@ -5,8 +5,9 @@
 // hazard (a pit's trigger_hurt, lava) dies and respawns at a spawn point: a teleport,
 // flagged in WanderBot::respawned for that tick, outside the motion_bound() contract.
 // The spawn point is picked at death and the bot is put there respawn_delay_ticks steps
-// later (sim/respawn.hpp: WanderBot::respawn in between). Deterministic given the seed.
-// Bots do not collide with each other.
+// later (sim/respawn.hpp: WanderBot::respawn in between). A bot on the ground does not
+// walk off a ledge into the void or a hazard (sim/footing.hpp): it stops there and picks
+// another goal. Deterministic given the seed. Bots do not collide with each other.
 
 #include "dsoc/maps/map.hpp"
 #include "dsoc/sim/collision_world.hpp"
@@ -39,6 +40,14 @@ struct WanderConfig {
     /// needs at least the clients' latency allowance in ticks (sim/respawn.hpp).
     /// [Units: ticks] [Limit: >= 0]
     int respawn_delay_ticks = 0;
+    /// A drop deeper than this below the place ahead, or one into a hazard, is a ledge
+    /// the bot does not walk off (0: it walks off anything). Quake 3's falling damage
+    /// starts at about 250 units of drop and stays small. [Units: world units] [Limit: >= 0]
+    float max_safe_drop = 512.0f;
+    /// How far ahead of its origin a bot looks for such a ledge: more than it slides
+    /// to a stop from full speed under ground friction (about 45 units at Quake 3's).
+    /// [Units: world units] [Limit: > 0]
+    float ledge_lookahead = 64.0f;
 };
 
 struct WanderBot {
@@ -54,6 +63,7 @@ struct WanderBot {
     std::uint32_t goals_reached = 0;
     std::uint32_t goals_abandoned = 0;
     std::uint32_t deaths = 0;
+    std::uint32_t ledges_avoided = 0;      ///< ticks it stopped at a ledge and picked another goal
     bool respawned = false;                ///< the last wander_step teleported it to a spawn point
     std::optional<PendingRespawn> respawn; ///< dead, waiting to be put at a spawn point
 };
@@ -71,6 +81,7 @@ struct WanderBot {
                                      std::span<const maps::SpawnPoint> spawns, float dt);
 
 /// A dead bot: step_dead() (and a new goal when it arrives). A live one: wander_think,
+/// on the ground a stop and a new goal instead at a ledge it should not walk off,
 /// player_move, then death if the box touches a hazard (respawned at once when
 /// config.respawn_delay_ticks is 0, else `respawn` is set).
 void wander_step(WanderBot& bot, const CollisionWorld& world, const WanderConfig& config,

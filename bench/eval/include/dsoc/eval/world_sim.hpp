@@ -80,6 +80,8 @@ private:
     sim::CollisionWorld collision_;
     sim::MoveConfig move_;
     sim::WanderConfig wander_;
+    /// The map's spawn points a walker has footing at (sim/footing.hpp).
+    std::vector<maps::SpawnPoint> spawns_;
     std::vector<sim::WanderBot> bots_; ///< every entity: viewers first
     std::vector<sim::Audible> sounds_; ///< the sounds each entity makes
     sim::SoundSettings sound_settings_;
