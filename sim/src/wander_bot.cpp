@@ -39,14 +39,15 @@ void pick_goal(WanderBot& bot, const WanderConfig& config,
 }
 
 /// Whether `input`, given on the ground, takes the bot off a ledge it should not walk
-/// off: on its way ahead, where it slides while it turns, or where a jump at full speed
-/// comes down.
+/// off: on its way ahead, where it slides while it turns, or, for a jump, where it comes
+/// down at full speed or a ledge beside or behind it.
 bool leads_off_a_ledge(const WanderBot& bot, const CollisionWorld& world,
                        const WanderConfig& config, const MoveConfig& move, const MoveInput& input,
                        std::span<const maps::Hazard> hazards) {
+    // Off an edge it carries on at full speed at the most.
     const auto unsafe_along = [&](glm::vec3 direction, float lookahead) {
-        return unsafe_ledge_ahead(world, move, bot.state.position, direction, lookahead,
-                                  config.max_safe_drop, hazards);
+        return unsafe_ledge_ahead(world, move, bot.state.position, direction, move.max_speed,
+                                  lookahead, config.max_safe_drop, hazards);
     };
     if (unsafe_along(input.wish_direction, config.ledge_lookahead)) {
         return true;
@@ -62,8 +63,19 @@ bool leads_off_a_ledge(const WanderBot& bot, const CollisionWorld& world,
         return false;
     }
     const float airtime = 2.0f * move.jump_velocity / move.gravity; // [Units: s]
-    return unsafe_along(input.wish_direction,
-                        std::max(config.ledge_lookahead, move.max_speed * airtime));
+    if (unsafe_along(input.wish_direction,
+                     std::max(config.ledge_lookahead, move.max_speed * airtime))) {
+        return true;
+    }
+    // A jump against a wall stays up long enough for a new goal to steer it aside in the
+    // air: no ledge beside it or behind it either.
+    const glm::vec3 w = input.wish_direction;
+    for (const glm::vec3 aside : {glm::vec3(-w.y, w.x, 0.0f), glm::vec3(w.y, -w.x, 0.0f), -w}) {
+        if (unsafe_along(aside, config.ledge_lookahead)) {
+            return true;
+        }
+    }
+    return false;
 }
 
 } // namespace

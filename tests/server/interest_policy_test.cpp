@@ -206,6 +206,9 @@ TEST_F(InterestPolicyOnOaDm4, BakedStageOnlyAddsProofsAndAloneCullsLess) {
         config.exact_stages = k < 2 ? interest::ExactStages::always : interest::ExactStages::never;
         config.bake_cell_size = 96.0f; // a coarse table bakes in seconds
         config.bake_dir = dir.string();
+        // Behind the table alone the manager groups no entities (docs/dsoc.md, "When TBVs
+        // pay"); a group's box seen sends all of it, so the runs compare each box alone.
+        config.dsoc.push_back({"entity_cluster_size", "0", "test"});
         config.insecure = true; // validate() wants a key otherwise
         const auto problems = validate(config);
         ASSERT_TRUE(problems.empty()) << problems.front();

@@ -15,9 +15,11 @@ namespace {
 
 constexpr float kDt = 1.0f / 30.0f;
 constexpr float kMaxDrop = 512.0f;
-/// A walker's origin standing on a floor whose top is at z = 0.
-constexpr float kStandingZ = 24.0f;
+/// A walker's origin standing on a floor whose top is at z = 0 (movement leaves it a
+/// clip epsilon above, not touching).
+constexpr float kStandingZ = 24.0f + kSurfaceClipEpsilon;
 const glm::vec3 kEast{1.0f, 0.0f, 0.0f};
+constexpr float kSpeed = 320.0f; ///< off an edge at full speed [Units: world units/s]
 
 maps::Map text_map(const std::string& boxes) {
     auto spec = maps::parse_text_map("dsoc-map 1\n" + boxes, "footing");
@@ -36,8 +38,8 @@ maps::Map platform(const std::string& more = "") {
 
 bool unsafe(const maps::Map& map, float x, glm::vec3 direction = kEast, float lookahead = 64.0f) {
     const CollisionWorld world(map.collision_brushes);
-    return unsafe_ledge_ahead(world, MoveConfig{}, {x, 0.0f, kStandingZ}, direction, lookahead,
-                              kMaxDrop, map.hazards);
+    return unsafe_ledge_ahead(world, MoveConfig{}, {x, 0.0f, kStandingZ}, direction, kSpeed,
+                              lookahead, kMaxDrop, map.hazards);
 }
 
 TEST(Footing, AnEdgeOverTheVoidIsALedgeAndTheMiddleOfTheFloorIsNot) {
@@ -49,9 +51,24 @@ TEST(Footing, AnEdgeOverTheVoidIsALedgeAndTheMiddleOfTheFloorIsNot) {
     EXPECT_FALSE(unsafe(map, 220.0f, -kEast)); // walking back in is fine
 }
 
+TEST(Footing, ALedgeUnderALowCeilingIsFound) {
+    // 10 units above the standing box: a step's height above it is in the ceiling.
+    EXPECT_TRUE(unsafe(platform("box solid -256 -256 66 256 256 80\n"), 220.0f));
+}
+
 TEST(Footing, AStepDownWithinTheSafeDropIsNotALedgeAndADeeperOneIs) {
     EXPECT_FALSE(unsafe(platform("box solid 256 -256 -216 768 256 -200\n"), 220.0f));
     EXPECT_TRUE(unsafe(platform("box solid 256 -256 -616 768 256 -600\n"), 220.0f));
+}
+
+TEST(Footing, ANarrowLedgeBelowThatTheFallOvershootsIsALedge) {
+    // A 48-unit ledge 200 units down: at full speed the walker comes down about 220 units
+    // further on, over the void; at a walk it lands on the ledge.
+    const maps::Map map = platform("box solid 256 -256 -216 304 256 -200\n");
+    EXPECT_TRUE(unsafe(map, 220.0f));
+    const CollisionWorld world(map.collision_brushes);
+    EXPECT_FALSE(unsafe_ledge_ahead(world, MoveConfig{}, {220.0f, 0.0f, kStandingZ}, kEast, 10.0f,
+                                    64.0f, kMaxDrop, map.hazards));
 }
 
 TEST(Footing, ADropIntoAHazardIsALedge) {
@@ -66,8 +83,8 @@ TEST(Footing, AGapTheBoxFitsIntoIsFoundThoughFloorLiesBeyondIt) {
     EXPECT_TRUE(unsafe(map, 230.0f));
     // A probe only at the far end (one box width past the edge) stands on the floor beyond.
     const CollisionWorld world(map.collision_brushes);
-    EXPECT_FALSE(unsafe_ledge_ahead(world, MoveConfig{}, {294.0f, 0.0f, kStandingZ}, kEast, 0.001f,
-                                    kMaxDrop, map.hazards));
+    EXPECT_FALSE(unsafe_ledge_ahead(world, MoveConfig{}, {294.0f, 0.0f, kStandingZ}, kEast, kSpeed,
+                                    0.001f, kMaxDrop, map.hazards));
 }
 
 TEST(Footing, AWallAheadIsNotALedge) {

@@ -24,11 +24,15 @@ namespace dsoc::sim {
 /// Whether the walker's box at `position`, moved up to `lookahead` units along
 /// `direction` (horizontal, unit length; probed every half box width of the way), would
 /// stand over nothing for more than `max_drop` units below, or fall from there into one
-/// of `hazards` (touched anywhere between the step and the floor). The way stops at a wall
-/// or a step higher than step_height (movement deals with those). [Units: world units]
+/// of `hazards` (touched anywhere between the step and the floor), or, carried on at
+/// `speed` (horizontal, world units/s) while it falls to a floor more than a step below,
+/// come down where that holds (a narrow ledge below is overshot). The way stops at a
+/// wall or a step higher than step_height (movement deals with those). [Units: world
+/// units]
 [[nodiscard]] bool unsafe_ledge_ahead(const CollisionWorld& world, const MoveConfig& move,
-                                      glm::vec3 position, glm::vec3 direction, float lookahead,
-                                      float max_drop, std::span<const maps::Hazard> hazards);
+                                      glm::vec3 position, glm::vec3 direction, float speed,
+                                      float lookahead, float max_drop,
+                                      std::span<const maps::Hazard> hazards);
 
 /// The spawn points where a walker put there (spawn_state()) lands on a floor within
 /// `max_drop` without touching a hazard, in their order; all of `spawns` when none does.
