@@ -4,6 +4,7 @@
 #include "dsoc/interest/bake_request.hpp"
 #include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/server/dsoc_settings.hpp"
+#include "dsoc/server/startup_stop.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -49,6 +50,8 @@ baked_table(const ServerConfig& config, const interest::GameWorld& world,
     maps::BakeRequest request = interest::walking_bake_request(world.move_config());
     request.config.cell_size = config.bake_cell_size;
     request.dir = config.bake_dir;
+    // Ctrl-C or SIGTERM during the bake: saved where it stands, taken up next start.
+    request.stop = [] { return startup_stop_requested(); };
     const std::string& name = world.map().name;
     cli::ProgressLine progress("baking the cell visibility of " + name);
     auto baked = maps::load_or_bake(world.map(), scene, request,
@@ -58,6 +61,10 @@ baked_table(const ServerConfig& config, const interest::GameWorld& world,
     }
     if (!baked->cache_problem.empty()) {
         spdlog::warn("baked stage: cached table refused: {}", baked->cache_problem);
+    }
+    if (baked->resumed_fraction > 0.0) {
+        spdlog::info("baked stage: went on from a partial bake {:.1f}% done",
+                     100.0 * baked->resumed_fraction);
     }
     if (!baked->write_problem.empty()) {
         spdlog::warn("baked stage: table not saved: {}", baked->write_problem);

@@ -20,6 +20,7 @@
 #include "dsoc/server/metrics_endpoint.hpp"
 #include "dsoc/server/process_metrics.hpp"
 #include "dsoc/server/server.hpp"
+#include "dsoc/server/startup_stop.hpp"
 #include "dsoc/server/stats_report.hpp"
 #include "dsoc/server/world_role.hpp"
 
@@ -380,6 +381,8 @@ int serve_world(const ServerConfig& config, const std::shared_ptr<const dsoc::ma
 int serve(const ServerConfig& config, const ProgramOptions& options) {
     dsoc::server::set_up_logging(config);
     spdlog::info("{}", dsoc::cli::version_line("dsoc-server"));
+    // Until the serving loop's signal_set: a first bake stops and keeps its work.
+    dsoc::server::catch_startup_signals();
 
     boost::asio::io_context io;
     dsoc::server::Server* live = nullptr; // the server, once it runs on this thread
@@ -452,8 +455,17 @@ int serve(const ServerConfig& config, const ProgramOptions& options) {
             world_map = checked.map; // no policy, no table: the gateways hold those
         } else {
             // Builds the policy: loads the map's baked table from the cache, or bakes it.
-            server = std::make_unique<dsoc::server::Server>(io, config, checked.map);
+            try {
+                server = std::make_unique<dsoc::server::Server>(io, config, checked.map);
+            } catch (const std::exception& e) {
+                spdlog::error("{}", e.what());
+                return exit_failure;
+            }
         }
+    }
+    if (dsoc::server::startup_stop_requested()) {
+        spdlog::info("stopped while starting");
+        return exit_failure;
     }
     if (world_map) {
         return serve_world(config, world_map, io, metrics, world_live);

@@ -22,7 +22,9 @@ namespace dsoc::server {
 [[nodiscard]] interest::PolicySettings policy_settings(const ServerConfig& config);
 
 /// The map's baked cell visibility table for config.baked_stage: from the cache, or
-/// baked (progress on stderr) and saved. Throws std::runtime_error when it cannot be had.
+/// baked (progress on stderr) and saved. Throws std::runtime_error when it cannot be had,
+/// or when a stop was asked for during the bake (startup_stop.hpp; the partial bake is
+/// saved and the next start goes on from it).
 [[nodiscard]] std::shared_ptr<const visibility::CellVisibilityTable>
 baked_table(const ServerConfig& config, const interest::GameWorld& world,
             const visibility::OccluderScene& scene);
