@@ -354,6 +354,10 @@ int serve_world(const ServerConfig& config, const std::shared_ptr<const dsoc::ma
             stop.store(true);
         }
     });
+    if (dsoc::server::startup_stop_requested()) { // came while starting, before the set
+        spdlog::info("signal received while starting");
+        stop.store(true);
+    }
     std::thread io_thread([&io] { io.run(); });
     std::printf("world %s publishing on %s\n", config.world_name.c_str(),
                 dsoc::scaleout::world_subject(config.world_name, "tick").c_str());
@@ -502,6 +506,10 @@ int serve(const ServerConfig& config, const ProgramOptions& options) {
             stop();
         }
     });
+    if (dsoc::server::startup_stop_requested()) { // came after the bake, before the set
+        spdlog::info("signal received while starting");
+        stop();
+    }
     if (config.duration_s > 0.0) {
         stop_timer.expires_after(
             std::chrono::milliseconds(static_cast<long>(config.duration_s * 1000)));

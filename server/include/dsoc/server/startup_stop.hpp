@@ -9,7 +9,8 @@
 
 namespace dsoc::server {
 
-/// Makes SIGINT and SIGTERM set the flag (until a boost::asio::signal_set takes them).
+/// Makes SIGINT and SIGTERM set the flag (until a boost::asio::signal_set takes them;
+/// whoever installs one asks the flag once after, so a signal in between is not lost).
 void catch_startup_signals();
 
 /// Whether SIGINT or SIGTERM came since catch_startup_signals().
