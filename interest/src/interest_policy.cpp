@@ -133,8 +133,8 @@ bool use_exact_stages(const PolicySettings& settings,
     if (settings.exact_stages != ExactStages::when_coarse) {
         return settings.exact_stages == ExactStages::always;
     }
-    // The bake grows cells by 1.25x steps until the table fits its budget: a grown
-    // table was made coarse by the map's size, not chosen.
+    // The bake grows cells by 1.25x steps until the table fits its memory and time
+    // budgets: a grown table was made coarse by the map's size, not chosen.
     return table.grid().cell_size > settings.bake_cell_size * 1.01f;
 }
 

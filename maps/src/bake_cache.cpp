@@ -40,6 +40,16 @@ std::filesystem::path default_bake_dir() {
     return ".dsoc-bakes";
 }
 
+std::string describe(const GridOverBudget& over) {
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "%g-unit cells: a bake would take about %.0f s of a quiet machine, over the "
+                  "%.0f s budget (given up after %.0f s)",
+                  static_cast<double>(over.cell_size), over.predicted_seconds, over.budget_seconds,
+                  over.spent_seconds);
+    return line;
+}
+
 static std::unique_ptr<PvsBakePruner> pvs_pruner(const Map& map) {
     if (map.pvs != nullptr && map.pvs->has_visibility()) {
         return std::make_unique<PvsBakePruner>(map.pvs);
@@ -88,6 +98,100 @@ visibility::CellGrid bake_grid(const Map& map, const visibility::OccluderScene& 
     });
 }
 
+/// Bakes `out.file`'s table over `grid` (or loads it when a good file is there: then
+/// out.table is set). Nothing when the bake would be over the request's time budget
+/// (recorded in out.over_budget; never on the last grid, which is baked whatever it
+/// takes); an error when the request's stop() ended it.
+static Result<std::optional<visibility::CellVisibilityTable>>
+bake_one_grid(const Map& map, const visibility::OccluderScene& scene,
+              const visibility::CellGrid& grid, const BakeRequest& request,
+              const visibility::BakePruner* pruner, const std::vector<std::uint8_t>& covered,
+              const visibility::BakeProgress& progress, BakedTable& out) {
+    std::error_code ec;
+    const auto note_problem = [&](const std::string& problem) {
+        out.cache_problem += (out.cache_problem.empty() ? "" : "; ") + problem;
+    };
+    if (!request.force && std::filesystem::exists(out.file, ec)) {
+        auto cached = read_bake_file(out.file, out.key);
+        if (cached) {
+            out.table =
+                std::make_shared<const visibility::CellVisibilityTable>(std::move(cached).value());
+            out.from_cache = true;
+            return std::optional<visibility::CellVisibilityTable>{};
+        }
+        note_problem(cached.error().message() + "; baking again");
+    }
+    // A bake stopped part way (a restart) goes on from its partial file.
+    const auto partial_file = partial_file_of(out.file);
+    std::optional<PartialBake> partial;
+    if (!request.force && std::filesystem::exists(partial_file, ec)) {
+        auto read = read_partial_file(partial_file, out.key);
+        if (read) {
+            partial = std::move(read).value();
+        } else {
+            note_problem(read.error().message() + "; baking from the start");
+        }
+    }
+    visibility::BakeState resume;
+    visibility::BakeCheckpoints checkpoints;
+    if (request.checkpoint_seconds > 0.0) {
+        checkpoints.interval_seconds = request.checkpoint_seconds;
+        checkpoints.save_now = request.stop;
+        checkpoints.save = [&](const visibility::BakeState& state) {
+            if (auto problem = write_partial_file(partial_file, state, out.key)) {
+                out.write_problem = *problem;
+            } else if (request.stop && request.stop()) {
+                throw BakeStopped{state.pairs_total > 0 ? static_cast<double>(state.pairs_done) /
+                                                              static_cast<double>(state.pairs_total)
+                                                        : 0.0};
+            }
+        };
+    }
+    out.resumed_fraction = 0.0;
+    if (partial) {
+        resume = partial->state();
+        checkpoints.resume = &resume;
+        out.resumed_fraction = resume.pairs_total > 0 ? static_cast<double>(resume.pairs_done) /
+                                                            static_cast<double>(resume.pairs_total)
+                                                      : 0.0;
+    }
+    visibility::BakeBudget budget;
+    if (grid.cell_size <= 1024.0f) { // not the last grid
+        budget.max_seconds = request.max_bake_seconds;
+        budget.sample_fraction = request.budget_sample_fraction;
+    }
+    const auto bake = [&] {
+        return visibility::bake_cell_visibility(scene, grid, request.config, pruner, &out.stats,
+                                                progress, covered, checkpoints, budget);
+    };
+    try {
+        try {
+            return std::optional<visibility::CellVisibilityTable>{bake()};
+        } catch (const std::invalid_argument& e) {
+            if (checkpoints.resume == nullptr) {
+                throw;
+            }
+            // Checksummed and of this key, yet not of this bake's size: never trusted.
+            note_problem(partial_file.string() + ": " + e.what() + "; baking from the start");
+            checkpoints.resume = nullptr;
+            out.resumed_fraction = 0.0;
+            return std::optional<visibility::CellVisibilityTable>{bake()};
+        }
+    } catch (const BakeStopped& stopped) {
+        char done[32];
+        std::snprintf(done, sizeof done, "%.1f%%", 100.0 * stopped.fraction);
+        return LoadError{map.name, "",
+                         std::string("bake stopped at ") + done + "; " + partial_file.string() +
+                             " goes on from there next time"};
+    } catch (const visibility::BakeOverBudget& over) {
+        // A grid no bake will finish: its sample's saved state is of no use.
+        std::filesystem::remove(partial_file, ec);
+        out.over_budget.push_back(
+            {grid.cell_size, over.predicted_seconds, over.spent_seconds, request.max_bake_seconds});
+        return std::optional<visibility::CellVisibilityTable>{};
+    }
+}
+
 Result<BakedTable> load_or_bake(const Map& map, const visibility::OccluderScene& scene,
                                 const BakeRequest& request,
                                 const visibility::BakeProgress& progress) {
@@ -96,6 +200,12 @@ Result<BakedTable> load_or_bake(const Map& map, const visibility::OccluderScene&
     }
     if (const auto problems = visibility::validate(request.config); !problems.empty()) {
         return LoadError{map.name, "bake settings", problems.front()};
+    }
+    if (!(request.max_bake_seconds > 0.0)) {
+        return LoadError{map.name, "bake settings", "max_bake_seconds must be > 0"};
+    }
+    if (!(request.budget_sample_fraction > 0.0 && request.budget_sample_fraction <= 1.0)) {
+        return LoadError{map.name, "bake settings", "budget_sample_fraction must be within (0, 1]"};
     }
     if (request.player_space) {
         if (const auto problems = validate(*request.player_space); !problems.empty()) {
@@ -140,89 +250,35 @@ Result<BakedTable> load_or_bake(const Map& map, const visibility::OccluderScene&
             return out;
         }
     }
-    const auto grid = bake_grid(map, scene, request.config.cell_size, request.max_table_bytes,
-                                request.player_space);
-    out.key = bake_key(key_of_map, grid, request.config, request.player_space);
-    out.file = file_of(out.key);
-    if (!request.force && std::filesystem::exists(out.file, ec)) {
-        auto cached = read_bake_file(out.file, out.key);
-        if (cached) {
-            out.table =
-                std::make_shared<const visibility::CellVisibilityTable>(std::move(cached).value());
-            out.from_cache = true;
-            return out;
-        }
-        out.cache_problem = cached.error().message() + "; baking again";
-    }
     // The compiler's PVS, where the map has one, proves far pairs apart for free.
     const auto pruner = pvs_pruner(map);
     const auto boxes = request.player_space ? player_space_boxes(map, *request.player_space)
                                             : std::vector<visibility::Aabb>{};
-    const auto covered = covered_cells(grid, request.player_space ? &boxes : nullptr);
-    // A bake stopped part way (a restart) goes on from its partial file.
-    const auto partial_file = partial_file_of(out.file);
-    const auto note_problem = [&](const std::string& problem) {
-        out.cache_problem += (out.cache_problem.empty() ? "" : "; ") + problem;
-    };
-    std::optional<PartialBake> partial;
-    if (!request.force && std::filesystem::exists(partial_file, ec)) {
-        auto read = read_partial_file(partial_file, out.key);
-        if (read) {
-            partial = std::move(read).value();
-        } else {
-            note_problem(read.error().message() + "; baking from the start");
-        }
-    }
-    visibility::BakeState resume;
-    visibility::BakeCheckpoints checkpoints;
-    if (request.checkpoint_seconds > 0.0) {
-        checkpoints.interval_seconds = request.checkpoint_seconds;
-        checkpoints.save_now = request.stop;
-        checkpoints.save = [&](const visibility::BakeState& state) {
-            if (auto problem = write_partial_file(partial_file, state, out.key)) {
-                out.write_problem = *problem;
-            } else if (request.stop && request.stop()) {
-                throw BakeStopped{state.pairs_total > 0 ? static_cast<double>(state.pairs_done) /
-                                                              static_cast<double>(state.pairs_total)
-                                                        : 0.0};
-            }
-        };
-    }
-    if (partial) {
-        resume = partial->state();
-        checkpoints.resume = &resume;
-        out.resumed_fraction = resume.pairs_total > 0 ? static_cast<double>(resume.pairs_done) /
-                                                            static_cast<double>(resume.pairs_total)
-                                                      : 0.0;
-    }
-    const auto bake = [&] {
-        return visibility::bake_cell_visibility(scene, grid, request.config, pruner.get(),
-                                                &out.stats, progress, covered, checkpoints);
-    };
     std::optional<visibility::CellVisibilityTable> baked;
-    try {
-        baked.emplace(bake());
-    } catch (const BakeStopped& stopped) {
-        char done[32];
-        std::snprintf(done, sizeof done, "%.1f%%", 100.0 * stopped.fraction);
-        return LoadError{map.name, "",
-                         std::string("bake stopped at ") + done + "; " + partial_file.string() +
-                             " goes on from there next time"};
-    } catch (const std::invalid_argument& e) {
-        if (checkpoints.resume == nullptr) {
-            throw;
+    // The grid the memory budget picks, then coarser ones while a bake would be over
+    // the time budget.
+    for (float cell_size = request.config.cell_size; !baked;) {
+        const auto grid =
+            bake_grid(map, scene, cell_size, request.max_table_bytes, request.player_space);
+        out.key = bake_key(key_of_map, grid, request.config, request.player_space);
+        out.file = file_of(out.key);
+        auto one = bake_one_grid(map, scene, grid, request, pruner.get(),
+                                 covered_cells(grid, request.player_space ? &boxes : nullptr),
+                                 progress, out);
+        if (!one) {
+            return std::move(one).error();
         }
-        // Checksummed and of this key, yet not of this bake's size: never trusted.
-        note_problem(partial_file.string() + ": " + e.what() + "; baking from the start");
-        checkpoints.resume = nullptr;
-        out.resumed_fraction = 0.0;
-        baked.emplace(bake());
+        if (out.table != nullptr) {
+            return out; // from the cache
+        }
+        baked = std::move(one).value();
+        cell_size = grid.cell_size * 1.25f;
     }
     auto& table = *baked;
     if (auto problem = write_bake_file(out.file, table, out.key)) {
         out.write_problem = *problem;
     } else {
-        std::filesystem::remove(partial_file, ec);
+        std::filesystem::remove(partial_file_of(out.file), ec);
     }
     out.table = std::make_shared<const visibility::CellVisibilityTable>(std::move(table));
     return out;

@@ -62,6 +62,9 @@ baked_table(const ServerConfig& config, const interest::GameWorld& world,
     if (!baked->cache_problem.empty()) {
         spdlog::warn("baked stage: cached table refused: {}", baked->cache_problem);
     }
+    for (const maps::GridOverBudget& over : baked->over_budget) {
+        spdlog::info("baked stage: {}: coarser cells instead", maps::describe(over));
+    }
     if (baked->resumed_fraction > 0.0) {
         spdlog::info("baked stage: went on from a partial bake {:.1f}% done",
                      100.0 * baked->resumed_fraction);

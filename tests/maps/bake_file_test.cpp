@@ -19,18 +19,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Fixture {
-    Map map;
-    std::shared_ptr<const visibility::OccluderScene> scene;
-};
-
-const Fixture& rooms() {
-    static const Fixture f = [] {
-        Fixture out{test::corridor_map(), nullptr};
-        out.scene = visibility::OccluderScene::build(out.map.occluders);
-        return out;
-    }();
-    return f;
+const test::Corridor& rooms() {
+    return test::shared_corridor();
 }
 
 BakeRequest small_request(const fs::path& dir) {

@@ -31,13 +31,10 @@ struct Saved {
 };
 
 const Map& corridor() {
-    static const Map map = test::corridor_map();
-    return map;
+    return test::shared_corridor().map;
 }
-
 const visibility::OccluderScene& corridor_scene() {
-    static const auto scene = visibility::OccluderScene::build(corridor().occluders);
-    return *scene;
+    return *test::shared_corridor().scene;
 }
 
 visibility::CellBakeConfig config(int threads) {

@@ -5,6 +5,7 @@
 
 #include "dsoc/maps/map.hpp"
 #include "dsoc/maps/q3_bsp.hpp"
+#include "dsoc/visibility/occluder_region_visibility.hpp"
 #include "dsoc/visibility/seeds/test_worlds.hpp"
 #include "support/openarena.hpp"
 
@@ -13,6 +14,7 @@
 #include <array>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -28,6 +30,20 @@ inline Map corridor_map(std::uint32_t seed = 3) {
     map.occluders = w.world.occluders();
     map.bounds = w.world.bounds();
     return map;
+}
+
+/// corridor_map() and its occluder scene, built once for the whole test program.
+struct Corridor {
+    Map map;
+    std::shared_ptr<const visibility::OccluderScene> scene;
+};
+inline const Corridor& shared_corridor() {
+    static const Corridor c = [] {
+        Corridor out{corridor_map(), nullptr};
+        out.scene = visibility::OccluderScene::build(out.map.occluders);
+        return out;
+    }();
+    return c;
 }
 
 using ::dsoc::testing::kOpenArenaPak;

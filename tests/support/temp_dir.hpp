@@ -26,6 +26,7 @@ public:
     TempDir(const TempDir&) = delete;
     TempDir& operator=(const TempDir&) = delete;
 
+    [[nodiscard]] const std::filesystem::path& dir() const { return dir_; }
     /// The path of file `name` in the directory (it need not exist).
     [[nodiscard]] std::string path(const std::string& name) const { return (dir_ / name).string(); }
     /// Writes `text` to file `name` in the directory; returns its path.

@@ -20,6 +20,7 @@
 #include <csignal>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 
 namespace {
 
@@ -87,6 +88,10 @@ int main(int argc, char** argv) {
     app.add_flag("--force", request.force,
                  "bake again even when the cache holds a good table (and do not go on from a "
                  "partial bake)");
+    double max_minutes = request.max_bake_seconds / 60.0;
+    dsoc::cli::add_setting(app, "--max-bake-minutes", max_minutes,
+                           "cells grow until a bake is predicted (from a sample of its pairs) "
+                           "to take at most this long on a quiet machine (0: no limit)");
     dsoc::cli::add_setting(app, "--checkpoint-seconds", request.checkpoint_seconds,
                            "save where the bake stands this often, so that it goes on after a "
                            "restart (0: never)");
@@ -103,6 +108,12 @@ int main(int argc, char** argv) {
     }
     request.dir = dir;
     request.max_table_bytes = max_mib << 20;
+    if (!(max_minutes >= 0.0)) {
+        std::cerr << "dsoc-bake: --max-bake-minutes must be >= 0\n";
+        return dsoc::cli::exit_usage;
+    }
+    request.max_bake_seconds =
+        max_minutes > 0.0 ? max_minutes * 60.0 : std::numeric_limits<double>::infinity();
     if (whole_box) {
         request.player_space.reset();
     }
@@ -134,6 +145,10 @@ int main(int argc, char** argv) {
                 break; // the maps after it are not started
             }
             continue;
+        }
+        for (const auto& over : baked->over_budget) {
+            std::cerr << "dsoc-bake: " << map->name << ": " << dsoc::maps::describe(over)
+                      << ": coarser cells instead\n";
         }
         if (!baked->cache_problem.empty()) {
             std::cerr << "dsoc-bake: cached table refused: " << baked->cache_problem << "\n";
@@ -169,6 +184,12 @@ int main(int argc, char** argv) {
             out["witness_rays"] = s.witness_rays;
             out["witness_clear"] = s.witness_clear;
             out["resumed_fraction"] = baked->resumed_fraction;
+            auto& over = out["over_budget"] = nlohmann::json::array();
+            for (const auto& o : baked->over_budget) {
+                over.push_back({{"cell_size", o.cell_size},
+                                {"predicted_seconds", o.predicted_seconds},
+                                {"spent_seconds", o.spent_seconds}});
+            }
             std::cout << out.dump() << std::endl;
         } else {
             std::printf("%s: %s %s\n", map->name.c_str(), baked->from_cache ? "loaded" : "baked",

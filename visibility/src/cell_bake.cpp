@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstddef>
+#include <ctime>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -64,8 +66,8 @@ public:
     /// Resolves the top pairs from checkpoints.resume's (or from the first), saving
     /// the state every checkpoints.interval_seconds; adds to `stats` the work counts
     /// of this run and of the resumed ones, and sets its seconds to all of theirs.
-    void run(CellBakeStats& stats, const BakeProgress& progress,
-             const BakeCheckpoints& checkpoints);
+    void run(CellBakeStats& stats, const BakeProgress& progress, const BakeCheckpoints& checkpoints,
+             const BakeBudget& budget);
 
 private:
     struct Worker {
@@ -374,8 +376,9 @@ void Baker::resolve(Worker& w, Node a, Node b) {
 }
 
 void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
-                const BakeCheckpoints& checkpoints) {
+                const BakeCheckpoints& checkpoints, const BakeBudget& budget) {
     const auto start = std::chrono::steady_clock::now();
+    const std::clock_t cpu_start = std::clock();
     const int top = config_.top_level;
     const Level& level = levels_[static_cast<std::size_t>(top)];
     std::vector<std::uint32_t> blocks;
@@ -419,6 +422,34 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
     // the pairs resolved are exactly those below `next`.
     std::atomic<bool> pause{false};
     std::vector<Worker> workers(threads);
+    // The budget's samples (0: none): worker 0 predicts the whole bake's time once the
+    // first `early_end` pairs are done, giving up when that is far over the budget (a
+    // bake many times too large wastes a tenth of the sample), and once the first
+    // `sample_end` are, giving up when it is over at all.
+    const std::uint64_t left = work.count() - first;
+    const auto pairs_in = [&](double fraction) -> std::uint64_t {
+        return budget.limited() && left > 0
+                   ? first + std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::ceil(
+                                                            fraction * static_cast<double>(left))))
+                   : 0;
+    };
+    const std::uint64_t early_end = pairs_in(budget.sample_fraction / 10.0);
+    const std::uint64_t sample_end = pairs_in(budget.sample_fraction);
+    constexpr double kEarlyFactor = 3.0;
+    int samples_taken = 0;
+    double over_budget = 0.0; // the prediction that gave up
+    double sample_seconds = 0.0;
+    const auto predict = [&](std::uint64_t finished, double factor) {
+        ++samples_taken;
+        sample_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC /
+                         static_cast<double>(threads);
+        const double whole = sample_seconds * static_cast<double>(work.count()) /
+                             static_cast<double>(finished - first);
+        if (whole > factor * budget.max_seconds) {
+            over_budget = whole;
+            pause.store(true);
+        }
+    };
     const auto body = [&](unsigned t) {
         Worker& w = workers[t];
         auto last_report = std::chrono::steady_clock::now();
@@ -439,6 +470,12 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
                 resolve(w, Node{top, i}, Node{top, j});
             }
             const std::uint64_t finished = done.fetch_add(1) + 1;
+            if (t == 0 && samples_taken == 0 && early_end != 0 && finished >= early_end) {
+                predict(finished, kEarlyFactor);
+            }
+            if (t == 0 && samples_taken == 1 && finished >= sample_end && over_budget == 0.0) {
+                predict(finished, 1.0);
+            }
             if (t == 0 && progress) {
                 const auto now = std::chrono::steady_clock::now();
                 if (now - last_report > std::chrono::milliseconds(500)) {
@@ -491,6 +528,9 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
         stop_timer.store(true);
         if (timer.joinable()) {
             timer.join();
+        }
+        if (over_budget > 0.0) {
+            throw BakeOverBudget(over_budget, sample_seconds);
         }
         // Every pair handed out was resolved: the first min(next, count) are done.
         const std::uint64_t resolved = std::min<std::uint64_t>(next.load(), work.count());
@@ -592,12 +632,18 @@ CellVisibilityTable bake_cell_visibility(const OccluderScene& scene, const CellG
                                          const CellBakeConfig& config, const BakePruner* pruner,
                                          CellBakeStats* stats, const BakeProgress& progress,
                                          std::span<const std::uint8_t> covered,
-                                         const BakeCheckpoints& checkpoints) {
+                                         const BakeCheckpoints& checkpoints,
+                                         const BakeBudget& budget) {
     if (const auto problems = validate(config); !problems.empty()) {
         throw std::invalid_argument("CellBakeConfig: " + problems.front());
     }
     if (scene.grid == nullptr) {
         throw std::invalid_argument("bake_cell_visibility: the scene has no occluder grid");
+    }
+    if (!(budget.max_seconds > 0.0) ||
+        !(budget.sample_fraction > 0.0 && budget.sample_fraction <= 1.0)) {
+        throw std::invalid_argument("bake_cell_visibility: a budget needs max_seconds > 0 and "
+                                    "sample_fraction within (0, 1]");
     }
     auto [open, uncovered] = split_covered(open_cells_of(scene, grid, pruner), covered);
     CellVisibilityTable table(grid, std::move(open), std::move(uncovered));
@@ -607,7 +653,7 @@ CellVisibilityTable bake_cell_visibility(const OccluderScene& scene, const CellG
     local.uncovered_cells = table.uncovered_cells().size();
     if (table.open_count() > 0) {
         Baker baker(scene, grid, config, pruner, table);
-        baker.run(local, progress, checkpoints);
+        baker.run(local, progress, checkpoints, budget);
     }
     table.compress();
     if (stats != nullptr) {

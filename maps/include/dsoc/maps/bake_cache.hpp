@@ -16,6 +16,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace dsoc::maps {
 
@@ -32,6 +33,15 @@ struct BakeRequest {
     /// after loading, has compressed rows: a fraction of this.) [Units: bytes]
     /// [Limit: >= 1 MiB]
     std::uint64_t max_table_bytes = std::uint64_t{128} << 20;
+    /// A bake predicted to take longer than this is given up after a sample of its
+    /// pairs (visibility::BakeBudget), and the cells grow by another 1.25x step; the
+    /// grid past 1024 units is baked whatever it takes. Infinity: no limit. Nine
+    /// minutes: a tenth below ten, for the prediction's error and the sample's work.
+    /// [Units: s of CPU per worker thread: the wall time on an otherwise quiet machine]
+    /// [Limit: > 0]
+    double max_bake_seconds = 540.0;
+    /// The share of a bake's pairs its time is predicted from. [Limit: (0, 1]]
+    double budget_sample_fraction = 0.01;
     /// Bake again even when a good file exists (a partial bake is not taken up either).
     bool force = false;
     /// A bake saves where it stands this often, in a partial file beside the table's
@@ -48,6 +58,19 @@ struct BakeRequest {
     std::optional<PlayerSpace> player_space;
 };
 
+/// A grid a bake gave up on because it would have taken longer than the request's
+/// max_bake_seconds.
+struct GridOverBudget {
+    float cell_size = 0.0f;         ///< [Units: world units]
+    double predicted_seconds = 0.0; ///< the whole bake's, as the budget counts them
+    double spent_seconds = 0.0;     ///< on the sample, as the budget counts them
+    double budget_seconds = 0.0;    ///< the request's max_bake_seconds
+};
+
+/// One line for a log: "62.5-unit cells: a bake would take about 650 s of a quiet
+/// machine, over the 540 s budget (given up after 7 s)".
+[[nodiscard]] std::string describe(const GridOverBudget& over);
+
 struct BakedTable {
     std::shared_ptr<const visibility::CellVisibilityTable> table;
     std::filesystem::path file;
@@ -61,6 +84,8 @@ struct BakedTable {
     /// started from the beginning).
     double resumed_fraction = 0.0;
     visibility::CellBakeStats stats; ///< of the bake, when one ran
+    /// The finer grids given up on for the time budget, finest first.
+    std::vector<GridOverBudget> over_budget;
 };
 
 /// How far the baked grid reaches past the map's bounds. The reachable eye region of a
@@ -74,7 +99,8 @@ inline constexpr float kBakeGridMargin = 128.0f;
 /// The grid `map` is baked over: cells of `cell_size` over the map's bounds grown by
 /// kBakeGridMargin on every side, grown by
 /// 1.25x steps until the dense rows of its open covered cells (all open cells when
-/// `space` is nothing) fit `max_table_bytes`.
+/// `space` is nothing) fit `max_table_bytes`. (load_or_bake() grows them further when
+/// a bake over this grid would be over its time budget.)
 [[nodiscard]] visibility::CellGrid bake_grid(const Map& map, const visibility::OccluderScene& scene,
                                              float cell_size, std::uint64_t max_table_bytes,
                                              const std::optional<PlayerSpace>& space);

@@ -13,7 +13,9 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -131,6 +133,36 @@ struct BakeCheckpoints {
     std::function<bool()> save_now;
 };
 
+/// A bake that gives up early when it would take too long. Once `sample_fraction` of
+/// the top pairs it has left are resolved (they come in a scattered order, so they are
+/// a fair sample of the work), the bake predicts the time of all its pairs from theirs
+/// and throws BakeOverBudget when that is over `max_seconds`. The time is the process's CPU time
+/// (std::clock) over the bake's workers: what the bake takes on an otherwise quiet
+/// machine, however busy this one is, as long as nothing else in the process works.
+/// A bake that goes on from a saved state samples the pairs left and predicts the
+/// whole bake's time at their pace, as a bake from the start would.
+struct BakeBudget {
+    /// Infinity: no budget. [Units: s of CPU per worker] [Limit: > 0]
+    double max_seconds = std::numeric_limits<double>::infinity();
+    /// [Limit: (0, 1]]
+    double sample_fraction = 0.01;
+
+    [[nodiscard]] bool limited() const {
+        return max_seconds < std::numeric_limits<double>::infinity();
+    }
+};
+
+/// What a bake over its budget predicted when it gave up.
+struct BakeOverBudget : std::runtime_error {
+    BakeOverBudget(double predicted, double spent)
+        : std::runtime_error("bake_cell_visibility: the bake would take longer than its budget"),
+          predicted_seconds(predicted), spent_seconds(spent) {}
+    /// The whole bake's predicted time, as BakeBudget counts it. [Units: s]
+    double predicted_seconds;
+    /// What the sample took, as BakeBudget counts it. [Units: s]
+    double spent_seconds;
+};
+
 /// The grid cells that are open: not inside the interior of one occluder (every corner
 /// 1/64 unit inside all of its planes) and not empty space to `pruner` (may be null).
 /// Increasing grid indexes.
@@ -146,11 +178,12 @@ split_covered(std::vector<std::uint32_t> open, std::span<const std::uint8_t> cov
 /// its grid). `pruner` may be null. `covered` (one byte per grid cell, or empty: all)
 /// says where the table must answer: open cells it does not mark become the table's
 /// uncovered cells, which get no row and are never paired. Runs on config.threads
-/// workers.
+/// workers. With a limited `budget`, throws BakeOverBudget when the sample predicts
+/// more (after `checkpoints.save` may have saved a state of it).
 [[nodiscard]] CellVisibilityTable
 bake_cell_visibility(const OccluderScene& scene, const CellGrid& grid, const CellBakeConfig& config,
                      const BakePruner* pruner = nullptr, CellBakeStats* stats = nullptr,
                      const BakeProgress& progress = {}, std::span<const std::uint8_t> covered = {},
-                     const BakeCheckpoints& checkpoints = {});
+                     const BakeCheckpoints& checkpoints = {}, const BakeBudget& budget = {});
 
 } // namespace dsoc::visibility
