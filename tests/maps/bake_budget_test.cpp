@@ -48,8 +48,11 @@ TEST(BakeBudget, AKeptBudgetChangesNothingAndAnOverrunOneIsGivenUpOnASample) {
 
     visibility::BakeBudget generous;
     generous.max_seconds = 1e6;
-    EXPECT_TRUE(visibility::bake_cell_visibility(corridor_scene(), grid, config(), nullptr, nullptr,
+    generous.sample_fraction = 0.5;
+    visibility::CellBakeStats stats;
+    EXPECT_TRUE(visibility::bake_cell_visibility(corridor_scene(), grid, config(), nullptr, &stats,
                                                  {}, {}, {}, generous) == whole);
+    EXPECT_GT(stats.predicted_seconds, 0.0); // the sample's prediction is reported
 
     // Half the pairs as the sample: enough CPU time to measure, and the bake gives up
     // with a prediction of more than the sample took.

@@ -184,6 +184,7 @@ int main(int argc, char** argv) {
             out["witness_rays"] = s.witness_rays;
             out["witness_clear"] = s.witness_clear;
             out["resumed_fraction"] = baked->resumed_fraction;
+            out["predicted_seconds"] = s.predicted_seconds; // 0: none made
             auto& over = out["over_budget"] = nlohmann::json::array();
             for (const auto& o : baked->over_budget) {
                 over.push_back({{"cell_size", o.cell_size},

@@ -438,6 +438,7 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
     constexpr double kEarlyFactor = 3.0;
     int samples_taken = 0;
     double over_budget = 0.0; // the prediction that gave up
+    double predicted_seconds = 0.0;
     double sample_seconds = 0.0;
     const auto predict = [&](std::uint64_t finished, double factor) {
         ++samples_taken;
@@ -445,6 +446,7 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
                          static_cast<double>(threads);
         const double whole = sample_seconds * static_cast<double>(work.count()) /
                              static_cast<double>(finished - first);
+        predicted_seconds = whole;
         if (whole > factor * budget.max_seconds) {
             over_budget = whole;
             pause.store(true);
@@ -543,6 +545,7 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
     const CellBakeStats all = counts();
     stats.add_work(all);
     stats.seconds = all.seconds;
+    stats.predicted_seconds = predicted_seconds;
     if (progress) {
         progress(1.0, stats.seconds);
     }

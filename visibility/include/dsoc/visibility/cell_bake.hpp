@@ -80,9 +80,12 @@ struct CellBakeStats {
     std::uint64_t exact_by_level[7] = {};
     std::uint64_t hidden_by_level[7] = {};
     double seconds = 0.0;
+    /// What BakeBudget's sample predicted for the whole bake, in its units (0: no
+    /// prediction: no budget, or the bake was done before its sample).
+    double predicted_seconds = 0.0;
 
     /// Adds the work counts of `other` (pair visits to proofs by level); the cell
-    /// counts and the seconds are left as they are.
+    /// counts, the seconds and the prediction are left as they are.
     CellBakeStats& add_work(const CellBakeStats& other) {
         pair_visits += other.pair_visits;
         pruned += other.pruned;
