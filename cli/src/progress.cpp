@@ -29,7 +29,17 @@ void ProgressLine::operator()(double fraction, double elapsed_seconds) {
         std::fprintf(out_, "%s: %5.1f%%, %.1f s elapsed, ETA %.1f s\n", what_.c_str(),
                      100.0 * fraction, elapsed_seconds, eta);
     }
+    written_ = !done;
     std::fflush(out_);
+}
+
+void ProgressLine::restart() {
+    if (terminal_ && written_) {
+        std::fputc('\n', out_);
+        std::fflush(out_);
+    }
+    written_ = false;
+    last_tenth_ = -1;
 }
 
 } // namespace dsoc::cli

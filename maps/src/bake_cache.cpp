@@ -188,6 +188,9 @@ bake_one_grid(const Map& map, const visibility::OccluderScene& scene,
         std::filesystem::remove(partial_file, ec);
         out.over_budget.push_back(
             {grid.cell_size, over.predicted_seconds, over.spent_seconds, request.max_bake_seconds});
+        if (request.gave_up) {
+            request.gave_up(out.over_budget.back());
+        }
         return std::optional<visibility::CellVisibilityTable>{};
     }
 }

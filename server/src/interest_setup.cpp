@@ -54,6 +54,10 @@ baked_table(const ServerConfig& config, const interest::GameWorld& world,
     request.stop = [] { return startup_stop_requested(); };
     const std::string& name = world.map().name;
     cli::ProgressLine progress("baking the cell visibility of " + name);
+    request.gave_up = [&](const maps::GridOverBudget& over) {
+        progress.restart();
+        spdlog::info("baked stage: {}: coarser cells instead", maps::describe(over));
+    };
     auto baked = maps::load_or_bake(world.map(), scene, request,
                                     [&](double f, double seconds) { progress(f, seconds); });
     if (!baked) {
@@ -61,9 +65,6 @@ baked_table(const ServerConfig& config, const interest::GameWorld& world,
     }
     if (!baked->cache_problem.empty()) {
         spdlog::warn("baked stage: cached table refused: {}", baked->cache_problem);
-    }
-    for (const maps::GridOverBudget& over : baked->over_budget) {
-        spdlog::info("baked stage: {}: coarser cells instead", maps::describe(over));
     }
     if (baked->resumed_fraction > 0.0) {
         spdlog::info("baked stage: went on from a partial bake {:.1f}% done",

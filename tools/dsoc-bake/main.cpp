@@ -134,6 +134,11 @@ int main(int argc, char** argv) {
         }
         const auto scene = dsoc::visibility::OccluderScene::build(map->occluders);
         dsoc::cli::ProgressLine progress(map->name);
+        request.gave_up = [&](const dsoc::maps::GridOverBudget& over) {
+            progress.restart();
+            std::cerr << "dsoc-bake: " << map->name << ": " << dsoc::maps::describe(over)
+                      << ": coarser cells instead" << std::endl;
+        };
         const double cpu_before = process_cpu_seconds();
         auto baked = dsoc::maps::load_or_bake(map.value(), *scene, request,
                                               [&](double f, double s) { progress(f, s); });
@@ -145,10 +150,6 @@ int main(int argc, char** argv) {
                 break; // the maps after it are not started
             }
             continue;
-        }
-        for (const auto& over : baked->over_budget) {
-            std::cerr << "dsoc-bake: " << map->name << ": " << dsoc::maps::describe(over)
-                      << ": coarser cells instead\n";
         }
         if (!baked->cache_problem.empty()) {
             std::cerr << "dsoc-bake: cached table refused: " << baked->cache_problem << "\n";

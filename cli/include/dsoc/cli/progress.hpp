@@ -18,12 +18,16 @@ public:
 
     /// `fraction` of the work done (0..1) after `elapsed_seconds`; the line ends at 1.
     void operator()(double fraction, double elapsed_seconds);
+    /// The work starts over (another try at it): ends a line rewritten in place, so
+    /// that a message may follow on a line of its own, and reports from 0 again.
+    void restart();
 
 private:
     std::string what_;
     std::FILE* out_;
     bool terminal_;
-    int last_tenth_ = -1; ///< the last tenth written (not on a terminal)
+    int last_tenth_ = -1;  ///< the last tenth written (not on a terminal)
+    bool written_ = false; ///< a line is open on the terminal
 };
 
 } // namespace dsoc::cli

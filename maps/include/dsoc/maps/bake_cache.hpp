@@ -24,6 +24,19 @@ namespace dsoc::maps {
 /// ".dsoc-bakes" in the working directory.
 [[nodiscard]] std::filesystem::path default_bake_dir();
 
+/// A grid a bake gave up on because it would have taken longer than the request's
+/// max_bake_seconds.
+struct GridOverBudget {
+    float cell_size = 0.0f;         ///< [Units: world units]
+    double predicted_seconds = 0.0; ///< the whole bake's, as the budget counts them
+    double spent_seconds = 0.0;     ///< on the sample, as the budget counts them
+    double budget_seconds = 0.0;    ///< the request's max_bake_seconds
+};
+
+/// One line for a log: "62.5-unit cells: a bake would take about 650 s of a quiet
+/// machine, over the 540 s budget (given up after 7 s)".
+[[nodiscard]] std::string describe(const GridOverBudget& over);
+
 struct BakeRequest {
     visibility::CellBakeConfig config;
     /// Cache directory; empty: default_bake_dir().
@@ -42,6 +55,9 @@ struct BakeRequest {
     double max_bake_seconds = 540.0;
     /// The share of a bake's pairs its time is predicted from. [Limit: (0, 1]]
     double budget_sample_fraction = 0.01;
+    /// Called at once (on the calling thread) for each grid given up for the time
+    /// budget, before the next is tried; BakedTable::over_budget lists them all too.
+    std::function<void(const GridOverBudget&)> gave_up;
     /// Bake again even when a good file exists (a partial bake is not taken up either).
     bool force = false;
     /// A bake saves where it stands this often, in a partial file beside the table's
@@ -57,19 +73,6 @@ struct BakeRequest {
     /// uncovered (no row, no answer). Nothing: the whole map's box.
     std::optional<PlayerSpace> player_space;
 };
-
-/// A grid a bake gave up on because it would have taken longer than the request's
-/// max_bake_seconds.
-struct GridOverBudget {
-    float cell_size = 0.0f;         ///< [Units: world units]
-    double predicted_seconds = 0.0; ///< the whole bake's, as the budget counts them
-    double spent_seconds = 0.0;     ///< on the sample, as the budget counts them
-    double budget_seconds = 0.0;    ///< the request's max_bake_seconds
-};
-
-/// One line for a log: "62.5-unit cells: a bake would take about 650 s of a quiet
-/// machine, over the 540 s budget (given up after 7 s)".
-[[nodiscard]] std::string describe(const GridOverBudget& over);
 
 struct BakedTable {
     std::shared_ptr<const visibility::CellVisibilityTable> table;
