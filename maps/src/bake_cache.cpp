@@ -43,8 +43,8 @@ std::filesystem::path default_bake_dir() {
 std::string describe(const GridOverBudget& over) {
     char line[200];
     std::snprintf(line, sizeof line,
-                  "%g-unit cells: a bake would take about %.0f s of a quiet machine, over the "
-                  "%.0f s budget (given up after %.0f s)",
+                  "%g-unit cells: the bake would need about %.0f s more of a quiet machine, "
+                  "over the %.0f s budget (given up after %.0f s)",
                   static_cast<double>(over.cell_size), over.predicted_seconds, over.budget_seconds,
                   over.spent_seconds);
     return line;
@@ -111,6 +111,8 @@ bake_one_grid(const Map& map, const visibility::OccluderScene& scene,
     const auto note_problem = [&](const std::string& problem) {
         out.cache_problem += (out.cache_problem.empty() ? "" : "; ") + problem;
     };
+    out.resumed_fraction = 0.0;
+    out.write_problem.clear(); // a grid given up before may have left one
     if (!request.force && std::filesystem::exists(out.file, ec)) {
         auto cached = read_bake_file(out.file, out.key);
         if (cached) {
@@ -147,7 +149,6 @@ bake_one_grid(const Map& map, const visibility::OccluderScene& scene,
             }
         };
     }
-    out.resumed_fraction = 0.0;
     if (partial) {
         resume = partial->state();
         checkpoints.resume = &resume;
@@ -159,6 +160,7 @@ bake_one_grid(const Map& map, const visibility::OccluderScene& scene,
     if (grid.cell_size <= 1024.0f) { // not the last grid
         budget.max_seconds = request.max_bake_seconds;
         budget.sample_fraction = request.budget_sample_fraction;
+        budget.cpu_seconds = request.budget_clock;
     }
     const auto bake = [&] {
         return visibility::bake_cell_visibility(scene, grid, request.config, pruner, &out.stats,
@@ -184,8 +186,11 @@ bake_one_grid(const Map& map, const visibility::OccluderScene& scene,
                          std::string("bake stopped at ") + done + "; " + partial_file.string() +
                              " goes on from there next time"};
     } catch (const visibility::BakeOverBudget& over) {
-        // A grid no bake will finish: its sample's saved state is of no use.
-        std::filesystem::remove(partial_file, ec);
+        // A state this bake saved holds no more than its sample: of no use. One it
+        // went on from is kept (a later bake with a larger budget may finish it).
+        if (checkpoints.resume == nullptr) {
+            std::filesystem::remove(partial_file, ec);
+        }
         out.over_budget.push_back(
             {grid.cell_size, over.predicted_seconds, over.spent_seconds, request.max_bake_seconds});
         if (request.gave_up) {
@@ -276,6 +281,13 @@ Result<BakedTable> load_or_bake(const Map& map, const visibility::OccluderScene&
         }
         baked = std::move(one).value();
         cell_size = grid.cell_size * 1.25f;
+        if (!baked && request.stop && request.stop()) {
+            char size[32];
+            std::snprintf(size, sizeof size, "%g", static_cast<double>(cell_size));
+            return LoadError{map.name, "",
+                             std::string("bake stopped before trying ") + size +
+                                 "-unit cells (the finer ones were over the time budget)"};
+        }
     }
     auto& table = *baked;
     if (auto problem = write_bake_file(out.file, table, out.key)) {

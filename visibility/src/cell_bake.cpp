@@ -23,6 +23,9 @@ namespace {
 constexpr float kSolidMargin = 1.0f / 64.0f;
 /// Points outside every occluder kept per open cell for witness segments.
 constexpr int kSamplesPerCell = 8;
+/// The budget's sample holds at least this many pairs per worker (or all): the CPU
+/// time counted includes the pairs still in the workers' hands.
+constexpr std::uint64_t kMinSamplePairsPerThread = 8;
 
 /// One level of the block hierarchy: level l holds blocks of 2^l cells per side.
 /// Per block: its open cells, the box of those cells, a representative point (the
@@ -378,7 +381,6 @@ void Baker::resolve(Worker& w, Node a, Node b) {
 void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
                 const BakeCheckpoints& checkpoints, const BakeBudget& budget) {
     const auto start = std::chrono::steady_clock::now();
-    const std::clock_t cpu_start = std::clock();
     const int top = config_.top_level;
     const Level& level = levels_[static_cast<std::size_t>(top)];
     std::vector<std::uint32_t> blocks;
@@ -422,33 +424,48 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
     // the pairs resolved are exactly those below `next`.
     std::atomic<bool> pause{false};
     std::vector<Worker> workers(threads);
-    // The budget's samples (0: none): worker 0 predicts the whole bake's time once the
-    // first `early_end` pairs are done, giving up when that is far over the budget (a
-    // bake many times too large wastes a tenth of the sample), and once the first
-    // `sample_end` are, giving up when it is over at all.
+    // The budget: the time of the pairs left is predicted from the first `sample_end`
+    // of them, at their pace, and over max_seconds the bake gives up. Before the sample
+    // ends it gives up as soon as the sample has cost more than its share of the
+    // budget (the prediction can then only be over), so a bake far too large costs at
+    // most sample_fraction of the budget. The worker that finishes a pair decides; one
+    // does (`decided`), and what it found is read after the workers are joined.
     const std::uint64_t left = work.count() - first;
-    const auto pairs_in = [&](double fraction) -> std::uint64_t {
-        return budget.limited() && left > 0
-                   ? first + std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::ceil(
-                                                            fraction * static_cast<double>(left))))
-                   : 0;
+    const std::uint64_t sample_end =
+        budget.limited() && left > 0
+            ? first + std::min<std::uint64_t>(
+                          left, std::max<std::uint64_t>(
+                                    kMinSamplePairsPerThread * threads,
+                                    static_cast<std::uint64_t>(std::ceil(
+                                        budget.sample_fraction * static_cast<double>(left)))))
+            : 0;
+    const unsigned hardware = std::thread::hardware_concurrency();
+    const double cores = static_cast<double>(hardware > 0 ? std::min(threads, hardware) : threads);
+    const auto cpu_now = [&] {
+        return budget.cpu_seconds ? budget.cpu_seconds()
+                                  : static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
     };
-    const std::uint64_t early_end = pairs_in(budget.sample_fraction / 10.0);
-    const std::uint64_t sample_end = pairs_in(budget.sample_fraction);
-    constexpr double kEarlyFactor = 3.0;
-    int samples_taken = 0;
+    const double cpu_start = sample_end != 0 ? cpu_now() : 0.0;
+    std::atomic<bool> decided{sample_end == 0};
     double over_budget = 0.0; // the prediction that gave up
     double predicted_seconds = 0.0;
     double sample_seconds = 0.0;
-    const auto predict = [&](std::uint64_t finished, double factor) {
-        ++samples_taken;
-        sample_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC /
-                         static_cast<double>(threads);
-        const double whole = sample_seconds * static_cast<double>(work.count()) /
-                             static_cast<double>(finished - first);
-        predicted_seconds = whole;
-        if (whole > factor * budget.max_seconds) {
-            over_budget = whole;
+    const auto judge = [&](std::uint64_t finished) {
+        if (decided.load(std::memory_order_relaxed)) {
+            return;
+        }
+        const double spent = (cpu_now() - cpu_start) / cores;
+        if (finished < sample_end && !(spent > budget.sample_fraction * budget.max_seconds)) {
+            return;
+        }
+        if (decided.exchange(true)) {
+            return; // another worker decided
+        }
+        sample_seconds = spent;
+        predicted_seconds =
+            spent * static_cast<double>(left) / static_cast<double>(finished - first);
+        if (predicted_seconds > budget.max_seconds) {
+            over_budget = predicted_seconds;
             pause.store(true);
         }
     };
@@ -472,12 +489,7 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
                 resolve(w, Node{top, i}, Node{top, j});
             }
             const std::uint64_t finished = done.fetch_add(1) + 1;
-            if (t == 0 && samples_taken == 0 && early_end != 0 && finished >= early_end) {
-                predict(finished, kEarlyFactor);
-            }
-            if (t == 0 && samples_taken == 1 && finished >= sample_end && over_budget == 0.0) {
-                predict(finished, 1.0);
-            }
+            judge(finished);
             if (t == 0 && progress) {
                 const auto now = std::chrono::steady_clock::now();
                 if (now - last_report > std::chrono::milliseconds(500)) {
@@ -531,14 +543,14 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
         if (timer.joinable()) {
             timer.join();
         }
-        if (over_budget > 0.0) {
-            throw BakeOverBudget(over_budget, sample_seconds);
-        }
         // Every pair handed out was resolved: the first min(next, count) are done.
         const std::uint64_t resolved = std::min<std::uint64_t>(next.load(), work.count());
         next.store(resolved);
         if (resolved == work.count()) {
-            break;
+            break; // done, whatever the budget said
+        }
+        if (over_budget > 0.0) {
+            throw BakeOverBudget(over_budget, sample_seconds);
         }
         checkpoints.save(BakeState{resolved, work.count(), table_.words(), counts()});
     }

@@ -80,8 +80,9 @@ struct CellBakeStats {
     std::uint64_t exact_by_level[7] = {};
     std::uint64_t hidden_by_level[7] = {};
     double seconds = 0.0;
-    /// What BakeBudget's sample predicted for the whole bake, in its units (0: no
-    /// prediction: no budget, or the bake was done before its sample).
+    /// What BakeBudget's sample predicted for the pairs this run had left (all of
+    /// them, unless it went on from a saved state), in its units (0: no prediction:
+    /// no budget).
     double predicted_seconds = 0.0;
 
     /// Adds the work counts of `other` (pair visits to proofs by level); the cell
@@ -137,18 +138,21 @@ struct BakeCheckpoints {
 };
 
 /// A bake that gives up early when it would take too long. Once `sample_fraction` of
-/// the top pairs it has left are resolved (they come in a scattered order, so they are
-/// a fair sample of the work), the bake predicts the time of all its pairs from theirs
-/// and throws BakeOverBudget when that is over `max_seconds`. The time is the process's CPU time
-/// (std::clock) over the bake's workers: what the bake takes on an otherwise quiet
-/// machine, however busy this one is, as long as nothing else in the process works.
-/// A bake that goes on from a saved state samples the pairs left and predicts the
-/// whole bake's time at their pace, as a bake from the start would.
+/// the top pairs it has left are resolved (at least 8 per worker; they come in a
+/// scattered order, so they are a fair sample of the work), the bake predicts the time
+/// of all the pairs it has left at their pace and throws BakeOverBudget when that is
+/// over `max_seconds`; it gives up sooner when the sample alone has cost more than
+/// sample_fraction of the budget. The time is CPU time over the workers (no more than
+/// the cores): what the bake takes on an otherwise quiet machine, however busy this
+/// one is, as long as nothing else in the process works. A bake that goes on from a
+/// saved state is judged by the time it has left.
 struct BakeBudget {
     /// Infinity: no budget. [Units: s of CPU per worker] [Limit: > 0]
     double max_seconds = std::numeric_limits<double>::infinity();
     /// [Limit: (0, 1]]
     double sample_fraction = 0.01;
+    /// The CPU clock read (thread-safe, seconds); empty: the process's (std::clock).
+    std::function<double()> cpu_seconds;
 
     [[nodiscard]] bool limited() const {
         return max_seconds < std::numeric_limits<double>::infinity();
@@ -160,7 +164,8 @@ struct BakeOverBudget : std::runtime_error {
     BakeOverBudget(double predicted, double spent)
         : std::runtime_error("bake_cell_visibility: the bake would take longer than its budget"),
           predicted_seconds(predicted), spent_seconds(spent) {}
-    /// The whole bake's predicted time, as BakeBudget counts it. [Units: s]
+    /// The predicted time of the pairs the bake had left, as BakeBudget counts it.
+    /// [Units: s]
     double predicted_seconds;
     /// What the sample took, as BakeBudget counts it. [Units: s]
     double spent_seconds;
