@@ -1,5 +1,7 @@
 #include "dsoc/visibility/cell_bake.hpp"
 
+#include "bake_budget_judge.hpp"
+
 #include "dsoc/visibility/reference_visibility.hpp"
 #include "dsoc/visibility/shaft_occlusion.hpp"
 #include "dsoc/visibility/shuffled_pairs.hpp"
@@ -7,9 +9,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cmath>
 #include <cstddef>
-#include <ctime>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -19,13 +19,8 @@ namespace dsoc::visibility {
 
 namespace {
 
-/// How far inside every plane each corner of a solid cell lies. [Units: world units]
-constexpr float kSolidMargin = 1.0f / 64.0f;
 /// Points outside every occluder kept per open cell for witness segments.
 constexpr int kSamplesPerCell = 8;
-/// The budget's sample holds at least this many pairs per worker (or all): the CPU
-/// time counted includes the pairs still in the workers' hands.
-constexpr std::uint64_t kMinSamplePairsPerThread = 8;
 
 /// One level of the block hierarchy: level l holds blocks of 2^l cells per side.
 /// Per block: its open cells, the box of those cells, a representative point (the
@@ -424,51 +419,7 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
     // the pairs resolved are exactly those below `next`.
     std::atomic<bool> pause{false};
     std::vector<Worker> workers(threads);
-    // The budget: the time of the pairs left is predicted from the first `sample_end`
-    // of them, at their pace, and over max_seconds the bake gives up. Before the sample
-    // ends it gives up as soon as the sample has cost more than its share of the
-    // budget (the prediction can then only be over), so a bake far too large costs at
-    // most sample_fraction of the budget. The worker that finishes a pair decides; one
-    // does (`decided`), and what it found is read after the workers are joined.
-    const std::uint64_t left = work.count() - first;
-    const std::uint64_t sample_end =
-        budget.limited() && left > 0
-            ? first + std::min<std::uint64_t>(
-                          left, std::max<std::uint64_t>(
-                                    kMinSamplePairsPerThread * threads,
-                                    static_cast<std::uint64_t>(std::ceil(
-                                        budget.sample_fraction * static_cast<double>(left)))))
-            : 0;
-    const unsigned hardware = std::thread::hardware_concurrency();
-    const double cores = static_cast<double>(hardware > 0 ? std::min(threads, hardware) : threads);
-    const auto cpu_now = [&] {
-        return budget.cpu_seconds ? budget.cpu_seconds()
-                                  : static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
-    };
-    const double cpu_start = sample_end != 0 ? cpu_now() : 0.0;
-    std::atomic<bool> decided{sample_end == 0};
-    double over_budget = 0.0; // the prediction that gave up
-    double predicted_seconds = 0.0;
-    double sample_seconds = 0.0;
-    const auto judge = [&](std::uint64_t finished) {
-        if (decided.load(std::memory_order_relaxed)) {
-            return;
-        }
-        const double spent = (cpu_now() - cpu_start) / cores;
-        if (finished < sample_end && !(spent > budget.sample_fraction * budget.max_seconds)) {
-            return;
-        }
-        if (decided.exchange(true)) {
-            return; // another worker decided
-        }
-        sample_seconds = spent;
-        predicted_seconds =
-            spent * static_cast<double>(left) / static_cast<double>(finished - first);
-        if (predicted_seconds > budget.max_seconds) {
-            over_budget = predicted_seconds;
-            pause.store(true);
-        }
-    };
+    BakeBudgetJudge judge(budget, first, work.count(), threads);
     const auto body = [&](unsigned t) {
         Worker& w = workers[t];
         auto last_report = std::chrono::steady_clock::now();
@@ -489,7 +440,9 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
                 resolve(w, Node{top, i}, Node{top, j});
             }
             const std::uint64_t finished = done.fetch_add(1) + 1;
-            judge(finished);
+            if (judge.over_budget_after(finished)) {
+                pause.store(true);
+            }
             if (t == 0 && progress) {
                 const auto now = std::chrono::steady_clock::now();
                 if (now - last_report > std::chrono::milliseconds(500)) {
@@ -549,32 +502,18 @@ void Baker::run(CellBakeStats& stats, const BakeProgress& progress,
         if (resolved == work.count()) {
             break; // done, whatever the budget said
         }
-        if (over_budget > 0.0) {
-            throw BakeOverBudget(over_budget, sample_seconds);
+        if (judge.over_budget()) {
+            throw BakeOverBudget(judge.predicted_seconds(), judge.sample_seconds());
         }
         checkpoints.save(BakeState{resolved, work.count(), table_.words(), counts()});
     }
     const CellBakeStats all = counts();
     stats.add_work(all);
     stats.seconds = all.seconds;
-    stats.predicted_seconds = predicted_seconds;
+    stats.predicted_seconds = judge.predicted_seconds();
     if (progress) {
         progress(1.0, stats.seconds);
     }
-}
-
-bool inside_interior(const OccluderWorld& world, OccluderId id, const Aabb& box) {
-    for (const Plane& p : world.solid_planes(id)) {
-        for (int k = 0; k < 8; ++k) {
-            const glm::vec3 corner{(k & 1) != 0 ? box.max.x : box.min.x,
-                                   (k & 2) != 0 ? box.max.y : box.min.y,
-                                   (k & 4) != 0 ? box.max.z : box.min.z};
-            if (p.signed_distance(corner) > -kSolidMargin) {
-                return false;
-            }
-        }
-    }
-    return true;
 }
 
 } // namespace
@@ -600,47 +539,6 @@ std::vector<std::string> validate(const CellBakeConfig& c) {
         problems.push_back("witness_stop_level must be within 0..3");
     }
     return problems;
-}
-
-std::vector<std::uint32_t> open_cells_of(const OccluderScene& scene, const CellGrid& grid,
-                                         const BakePruner* pruner) {
-    std::vector<std::uint32_t> open;
-    OccluderGrid::Scratch scratch;
-    const auto n = static_cast<std::uint32_t>(grid.cell_count());
-    for (std::uint32_t i = 0; i < n; ++i) {
-        const Aabb box = grid.cell_box(grid.coords(i));
-        bool solid = pruner != nullptr && pruner->empty_space(box);
-        if (!solid && scene.grid != nullptr) {
-            scene.grid->query(box, scratch);
-            for (const OccluderId id : scratch.found) {
-                if (scene.world.occluder(id).bounds().contains(box) &&
-                    inside_interior(scene.world, id, box)) {
-                    solid = true;
-                    break;
-                }
-            }
-        }
-        if (!solid) {
-            open.push_back(i);
-        }
-    }
-    return open;
-}
-
-std::pair<std::vector<std::uint32_t>, std::vector<std::uint32_t>>
-split_covered(std::vector<std::uint32_t> open, std::span<const std::uint8_t> covered) {
-    if (covered.empty()) {
-        return {std::move(open), {}};
-    }
-    std::vector<std::uint32_t> uncovered;
-    std::erase_if(open, [&](std::uint32_t c) {
-        if (c < covered.size() && covered[c] != 0) {
-            return false;
-        }
-        uncovered.push_back(c);
-        return true;
-    });
-    return {std::move(open), std::move(uncovered)};
 }
 
 CellVisibilityTable bake_cell_visibility(const OccluderScene& scene, const CellGrid& grid,
