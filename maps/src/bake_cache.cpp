@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 
 namespace dsoc::maps {
 
@@ -15,6 +16,7 @@ namespace {
 /// Thrown by a save when the request's stop() says so: ends the bake between pairs.
 struct BakeStopped {
     double fraction;
+    bool saved; ///< the partial file was written
 };
 
 std::string file_stem(const std::string& name) {
@@ -136,16 +138,27 @@ bake_one_grid(const Map& map, const visibility::OccluderScene& scene,
     }
     visibility::BakeState resume;
     visibility::BakeCheckpoints checkpoints;
-    if (request.checkpoint_seconds > 0.0) {
-        checkpoints.interval_seconds = request.checkpoint_seconds;
+    // A stop ends the bake between pairs even when nothing is saved (no checkpoints,
+    // or a partial file that cannot be written).
+    if (request.checkpoint_seconds > 0.0 || request.stop) {
+        checkpoints.interval_seconds = request.checkpoint_seconds > 0.0
+                                           ? request.checkpoint_seconds
+                                           : std::numeric_limits<double>::infinity();
         checkpoints.save_now = request.stop;
         checkpoints.save = [&](const visibility::BakeState& state) {
-            if (auto problem = write_partial_file(partial_file, state, out.key)) {
-                out.write_problem = *problem;
-            } else if (request.stop && request.stop()) {
+            bool saved = false;
+            if (request.checkpoint_seconds > 0.0) {
+                if (auto problem = write_partial_file(partial_file, state, out.key)) {
+                    out.write_problem = *problem;
+                } else {
+                    saved = true;
+                }
+            }
+            if (request.stop && request.stop()) {
                 throw BakeStopped{state.pairs_total > 0 ? static_cast<double>(state.pairs_done) /
                                                               static_cast<double>(state.pairs_total)
-                                                        : 0.0};
+                                                        : 0.0,
+                                  saved};
             }
         };
     }
@@ -183,8 +196,12 @@ bake_one_grid(const Map& map, const visibility::OccluderScene& scene,
         char done[32];
         std::snprintf(done, sizeof done, "%.1f%%", 100.0 * stopped.fraction);
         return LoadError{map.name, "",
-                         std::string("bake stopped at ") + done + "; " + partial_file.string() +
-                             " goes on from there next time"};
+                         std::string("bake stopped at ") + done + "; " +
+                             (stopped.saved
+                                  ? partial_file.string() + " goes on from there next time"
+                              : request.checkpoint_seconds > 0.0
+                                  ? "nothing kept: " + out.write_problem
+                                  : std::string("nothing kept (checkpoint_seconds is 0)"))};
     } catch (const visibility::BakeOverBudget& over) {
         // A state this bake saved holds no more than its sample: of no use. One it
         // went on from is kept (a later bake with a larger budget may finish it).

@@ -175,6 +175,18 @@ TEST_F(PartialBakeFile, AStopAsksForASaveAtOnceAndTheNextBakeGoesOnFromIt) {
     EXPECT_TRUE(*went_on->table == *fresh().table);
 }
 
+TEST_F(PartialBakeFile, AStopEndsABakeThatSavesNothingAndSaysSo) {
+    BakeRequest r = request(dir_);
+    r.checkpoint_seconds = 0.0; // no partial file
+    r.stop = [] { return true; };
+    const auto stopped = load_or_bake(corridor(), corridor_scene(), r);
+    ASSERT_FALSE(stopped.ok()); // not baked to the end regardless
+    EXPECT_NE(stopped.error().message().find("nothing kept (checkpoint_seconds is 0)"),
+              std::string::npos)
+        << stopped.error().message();
+    EXPECT_TRUE(fs::is_empty(dir_));
+}
+
 TEST_F(PartialBakeFile, ADamagedPartialFileIsRefusedInOneLineAndTheBakeStartsOver) {
     const auto expected = fresh();
     const fs::path partial = stopped_bake();
