@@ -59,6 +59,12 @@ static std::unique_ptr<PvsBakePruner> pvs_pruner(const Map& map) {
     return nullptr;
 }
 
+/// The coarsest grid a bake may use: the first whose cells are past 1024 units. It is
+/// baked whatever it costs (no memory or time budget applies to it).
+static bool is_last_grid(float cell_size) {
+    return cell_size > 1024.0f;
+}
+
 /// The grids a bake may use, finest first: cells grow by 1.25x from `cell_size`;
 /// grids of too many cells to even look at are skipped; the first past 1024 units is
 /// the last. Calls `take(grid, last)` until it returns true; returns that grid.
@@ -67,7 +73,7 @@ visibility::CellGrid first_grid(const Map& map, float cell_size, Take take) {
     for (;; cell_size *= 1.25f) {
         const auto grid =
             visibility::CellGrid::covering(map.bounds.expanded(kBakeGridMargin), cell_size);
-        const bool last = cell_size > 1024.0f;
+        const bool last = is_last_grid(cell_size);
         if (grid.cell_count() > kMaxBakeGridCells && !last) {
             continue;
         }
@@ -170,7 +176,7 @@ bake_one_grid(const Map& map, const visibility::OccluderScene& scene,
                                                       : 0.0;
     }
     visibility::BakeBudget budget;
-    if (grid.cell_size <= 1024.0f) { // not the last grid
+    if (!is_last_grid(grid.cell_size)) {
         budget.max_seconds = request.max_bake_seconds;
         budget.sample_fraction = request.budget_sample_fraction;
         budget.cpu_seconds = request.budget_clock;
