@@ -137,7 +137,11 @@ void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
     dsoc::cli::add_setting(app, "--udp-timeout-ms", config.udp_timeout_ms,
                            "Disconnect a UDP client from which nothing arrived this long [ms]");
     dsoc::cli::add_setting(app, "--udp-handshake-rate", config.udp_handshake_rate,
-                           "UDP handshake datagrams one source address may send per second [1/s]");
+                           "UDP responses with a valid cookie one source address may send per "
+                           "second [1/s]");
+    dsoc::cli::add_setting(app, "--udp-challenge-rate", config.udp_challenge_rate,
+                           "UDP requests the server answers with a challenge per second, all "
+                           "sources together [1/s]");
     dsoc::cli::add_setting(app, "--heap-metrics", config.heap_metrics,
                            "/metrics also reads glibc malloc's live and free bytes (a "
                            "diagnosis: each scrape stalls allocation; jemalloc's are always "

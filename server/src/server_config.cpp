@@ -87,6 +87,7 @@ std::vector<std::string> validate(const ServerConfig& c) {
     check(p, c.handshake_timeout_ms > 0, "handshake_timeout_ms", "must be > 0");
     check_range(p, "udp_timeout_ms", c.udp_timeout_ms, 500, 60000, " ms");
     check_range(p, "udp_handshake_rate", c.udp_handshake_rate, 1, 1000000, " per second");
+    check_range(p, "udp_challenge_rate", c.udp_challenge_rate, 1, 1000000, " per second");
     check(p, c.threads >= 0 && c.threads <= 256, "threads",
           "must be 0 (one per core)..256, got " + std::to_string(c.threads));
     for (auto& problem : protocol::validate(quantization(c))) {

@@ -32,6 +32,8 @@ const char* udp_drop_name(UdpDrop drop) noexcept {
         return "forged_cookie";
     case UdpDrop::expired_cookie:
         return "expired_cookie";
+    case UdpDrop::over_challenge_rate:
+        return "over_challenge_rate";
     case UdpDrop::count_:
         break;
     }

@@ -38,22 +38,24 @@ std::uint64_t cookie_now_ms() {
                                           .count());
 }
 
-/// Whose handshake budget a source spends: an IPv4 address, or an IPv6 /64 (one host
-/// holds a whole /64; keyed by the /128 it could spend as many budgets as it likes).
-std::uint64_t budget_key(const asio::ip::udp::endpoint& peer) {
+} // namespace
+
+BudgetKey budget_key(const asio::ip::udp::endpoint& peer) {
     const asio::ip::address a = peer.address();
     if (a.is_v4()) {
-        return a.to_v4().to_uint();
+        return {a.to_v4().to_uint(), false};
     }
-    const auto bytes = a.to_v6().to_bytes();
-    std::uint64_t key = 0;
+    const asio::ip::address_v6 v6 = a.to_v6();
+    if (v6.is_v4_mapped()) { // an IPv4 sender on a dual-stack socket
+        return {asio::ip::make_address_v4(asio::ip::v4_mapped, v6).to_uint(), false};
+    }
+    const auto bytes = v6.to_bytes();
+    std::uint64_t prefix = 0;
     for (std::size_t i = 0; i < 8; ++i) {
-        key = (key << 8) | bytes[i];
+        prefix = (prefix << 8) | bytes[i];
     }
-    return key | (std::uint64_t{1} << 63) | (std::uint64_t{1} << 32); // never an IPv4 key
+    return {prefix, true};
 }
-
-} // namespace
 
 protocol::SourceAddress source_address(const asio::ip::udp::endpoint& peer) {
     protocol::SourceAddress out;
@@ -68,7 +70,8 @@ UdpEndpoint::UdpEndpoint(asio::io_context& io, const ServerConfig& config, Conne
                          std::function<std::uint32_t()> next_client_id, OpenConnection open)
     : config_(config), host_(host), next_client_id_(std::move(next_client_id)),
       open_(std::move(open)), socket_(io), sweep_timer_(io),
-      cookie_key_(protocol::generate_token_key()) {}
+      cookie_key_(protocol::generate_token_key()),
+      challenge_budget_{static_cast<double>(config.udp_challenge_rate), Clock::now()} {}
 
 std::uint16_t UdpEndpoint::start(const std::string& address, std::uint16_t port) {
     const asio::ip::udp::endpoint endpoint(asio::ip::make_address(address), port);
@@ -166,17 +169,7 @@ void UdpEndpoint::on_datagram(std::size_t bytes) {
     }
 }
 
-bool UdpEndpoint::within_handshake_budget(Clock::time_point now) {
-    const auto rate = static_cast<double>(config_.udp_handshake_rate); // and the burst
-    const std::uint64_t key = budget_key(sender_);
-    auto it = budgets_.find(key);
-    if (it == budgets_.end()) {
-        if (budgets_.size() >= kMaxBudgets) {
-            return false; // every remembered source is spending: none new until a sweep
-        }
-        it = budgets_.emplace(key, Budget{rate, now}).first;
-    }
-    Budget& b = it->second;
+bool UdpEndpoint::spend(Budget& b, double rate, Clock::time_point now) {
     b.tokens =
         std::min(rate, b.tokens + std::chrono::duration<double>(now - b.refilled).count() * rate);
     b.refilled = now;
@@ -185,6 +178,19 @@ bool UdpEndpoint::within_handshake_budget(Clock::time_point now) {
     }
     b.tokens -= 1;
     return true;
+}
+
+bool UdpEndpoint::within_handshake_budget(Clock::time_point now) {
+    const auto rate = static_cast<double>(config_.udp_handshake_rate); // and the burst
+    const BudgetKey key = budget_key(sender_);
+    auto it = budgets_.find(key);
+    if (it == budgets_.end()) {
+        if (budgets_.size() >= kMaxBudgets) {
+            return false; // every remembered source is spending: none new until a sweep
+        }
+        it = budgets_.emplace(key, Budget{rate, now}).first;
+    }
+    return spend(it->second, rate, now);
 }
 
 bool UdpEndpoint::read_handshake(DatagramKind kind, std::span<const std::uint8_t> body,
@@ -204,8 +210,11 @@ void UdpEndpoint::on_request(std::uint64_t nonce, std::span<const std::uint8_t> 
     if (!read_handshake(DatagramKind::request, body, cookie, hello)) {
         return;
     }
-    if (!within_handshake_budget(Clock::now())) {
-        drop(UdpDrop::rate_limited);
+    // Not the sender's budget: a request proves nothing of its source address, and a
+    // spoofer's requests must not lock that address out. The answers of all sources
+    // together are capped instead.
+    if (!spend(challenge_budget_, static_cast<double>(config_.udp_challenge_rate), Clock::now())) {
+        drop(UdpDrop::over_challenge_rate);
         return;
     }
     const protocol::ChallengeCookie made = protocol::make_challenge_cookie(

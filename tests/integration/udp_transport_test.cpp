@@ -438,9 +438,9 @@ TEST(UdpTransport, AHelloTheServerRefusesIsAnsweredWithTheReasonInTheAcceptedDat
     EXPECT_EQ(server.stats().disconnects.at("unauthorized"), 1u);
 }
 
-TEST(UdpTransport, HandshakesBeyondASourcesRateAreDroppedUnanswered) {
+TEST(UdpTransport, RequestsBeyondTheServersChallengeRateAreDroppedUnanswered) {
     auto c = udp_config();
-    c.udp_handshake_rate = 3;
+    c.udp_challenge_rate = 3;
     testing::RunningServer server(c);
     RawUdp raw(server.port());
     pb::Envelope hello;
@@ -456,9 +456,84 @@ TEST(UdpTransport, HandshakesBeyondASourcesRateAreDroppedUnanswered) {
     }
     server.stop();
     // A burst of one second's worth (3) is answered; the refill in the few milliseconds
-    // the burst takes is well under one more.
+    // the burst takes is well under one more. No source's budget is spent.
     EXPECT_EQ(challenges, 3);
+    EXPECT_EQ(drops(server, UdpDrop::over_challenge_rate), 7u);
+    EXPECT_EQ(drops(server, UdpDrop::rate_limited), 0u);
+}
+
+TEST(UdpTransport, RequestsFromAnAddressDoNotSpendItsBudgetSoASpooferCannotLockItOut) {
+    // A spoofer sends requests with the victim's source address (here: from the same
+    // IPv4 address, another port). They prove nothing of the address, so they spend none
+    // of its budget, and the victim still connects.
+    auto c = udp_config();
+    c.udp_handshake_rate = 3;
+    testing::RunningServer server(c);
+    RawUdp spoofer(server.port());
+    pb::Envelope hello;
+    hello.mutable_client_hello()->set_protocol_version(protocol::kProtocolVersion);
+    for (std::uint64_t nonce = 1; nonce <= 40; ++nonce) {
+        std::vector<std::uint8_t> request;
+        ASSERT_TRUE(protocol::write_request(nonce, hello, request));
+        spoofer.send(request);
+    }
+    while (spoofer.receive_kind(DatagramKind::challenge, std::chrono::milliseconds(200))) {
+    }
+    RawUdp victim(server.port());
+    EXPECT_NE(victim.handshake(77), 0u);
+    server.stop();
+    EXPECT_EQ(server.udp_endpoint()->challenges_sent(), 41u);
+    EXPECT_EQ(drops(server, UdpDrop::rate_limited), 0u);
+}
+
+TEST(UdpTransport, ResponsesWithAValidCookieBeyondASourcesRateAreDroppedUnanswered) {
+    auto c = udp_config();
+    c.udp_handshake_rate = 3;
+    testing::RunningServer server(c);
+    RawUdp raw(server.port());
+    const pb::Envelope hello = RawUdp::plain_hello();
+    std::vector<std::vector<std::uint8_t>> responses;
+    for (std::uint64_t nonce = 1; nonce <= 10; ++nonce) {
+        std::vector<std::uint8_t> request;
+        ASSERT_TRUE(protocol::write_request(nonce, hello, request));
+        raw.send(request);
+        const auto challenge = raw.receive_kind(DatagramKind::challenge, std::chrono::seconds(2));
+        ASSERT_TRUE(challenge);
+        protocol::DatagramHeader h;
+        std::span<const std::uint8_t> cookie;
+        ASSERT_EQ(protocol::read_datagram(*challenge, h, cookie), protocol::DatagramError::none);
+        ASSERT_TRUE(protocol::write_response(nonce, cookie, hello, responses.emplace_back()));
+    }
+    for (const auto& response : responses) {
+        raw.send(response);
+    }
+    int accepted = 0;
+    while (raw.receive_kind(DatagramKind::accepted, std::chrono::milliseconds(500))) {
+        ++accepted;
+    }
+    server.stop();
+    EXPECT_EQ(accepted, 3);
     EXPECT_EQ(drops(server, UdpDrop::rate_limited), 7u);
+    EXPECT_EQ(drops(server, UdpDrop::over_challenge_rate), 0u);
+}
+
+TEST(UdpBudgetKey, AnIpv4SenderOnADualStackSocketSpendsItsOwnAddressesBudget) {
+    const auto at = [](const char* address) {
+        return server::budget_key({asio::ip::make_address(address), 5000});
+    };
+    // As it arrives on an IPv4 socket and as a dual-stack (::) socket reports it.
+    EXPECT_EQ(at("192.0.2.7"), at("::ffff:192.0.2.7"));
+    EXPECT_NE(at("::ffff:192.0.2.7"), at("::ffff:192.0.2.8"));
+    EXPECT_FALSE(at("::ffff:192.0.2.7").v6);
+    // An IPv6 /64 is one source, whatever its last 64 bits; the /64s apart in any bit
+    // of their prefix are two.
+    EXPECT_EQ(at("2001:db8:1:2::1"), at("2001:db8:1:2:ffff:ffff:ffff:ffff"));
+    EXPECT_NE(at("2001:db8:1:2::1"), at("2001:db8:1:3::1"));    // the prefix's last bit
+    EXPECT_NE(at("2001:db8:0:2::1"), at("2001:db8:8000:2::1")); // its 33rd bit
+    EXPECT_NE(at("2001:db8:1:2::1"), at("a001:db8:1:2::1"));    // its first bit
+    // An IPv6 prefix whose bits are an IPv4 address's is another source.
+    EXPECT_NE(at("::c000:207"), at("192.0.2.7"));
+    EXPECT_NE(at("0:0:c000:207::"), at("192.0.2.7"));
 }
 
 } // namespace

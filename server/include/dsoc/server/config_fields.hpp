@@ -54,6 +54,7 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("udp", config.udp);
     visit("udp_timeout_ms", config.udp_timeout_ms);
     visit("udp_handshake_rate", config.udp_handshake_rate);
+    visit("udp_challenge_rate", config.udp_challenge_rate);
     visit("heap_metrics", config.heap_metrics);
     visit("slow_client_timeout_ms", config.slow_client_timeout_ms);
     visit("socket_send_buffer_bytes", config.socket_send_buffer_bytes);

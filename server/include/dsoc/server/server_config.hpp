@@ -50,12 +50,19 @@ struct ServerConfig {
     /// A UDP client from which nothing arrived for this long is disconnected with
     /// timed_out. [Units: ms] [Limit: 500..60000]
     int udp_timeout_ms = 5000;
-    /// UDP handshake datagrams (requests, and responses with a valid cookie) one source
-    /// address (an IPv6 /64) may send per second, with a burst of one second's worth;
-    /// beyond it they are dropped unanswered (rate_limited). One address can hold many
-    /// honest clients (a NAT, a load generator): each sends two to connect, and retries
-    /// every 250 ms while it waits. [Units: 1/s] [Limit: 1..1000000]
+    /// UDP responses with a valid cookie (an address proven to be the sender's) one
+    /// source address (an IPv4 address, or an IPv6 /64) may send per second, with a burst
+    /// of one second's worth; beyond it they are dropped unanswered (rate_limited). One
+    /// address can hold many honest clients (a NAT, a load generator): each sends one to
+    /// connect, and again every 250 ms while it waits. [Units: 1/s] [Limit: 1..1000000]
     int udp_handshake_rate = 100;
+    /// UDP requests the server answers with a challenge per second, from all sources
+    /// together, with a burst of one second's worth; beyond it they are dropped unanswered
+    /// (over_challenge_rate). A request proves nothing of its source address (it may be
+    /// spoofed), so it spends no address's budget (a spoofer would lock that address
+    /// out): this cap bounds the CPU the answers take, one HMAC and a 42-byte datagram
+    /// each. [Units: 1/s] [Limit: 1..1000000]
+    int udp_challenge_rate = 10000;
     /// /metrics also gives dsoc_heap_in_use_bytes and dsoc_heap_free_bytes on glibc's
     /// malloc (mallinfo2, heap_stats.hpp): a diagnosis of resident memory that grows, off
     /// by default because each scrape walks the allocator's free chunks under its locks.

@@ -12,20 +12,21 @@
 namespace dsoc::server {
 
 enum class UdpDrop : std::uint8_t {
-    truncated,       ///< shorter than its header or body says
-    oversized,       ///< longer than protocol::kMaxDatagramBytes
-    not_dsoc,        ///< not our protocol id
-    wrong_version,   ///< another datagram format version
-    unknown_kind,    ///< a kind byte this build does not know
-    bad_body,        ///< a body that does not parse (a length, a count, padding, a message)
-    unexpected_kind, ///< a kind the server never receives (challenge, accepted, snapshot)
-    unknown_session, ///< names no open session, nor one closed in the last 10 s
-    closed_session,  ///< names a session closed in the last 10 s (a late or repeated goodbye)
-    wrong_source,    ///< a session's datagram from another address than its own
-    replayed,        ///< a sequence number taken before, or far too old
-    rate_limited,    ///< a handshake datagram over its source address's budget
-    forged_cookie,   ///< a response whose cookie this server did not make for its sender
-    expired_cookie,  ///< a response whose cookie is too old
+    truncated,           ///< shorter than its header or body says
+    oversized,           ///< longer than protocol::kMaxDatagramBytes
+    not_dsoc,            ///< not our protocol id
+    wrong_version,       ///< another datagram format version
+    unknown_kind,        ///< a kind byte this build does not know
+    bad_body,            ///< a body that does not parse (a length, a count, padding, a message)
+    unexpected_kind,     ///< a kind the server never receives (challenge, accepted, snapshot)
+    unknown_session,     ///< names no open session, nor one closed in the last 10 s
+    closed_session,      ///< names a session closed in the last 10 s (a late or repeated goodbye)
+    wrong_source,        ///< a session's datagram from another address than its own
+    replayed,            ///< a sequence number taken before, or far too old
+    rate_limited,        ///< a response with a valid cookie over its source address's budget
+    forged_cookie,       ///< a response whose cookie this server did not make for its sender
+    expired_cookie,      ///< a response whose cookie is too old
+    over_challenge_rate, ///< a request beyond the challenges the server answers a second
     count_,
 };
 

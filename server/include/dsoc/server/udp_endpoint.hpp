@@ -9,8 +9,9 @@
 // - response with that cookie and the hello -> a UdpConnection, its hello checked by the
 //   host as over TCP (version, token, one connection per token client id), and the
 //   accepted datagram with the session id.
-// Requests, and responses with a valid cookie, are rate-limited per source address (an
-// IPv6 /64). After it, a datagram reaches
+// Responses with a valid cookie are rate-limited per source address (an IPv4 address, or
+// an IPv6 /64); requests, which prove nothing of their source, only by the challenges
+// the server answers a second in all. After it, a datagram reaches
 // its connection only from the connection's own address, with its session id and a
 // sequence number not taken before. Everything else is dropped and counted by reason
 // (udp_drop.hpp); nothing a datagram holds can end another client's session.
@@ -33,6 +34,21 @@
 #include <unordered_map>
 
 namespace dsoc::server {
+
+/// Whose handshake budget a source spends: an IPv4 address, also one that reaches a
+/// dual-stack socket as ::ffff:a.b.c.d, or an IPv6 /64 (one host holds a whole /64;
+/// keyed by the /128 it could spend as many budgets as it likes).
+struct BudgetKey {
+    std::uint64_t bits = 0; ///< the IPv4 address, or the IPv6 address's first 64 bits
+    bool v6 = false;
+    friend bool operator==(const BudgetKey&, const BudgetKey&) = default;
+};
+struct BudgetKeyHash {
+    std::size_t operator()(const BudgetKey& k) const noexcept {
+        return std::hash<std::uint64_t>{}(k.bits) ^ static_cast<std::size_t>(k.v6);
+    }
+};
+[[nodiscard]] BudgetKey budget_key(const boost::asio::ip::udp::endpoint& peer);
 
 class UdpEndpoint {
 public:
@@ -74,14 +90,17 @@ private:
                                       std::span<const std::uint8_t> body,
                                       std::span<const std::uint8_t>& cookie,
                                       std::span<const std::uint8_t>& hello);
-    [[nodiscard]] bool within_handshake_budget(Clock::time_point now);
-    void sweep();
-    void drop(UdpDrop reason) { ++drops_[static_cast<std::size_t>(reason)]; }
-
     struct Budget {
         double tokens = 0;
         Clock::time_point refilled;
     };
+    /// Takes one token from `b`, refilled at `rate` a second up to `rate` (a burst of
+    /// one second's worth) since it was last; false when it has none.
+    static bool spend(Budget& b, double rate, Clock::time_point now);
+    /// spend() from the sender's budget (budget_key).
+    [[nodiscard]] bool within_handshake_budget(Clock::time_point now);
+    void sweep();
+    void drop(UdpDrop reason) { ++drops_[static_cast<std::size_t>(reason)]; }
 
     const ServerConfig& config_;
     ConnectionHost& host_;
@@ -99,7 +118,8 @@ private:
     /// Sessions closed lately, and when: their late datagrams are closed_session, not
     /// unknown_session (a client's goodbye goes twice; snapshots' inputs cross it).
     std::unordered_map<std::uint64_t, Clock::time_point> recently_closed_;
-    std::unordered_map<std::uint64_t, Budget> budgets_; ///< by source (budget_key)
+    std::unordered_map<BudgetKey, Budget, BudgetKeyHash> budgets_; ///< by source
+    Budget challenge_budget_; ///< every source's requests (udp_challenge_rate)
     /// Nonces of sessions closed lately: their responses never open a new session.
     std::unordered_map<std::uint64_t, Clock::time_point> closed_nonces_;
     UdpDropCounts drops_{};
