@@ -291,9 +291,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                 body.size() == datagram.size() - kDatagramHeaderBytes);
 
         const std::uint32_t s = header.sequence;
-        const bool fresh = s != 0 && taken.count(s) == 0 &&
-                           (s > newest ? newest == 0 || s - newest <= ReplayWindow::kMaxSequenceJump
-                                       : newest - s < 64);
+        const bool fresh =
+            s != 0 && taken.count(s) == 0 &&
+            (s > newest ? s - newest <= ReplayWindow::kMaxSequenceJump : newest - s < 64);
         require(window.accept(s) == fresh);
         if (fresh) {
             taken.insert(s);

@@ -333,7 +333,7 @@ bool ReplayWindow::accept(std::uint32_t sequence) {
     }
     if (sequence > newest_) {
         const std::uint32_t shift = sequence - newest_;
-        if (newest_ != 0 && shift > kMaxSequenceJump) {
+        if (shift > kMaxSequenceJump) { // the first too: newest_ counts as 0 before it
             return false;
         }
         seen_ = shift >= 64 ? 0 : seen_ << shift;

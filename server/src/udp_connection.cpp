@@ -231,14 +231,15 @@ bool UdpConnection::receive(DatagramKind kind, std::span<const std::uint8_t> bod
     if (kind == DatagramKind::message) {
         return handle_message(body);
     }
+    // The rate cap counts datagrams (an honest client sends one a tick), whatever they
+    // hold: redundant inputs already taken and bodies that do not parse cost a token too,
+    // so the token is taken before the body is read.
+    if (!admit_message()) {
+        return true;
+    }
     protocol::InputBody inputs;
     if (protocol::read_input_body(body, inputs) != protocol::DatagramError::none) {
         return false;
-    }
-    // The rate cap counts datagrams (an honest client sends one a tick), whatever they
-    // hold: redundant inputs already taken and bodies that do not parse cost a token too.
-    if (!admit_message()) {
-        return true;
     }
     // Only an acknowledgement of a snapshot the kernel took whole counts: another one
     // would make the server code against a frame the client does not hold.

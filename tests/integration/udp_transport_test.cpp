@@ -299,16 +299,10 @@ TEST(UdpTransport, HostileDatagramsAreDroppedByReasonWhileClientsKeepTheirSnapsh
     EXPECT_EQ(drops(server, UdpDrop::rate_limited), 0u);
 }
 
-TEST(UdpTransport, ASilentClientIsTimedOutWithAReason) {
-    auto c = udp_config();
-    c.udp_timeout_ms = 600;
-    testing::RunningServer server(c);
-    RawUdp raw(server.port());
-    const std::uint64_t session = raw.handshake(80);
-    ASSERT_NE(session, 0u);
+/// The Disconnect the server sends `raw` within `timeout`, if any (other datagrams skipped).
+std::optional<pb::Disconnect> disconnect_within(RawUdp& raw, std::chrono::milliseconds timeout) {
     const auto start = std::chrono::steady_clock::now();
-    std::optional<pb::Disconnect> disconnect;
-    while (!disconnect && std::chrono::steady_clock::now() - start < std::chrono::seconds(3)) {
+    while (std::chrono::steady_clock::now() - start < timeout) {
         const auto d = raw.receive_kind(DatagramKind::message, std::chrono::milliseconds(500));
         protocol::DatagramHeader h;
         std::span<const std::uint8_t> body;
@@ -316,13 +310,45 @@ TEST(UdpTransport, ASilentClientIsTimedOutWithAReason) {
         if (d && protocol::read_datagram(*d, h, body) == protocol::DatagramError::none &&
             protocol::decode_payload(body, message) == protocol::DecodeError::none &&
             message.has_disconnect()) {
-            disconnect = message.disconnect();
+            return message.disconnect();
         }
     }
+    return std::nullopt;
+}
+
+TEST(UdpTransport, ASilentClientIsTimedOutWithAReason) {
+    auto c = udp_config();
+    c.udp_timeout_ms = 600;
+    testing::RunningServer server(c);
+    RawUdp raw(server.port());
+    const std::uint64_t session = raw.handshake(80);
+    ASSERT_NE(session, 0u);
+    const auto disconnect = disconnect_within(raw, std::chrono::seconds(3));
     server.stop();
     ASSERT_TRUE(disconnect.has_value());
     EXPECT_EQ(disconnect->reason(), pb::DISCONNECT_REASON_TIMED_OUT) << disconnect->text();
     EXPECT_EQ(server.stats().disconnects.at("timed_out"), 1u);
+}
+
+TEST(UdpTransport, InputDatagramsWhoseBodiesDoNotParseCountTowardTheRateCap) {
+    // Every datagram costs a token of max_inputs_per_second, whatever its body: a flood of
+    // well-formed datagrams whose input bodies do not parse ends the session as any flood.
+    auto c = udp_config();
+    testing::RunningServer server(c);
+    RawUdp raw(server.port());
+    const std::uint64_t session = raw.handshake(83);
+    ASSERT_NE(session, 0u);
+    for (std::uint32_t sequence = 1; sequence <= 1000; ++sequence) {
+        std::vector<std::uint8_t> datagram = input_datagram(session, sequence);
+        datagram.push_back(0); // a byte past its inputs: bad_body
+        raw.send(datagram);
+    }
+    const auto disconnect = disconnect_within(raw, std::chrono::seconds(3));
+    server.stop();
+    ASSERT_TRUE(disconnect.has_value());
+    EXPECT_EQ(disconnect->reason(), pb::DISCONNECT_REASON_INPUT_FLOOD) << disconnect->text();
+    EXPECT_EQ(server.stats().disconnects.at("input_flood"), 1u);
+    EXPECT_GT(drops(server, UdpDrop::bad_body), 0u);
 }
 
 TEST(UdpTransport, AClientThatFallsBehindGetsFewerSnapshotsUntilItAcknowledges) {

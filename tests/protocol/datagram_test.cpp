@@ -800,16 +800,41 @@ TEST(ReplayWindow, RemembersTheLast64AndForgetsAllBehindAJumpOf64) {
 
 TEST(ReplayWindow, RefusesAJumpFurtherAheadThanAnHonestSenderSkips) {
     ReplayWindow window;
-    EXPECT_TRUE(window.accept(100)); // the first may be anything
+    EXPECT_TRUE(window.accept(100)); // the first counts from 0
     EXPECT_FALSE(window.accept(100 + ReplayWindow::kMaxSequenceJump + 1));
     EXPECT_FALSE(window.accept(0xffffffffu)); // a forged top would lock the sender out
     EXPECT_EQ(window.newest(), 100u);
     EXPECT_TRUE(window.accept(100 + ReplayWindow::kMaxSequenceJump));
 }
 
+TEST(ReplayWindow, TheFirstSequenceIsAJumpFromZeroSoAForgedFirstCannotLockTheSenderOut) {
+    ReplayWindow forged;
+    EXPECT_FALSE(forged.accept(0xfffffff0u)); // a session's first datagram, forged
+    EXPECT_FALSE(forged.accept(ReplayWindow::kMaxSequenceJump + 1));
+    EXPECT_EQ(forged.newest(), 0u);
+    EXPECT_TRUE(forged.accept(1)); // the sender's own first still counts
+    ReplayWindow far;
+    EXPECT_TRUE(far.accept(ReplayWindow::kMaxSequenceJump)); // as far as the rule goes
+}
+
+/// `window` moved on to `sequence` in the largest steps it takes; `taken` (if any) gets
+/// the sequences it took.
+void climb_to(ReplayWindow& window, std::uint32_t sequence,
+              std::set<std::uint32_t>* taken = nullptr) {
+    while (window.newest() < sequence) {
+        const std::uint32_t left = sequence - window.newest();
+        const std::uint32_t next = window.newest() + std::min(left, ReplayWindow::kMaxSequenceJump);
+        ASSERT_TRUE(window.accept(next));
+        if (taken != nullptr) {
+            taken->insert(next);
+        }
+    }
+}
+
 TEST(ReplayWindow, WorksAtTheTopOfTheSequenceRange) {
     constexpr std::uint32_t kTop = 0xffffffffu;
     ReplayWindow window;
+    climb_to(window, kTop - 2);
     EXPECT_TRUE(window.accept(kTop - 1));
     EXPECT_TRUE(window.accept(kTop));
     EXPECT_FALSE(window.accept(kTop));
@@ -822,7 +847,8 @@ TEST(ReplayWindow, WorksAtTheTopOfTheSequenceRange) {
 
 TEST(ReplayWindow, AgreesWithASetOfEverySequenceTaken) {
     // The contract: accept s iff s != 0, s was never accepted, and s is less than 64
-    // behind the newest or newer by at most kMaxSequenceJump (anything, before the first).
+    // behind the newest or newer by at most kMaxSequenceJump (the newest counting as 0
+    // before the first).
     constexpr std::int64_t kTop = 0xffffffff;
     std::size_t accepted = 0;
     std::size_t refused = 0;
@@ -838,7 +864,8 @@ TEST(ReplayWindow, AgreesWithASetOfEverySequenceTaken) {
                 const bool wild = run % 4 == 0; // also jumps anywhere, and to the very top
                 ReplayWindow window;
                 std::set<std::uint32_t> taken;
-                std::int64_t newest = 0; // the newest the model took: the window's newest()
+                climb_to(window, static_cast<std::uint32_t>(start), &taken); // (from 0: none)
+                std::int64_t newest = window.newest(); // the model's: the window's newest()
                 for (int step = 0; step < 2000; ++step) {
                     const std::int64_t from = std::max(newest, start);
                     const std::int64_t r = pick(0, 999);
@@ -861,10 +888,9 @@ TEST(ReplayWindow, AgreesWithASetOfEverySequenceTaken) {
                     }
                     s = std::clamp<std::int64_t>(s, 0, kTop);
                     const auto sequence = static_cast<std::uint32_t>(s);
-                    const bool expected =
-                        sequence != 0 && taken.count(sequence) == 0 &&
-                        (s > newest ? newest == 0 || s - newest <= ReplayWindow::kMaxSequenceJump
-                                    : newest - s < 64);
+                    const bool expected = sequence != 0 && taken.count(sequence) == 0 &&
+                                          (s > newest ? s - newest <= ReplayWindow::kMaxSequenceJump
+                                                      : newest - s < 64);
                     ASSERT_EQ(window.accept(sequence), expected)
                         << "step " << step << " sequence " << sequence << " newest " << newest;
                     if (expected) {
