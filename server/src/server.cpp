@@ -3,6 +3,7 @@
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/connect_token.hpp"
 #include "dsoc/scaleout/world_tick.hpp"
+#include "dsoc/server/client_ids.hpp"
 #include "dsoc/server/interest_setup.hpp"
 
 #include <boost/asio/post.hpp>
@@ -56,7 +57,7 @@ std::uint16_t Server::start() {
     const std::uint16_t port = acceptor_.local_endpoint().port();
     if (config_.udp) {
         udp_ = std::make_unique<UdpEndpoint>(
-            io_, config_, static_cast<ConnectionHost&>(*this), [this] { return next_client_id_++; },
+            io_, config_, static_cast<ConnectionHost&>(*this), [this] { return take_client_id(); },
             [this](const std::shared_ptr<Connection>& connection) { open_connection(connection); });
         udp_->start(config_.bind_address, port);
     }
@@ -114,7 +115,7 @@ void Server::accept_next() {
                 }
                 return;
             }
-            const std::uint32_t id = next_client_id_++;
+            const std::uint32_t id = take_client_id();
             auto session = std::make_shared<Session>(std::move(socket), id, config_,
                                                      static_cast<ConnectionHost&>(*this));
             session->start();
@@ -123,14 +124,44 @@ void Server::accept_next() {
         });
 }
 
+std::uint32_t Server::take_client_id() {
+    return take_free_client_id(next_client_id_, [this](std::uint32_t id) {
+        return sessions_.contains(id) || clients_.contains(id);
+    });
+}
+
 void Server::open_connection(const std::shared_ptr<Connection>& connection) {
     sessions_[connection->client_id()] = connection;
     ++stats_.clients_accepted;
-    if (sessions_.size() > static_cast<std::size_t>(config_.max_clients)) {
-        connection->disconnect(pb::DISCONNECT_REASON_SERVER_FULL,
-                               "server holds " + std::to_string(config_.max_clients) +
-                                   " clients at most");
+    // Whether the server is full is the hello's to decide (on_hello): a connection that
+    // has not said one takes no client's place, only one of the pending connections'.
+    if (pending_.size() >= static_cast<std::size_t>(config_.max_pending_connections)) {
+        connection->disconnect(pb::DISCONNECT_REASON_TRY_AGAIN,
+                               std::to_string(config_.max_pending_connections) +
+                                   " connections are waiting for their hello");
+        return;
     }
+    int& from_source = pending_per_source_[connection->source()];
+    if (from_source >= config_.max_pending_per_source) {
+        connection->disconnect(pb::DISCONNECT_REASON_TRY_AGAIN,
+                               std::to_string(from_source) + " connections from " +
+                                   connection->remote() + "'s address wait for their hello");
+        return;
+    }
+    ++from_source;
+    pending_.emplace(connection->client_id(), connection->source());
+}
+
+void Server::release_pending(std::uint32_t id) {
+    const auto it = pending_.find(id);
+    if (it == pending_.end()) {
+        return;
+    }
+    const auto source = pending_per_source_.find(it->second);
+    if (--source->second == 0) {
+        pending_per_source_.erase(source);
+    }
+    pending_.erase(it);
 }
 
 void Server::schedule_tick() {
@@ -491,6 +522,7 @@ void Server::apply_leaves() {
         policy_->remove_viewer(id);
         clients_.erase(id);
         sessions_.erase(id);
+        release_pending(id);
     }
     pending_leaves_.clear();
     if (feed_) {
@@ -603,6 +635,7 @@ void Server::on_hello(Connection& session, const pb::ClientHello& client_hello) 
                                     quantization(config_), session.transport() == Transport::udp)})
             .first->second;
     client.audit_every = client_hello.audit_every_ticks();
+    release_pending(session.client_id());
     pending_joins_.push_back(session.client_id());
     spdlog::debug("client {} '{}' from {} joined as entity {}", session.client_id(), session.name(),
                   session.remote(), entity);

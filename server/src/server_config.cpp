@@ -81,6 +81,8 @@ std::vector<std::string> validate(const ServerConfig& c) {
     check(p, std::isfinite(c.distance_radius) && c.distance_radius > 0.0f, "distance_radius",
           "must be a finite number > 0");
     check_range(p, "max_clients", c.max_clients, 1, 100000);
+    check_range(p, "max_pending_connections", c.max_pending_connections, 1, 1000000);
+    check_range(p, "max_pending_per_source", c.max_pending_per_source, 1, 1000000);
     check_range(p, "max_frame_bytes", c.max_frame_bytes, 64, 16 * 1024 * 1024);
     check(p, c.max_send_queue_bytes >= c.max_frame_bytes, "max_send_queue_bytes",
           "must be at least max_frame_bytes");

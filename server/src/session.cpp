@@ -38,6 +38,9 @@ Session::Session(asio::ip::tcp::socket socket, std::uint32_t client_id, const Se
     const auto endpoint = socket_.remote_endpoint(ec);
     remote_ =
         ec ? "unknown" : endpoint.address().to_string() + ":" + std::to_string(endpoint.port());
+    if (!ec) {
+        source_ = source_key(endpoint.address());
+    }
     socket_.set_option(asio::ip::tcp::no_delay(true), ec);
     if (config_.socket_send_buffer_bytes > 0) {
         socket_.set_option(asio::socket_base::send_buffer_size(config_.socket_send_buffer_bytes),

@@ -59,6 +59,7 @@ UdpConnection::UdpConnection(UdpEndpoint& endpoint, std::uint32_t client_id, std
       config_(config), session_(session), nonce_(nonce), peer_(peer), pacer_(config.tick_rate),
       last_heard_(Clock::now()) {
     remote_ = "udp:" + peer.address().to_string() + ":" + std::to_string(peer.port());
+    source_ = source_key(peer.address());
 }
 
 void UdpConnection::hello(const pb::ClientHello& hello) {

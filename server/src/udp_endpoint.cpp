@@ -40,23 +40,6 @@ std::uint64_t cookie_now_ms() {
 
 } // namespace
 
-BudgetKey budget_key(const asio::ip::udp::endpoint& peer) {
-    const asio::ip::address a = peer.address();
-    if (a.is_v4()) {
-        return {a.to_v4().to_uint(), false};
-    }
-    const asio::ip::address_v6 v6 = a.to_v6();
-    if (v6.is_v4_mapped()) { // an IPv4 sender on a dual-stack socket
-        return {asio::ip::make_address_v4(asio::ip::v4_mapped, v6).to_uint(), false};
-    }
-    const auto bytes = v6.to_bytes();
-    std::uint64_t prefix = 0;
-    for (std::size_t i = 0; i < 8; ++i) {
-        prefix = (prefix << 8) | bytes[i];
-    }
-    return {prefix, true};
-}
-
 protocol::SourceAddress source_address(const asio::ip::udp::endpoint& peer) {
     protocol::SourceAddress out;
     const asio::ip::address a = peer.address();
@@ -182,7 +165,7 @@ bool UdpEndpoint::spend(Budget& b, double rate, Clock::time_point now) {
 
 bool UdpEndpoint::within_handshake_budget(Clock::time_point now) {
     const auto rate = static_cast<double>(config_.udp_handshake_rate); // and the burst
-    const BudgetKey key = budget_key(sender_);
+    const SourceKey key = source_key(sender_.address());
     auto it = budgets_.find(key);
     if (it == budgets_.end()) {
         if (budgets_.size() >= kMaxBudgets) {

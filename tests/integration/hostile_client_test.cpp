@@ -11,7 +11,9 @@
 
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <thread>
+#include <vector>
 
 namespace dsoc {
 namespace {
@@ -113,9 +115,67 @@ TEST_F(HostileClients, ServerFullIsRefusedWithAReason) {
     first.send_message(client_hello());
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     RawClient second(server.port());
+    second.send_message(client_hello());
     const auto d = second.read_until_closed();
     ASSERT_TRUE(d.has_value());
     EXPECT_EQ(d->reason(), pb::DISCONNECT_REASON_SERVER_FULL);
+}
+
+TEST_F(HostileClients, ConnectionsThatSayNoHelloTakeNoClientsPlace) {
+    // Silent connections (until their handshake timeout) once made a full server: a host
+    // could keep every player out by holding max_clients of them.
+    auto c = config();
+    c.max_clients = 2;
+    c.handshake_timeout_ms = 5000; // the silent ones wait all through the test
+    testing::RunningServer server(c);
+    std::vector<std::unique_ptr<RawClient>> silent;
+    for (int i = 0; i < 4; ++i) {
+        silent.push_back(std::make_unique<RawClient>(server.port()));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    RawClient first(server.port());
+    RawClient second(server.port());
+    first.send_message(client_hello());
+    second.send_message(client_hello());
+    EXPECT_TRUE(first.read_until_hello(std::chrono::seconds(3)));
+    EXPECT_TRUE(second.read_until_hello(std::chrono::seconds(3)));
+    server.stop();
+    EXPECT_EQ(server.stats().disconnects.count("server_full"), 0u);
+}
+
+TEST_F(HostileClients, ConnectionsWaitingForTheirHelloAreCappedPerSourceAndInAll) {
+    auto c = config();
+    c.max_pending_per_source = 3;
+    c.max_pending_connections = 5;
+    c.handshake_timeout_ms = 5000; // the silent ones wait all through the test
+    testing::RunningServer server(c);
+    std::vector<std::unique_ptr<RawClient>> silent;
+    for (int i = 0; i < 3; ++i) {
+        silent.push_back(std::make_unique<RawClient>(server.port()));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    // A fourth from the same address is told to try again, at once.
+    RawClient fourth(server.port());
+    const auto refused = fourth.read_until_closed();
+    ASSERT_TRUE(refused.has_value());
+    EXPECT_EQ(refused->reason(), pb::DISCONNECT_REASON_TRY_AGAIN) << refused->text();
+    // Another address still connects, and joins.
+    RawClient other(server.port(), 0, "127.0.0.2");
+    other.send_message(client_hello());
+    EXPECT_TRUE(other.read_until_hello(std::chrono::seconds(3)));
+    // Once five wait in all (three here, two from a third address), a sixth from a
+    // fourth address is told to try again too.
+    RawClient third_a(server.port(), 0, "127.0.0.3");
+    RawClient third_b(server.port(), 0, "127.0.0.3");
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    RawClient sixth(server.port(), 0, "127.0.0.4");
+    sixth.send_message(client_hello());
+    std::optional<pb::Disconnect> full;
+    EXPECT_FALSE(sixth.read_until_hello(std::chrono::seconds(3), &full));
+    ASSERT_TRUE(full.has_value());
+    EXPECT_EQ(full->reason(), pb::DISCONNECT_REASON_TRY_AGAIN) << full->text();
+    server.stop();
+    EXPECT_EQ(server.stats().disconnects.at("try_again"), 2u);
 }
 
 } // namespace

@@ -543,9 +543,9 @@ TEST(UdpTransport, ResponsesWithAValidCookieBeyondASourcesRateAreDroppedUnanswer
     EXPECT_EQ(drops(server, UdpDrop::over_challenge_rate), 0u);
 }
 
-TEST(UdpBudgetKey, AnIpv4SenderOnADualStackSocketSpendsItsOwnAddressesBudget) {
+TEST(SourceKey, AnIpv4PeerOnADualStackSocketIsItsOwnAddressAndAnIpv6OneItsSlash64) {
     const auto at = [](const char* address) {
-        return server::budget_key({asio::ip::make_address(address), 5000});
+        return server::source_key(asio::ip::make_address(address));
     };
     // As it arrives on an IPv4 socket and as a dual-stack (::) socket reports it.
     EXPECT_EQ(at("192.0.2.7"), at("::ffff:192.0.2.7"));

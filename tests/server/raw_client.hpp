@@ -28,13 +28,61 @@ namespace dsoc::testing {
 class RawClient {
 public:
     /// `receive_buffer_bytes` > 0 shrinks SO_RCVBUF before connecting (a slow reader
-    /// whose kernel buffer fills quickly).
-    explicit RawClient(std::uint16_t port, int receive_buffer_bytes = 0) : socket_(io_) {
+    /// whose kernel buffer fills quickly); `source` (a loopback address, e.g. 127.0.0.2)
+    /// connects from another address than 127.0.0.1.
+    explicit RawClient(std::uint16_t port, int receive_buffer_bytes = 0,
+                       const char* source = nullptr)
+        : socket_(io_) {
         socket_.open(boost::asio::ip::tcp::v4());
         if (receive_buffer_bytes > 0) {
             socket_.set_option(boost::asio::socket_base::receive_buffer_size(receive_buffer_bytes));
         }
+        if (source != nullptr) {
+            socket_.bind({boost::asio::ip::make_address(source), 0});
+        }
         socket_.connect({boost::asio::ip::make_address("127.0.0.1"), port});
+    }
+
+    /// Reads until the server's hello (true) or a Disconnect, the connection's end or
+    /// `timeout` (false); `disconnect` gets the Disconnect, if one came first.
+    bool read_until_hello(std::chrono::milliseconds timeout,
+                          std::optional<protocol::pb::Disconnect>* disconnect = nullptr) {
+        protocol::FrameDecoder decoder(16 * 1024 * 1024);
+        std::array<std::uint8_t, 4096> buffer{};
+        socket_.non_blocking(true);
+        const auto until = std::chrono::steady_clock::now() + timeout;
+        while (std::chrono::steady_clock::now() < until) {
+            boost::system::error_code ec;
+            const std::size_t n = socket_.read_some(boost::asio::buffer(buffer), ec);
+            if (ec == boost::asio::error::would_block) {
+                std::this_thread::sleep_for(std::chrono::milliseconds(2));
+                continue;
+            }
+            if (ec) {
+                break;
+            }
+            decoder.feed(std::span<const std::uint8_t>(buffer.data(), n));
+            std::span<const std::uint8_t> payload;
+            while (decoder.next(payload) == protocol::FrameDecoder::Status::frame) {
+                protocol::pb::Envelope message;
+                if (protocol::decode_payload(payload, message) != protocol::DecodeError::none) {
+                    continue;
+                }
+                if (message.has_server_hello()) {
+                    socket_.non_blocking(false);
+                    return true;
+                }
+                if (message.has_disconnect()) {
+                    if (disconnect != nullptr) {
+                        *disconnect = message.disconnect();
+                    }
+                    socket_.non_blocking(false);
+                    return false;
+                }
+            }
+        }
+        socket_.non_blocking(false);
+        return false;
     }
 
     void send_bytes(std::span<const std::uint8_t> bytes) {

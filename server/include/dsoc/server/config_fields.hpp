@@ -48,6 +48,8 @@ void visit_config_fields(Config& config, Visitor&& visit) {
     visit("heard_quantum", config.heard_quantum);
     visit("network_lod", config.network_lod);
     visit("max_clients", config.max_clients);
+    visit("max_pending_connections", config.max_pending_connections);
+    visit("max_pending_per_source", config.max_pending_per_source);
     visit("max_frame_bytes", config.max_frame_bytes);
     visit("max_send_queue_bytes", config.max_send_queue_bytes);
     visit("handshake_timeout_ms", config.handshake_timeout_ms);

@@ -9,6 +9,7 @@
 
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/server/input_guard.hpp"
+#include "dsoc/server/source_key.hpp"
 
 #include <chrono>
 #include <cstdint>
@@ -99,6 +100,8 @@ public:
     void mark_active() { state_ = State::active; }
     [[nodiscard]] const std::string& name() const { return name_; }
     [[nodiscard]] const std::string& remote() const { return remote_; }
+    /// The source the peer's address counts as (source_key.hpp).
+    [[nodiscard]] const SourceKey& source() const { return source_; }
     [[nodiscard]] std::uint64_t bytes_sent() const { return bytes_sent_; }
     [[nodiscard]] std::uint64_t bytes_received() const { return bytes_received_; }
     [[nodiscard]] std::size_t queued_bytes() const { return queued_bytes_; }
@@ -136,6 +139,7 @@ protected:
     [[nodiscard]] bool begin_disconnect(protocol::pb::DisconnectReason reason,
                                         const std::string& text);
 
+    SourceKey source_;
     std::uint32_t client_id_;
     std::uint32_t entity_id_ = 0;
     ConnectionHost& host_;

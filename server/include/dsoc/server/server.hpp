@@ -69,6 +69,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace dsoc::server {
@@ -244,6 +245,11 @@ private:
     static void add_session_counts(const Connection& session, ServerStats& stats);
     /// A new connection (either transport): registered, and refused when over max_clients.
     void open_connection(const std::shared_ptr<Connection>& connection);
+    /// A client id no open connection or client holds (client_ids.hpp).
+    [[nodiscard]] std::uint32_t take_client_id();
+    /// Client `id` no longer waits for its hello (it joined, or left): its place among
+    /// the pending connections, if it held one, is free.
+    void release_pending(std::uint32_t id);
 
     boost::asio::io_context& io_;
     IoLoop* io_loop_ = nullptr;
@@ -262,7 +268,11 @@ private:
     std::vector<scaleout::PlayerInput> outgoing_inputs_; // role gateway: this tick's inputs
     std::vector<std::uint32_t> outgoing_ids_;            // role gateway: joins or leaves
     std::unique_ptr<interest::InterestPolicy> policy_;
-    std::map<std::uint32_t, Client> clients_;                       // active (after hello)
+    std::map<std::uint32_t, Client> clients_; // active (after hello)
+    // Connections waiting for their hello (max_pending_connections), and how many of
+    // them each source holds (max_pending_per_source).
+    std::unordered_map<std::uint32_t, SourceKey> pending_;
+    std::unordered_map<SourceKey, int, SourceKeyHash> pending_per_source_;
     std::map<std::uint32_t, std::shared_ptr<Connection>> sessions_; // all open connections
     std::uint32_t next_client_id_ = 1;
     std::unique_ptr<protocol::TokenKey> token_key_;        // null when insecure

@@ -169,8 +169,18 @@ struct ServerConfig {
     float heard_quantum = protocol::QuantizationSettings{}.heard_quantum;
     /// false: every entity near (every tick, finest quantum), whatever the policy says.
     bool network_lod = true;
-    /// Connected clients at most; more are refused with `server_full`. [Limit: 1..100000]
+    /// Connected clients at most; a hello beyond them is refused with `server_full`.
+    /// Connections that have not said their hello yet do not count. [Limit: 1..100000]
     int max_clients = 256;
+    /// Connections waiting for their hello at most, from all sources together; a new one
+    /// beyond them is refused with `try_again`. Bounds what silent connections hold (each
+    /// until handshake_timeout_ms). [Limit: 1..1000000]
+    int max_pending_connections = 1024;
+    /// Connections waiting for their hello from one source (an IPv4 address, or an IPv6
+    /// /64) at most; a new one beyond them is refused with `try_again`, so that one host's
+    /// silent connections cannot keep the others out. A load generator connects its
+    /// clients from one address, each saying its hello at once. [Limit: 1..1000000]
+    int max_pending_per_source = 64;
     /// Largest frame payload a client may send. [Units: bytes] [Limit: 64..16 MiB]
     std::uint32_t max_frame_bytes = 64 * 1024;
     /// A client's queued, unsent bytes (its one pending snapshot plus replies) at most

@@ -19,6 +19,7 @@
 // Threading: the io_context thread, but native_handle() (sending snapshots from the pool).
 
 #include "dsoc/protocol/challenge_cookie.hpp"
+#include "dsoc/server/source_key.hpp"
 #include "dsoc/server/udp_connection.hpp"
 #include "dsoc/server/udp_drop.hpp"
 
@@ -34,21 +35,6 @@
 #include <unordered_map>
 
 namespace dsoc::server {
-
-/// Whose handshake budget a source spends: an IPv4 address, also one that reaches a
-/// dual-stack socket as ::ffff:a.b.c.d, or an IPv6 /64 (one host holds a whole /64;
-/// keyed by the /128 it could spend as many budgets as it likes).
-struct BudgetKey {
-    std::uint64_t bits = 0; ///< the IPv4 address, or the IPv6 address's first 64 bits
-    bool v6 = false;
-    friend bool operator==(const BudgetKey&, const BudgetKey&) = default;
-};
-struct BudgetKeyHash {
-    std::size_t operator()(const BudgetKey& k) const noexcept {
-        return std::hash<std::uint64_t>{}(k.bits) ^ static_cast<std::size_t>(k.v6);
-    }
-};
-[[nodiscard]] BudgetKey budget_key(const boost::asio::ip::udp::endpoint& peer);
 
 class UdpEndpoint {
 public:
@@ -97,7 +83,7 @@ private:
     /// Takes one token from `b`, refilled at `rate` a second up to `rate` (a burst of
     /// one second's worth) since it was last; false when it has none.
     static bool spend(Budget& b, double rate, Clock::time_point now);
-    /// spend() from the sender's budget (budget_key).
+    /// spend() from the sender's budget (its source_key()).
     [[nodiscard]] bool within_handshake_budget(Clock::time_point now);
     void sweep();
     void drop(UdpDrop reason) { ++drops_[static_cast<std::size_t>(reason)]; }
@@ -118,7 +104,7 @@ private:
     /// Sessions closed lately, and when: their late datagrams are closed_session, not
     /// unknown_session (a client's goodbye goes twice; snapshots' inputs cross it).
     std::unordered_map<std::uint64_t, Clock::time_point> recently_closed_;
-    std::unordered_map<BudgetKey, Budget, BudgetKeyHash> budgets_; ///< by source
+    std::unordered_map<SourceKey, Budget, SourceKeyHash> budgets_; ///< by source
     Budget challenge_budget_; ///< every source's requests (udp_challenge_rate)
     /// Nonces of sessions closed lately: their responses never open a new session.
     std::unordered_map<std::uint64_t, Clock::time_point> closed_nonces_;
