@@ -40,6 +40,11 @@ baked_table(const maps::Map& map, const visibility::OccluderScene& scene,
     request.config.cell_size = options.bake_cell_size;
     request.dir = options.bake_dir;
     request.max_table_bytes = options.bake_max_table_mib << 20;
+    request.gave_up = [&](const maps::GridOverBudget& over) {
+        if (progress != nullptr) {
+            *progress << "\n" << maps::describe(over) << "\n";
+        }
+    };
     auto baked = maps::load_or_bake(map, scene, request, [&](double fraction, double seconds) {
         if (progress != nullptr) {
             *progress << "\rbaking " << map.name << ": " << static_cast<int>(100.0 * fraction)
@@ -55,7 +60,8 @@ baked_table(const maps::Map& map, const visibility::OccluderScene& scene,
         }
         *progress << "\n"
                   << (baked->from_cache ? "baked table loaded from " : "baked table written to ")
-                  << baked->file.string() << "\n";
+                  << baked->file.string() << " (" << baked->table->open_count() << " open cells of "
+                  << baked->table->grid().cell_size << " units)\n";
     }
     return baked->table;
 }
