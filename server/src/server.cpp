@@ -134,21 +134,33 @@ void Server::open_connection(const std::shared_ptr<Connection>& connection) {
     sessions_[connection->client_id()] = connection;
     ++stats_.clients_accepted;
     // Whether the server is full is the hello's to decide (on_hello): a connection that
-    // has not said one takes no client's place, only one of the pending connections'.
+    // has not said one takes no client's place, only one of the pending connections'. A
+    // UDP connection opens with its hello (its address proven first): it never waits.
+    if (connection->transport() == Transport::udp) {
+        return;
+    }
     if (pending_.size() >= static_cast<std::size_t>(config_.max_pending_connections)) {
-        connection->disconnect(pb::DISCONNECT_REASON_TRY_AGAIN,
-                               std::to_string(config_.max_pending_connections) +
-                                   " connections are waiting for their hello");
-        return;
+        // The oldest waiting connection of the source holding the most makes room: many
+        // sources' silent connections cannot keep a newcomer out, which refusing the
+        // newcomer would let them.
+        const auto most = std::max_element(
+            pending_by_source_.begin(), pending_by_source_.end(),
+            [](const auto& a, const auto& b) { return a.second.size() < b.second.size(); });
+        const std::uint32_t oldest = most->second.front();
+        const std::size_t held = most->second.size();
+        release_pending(oldest);
+        if (const auto it = sessions_.find(oldest); it != sessions_.end()) {
+            it->second->disconnect(pb::DISCONNECT_REASON_TRY_AGAIN,
+                                   std::to_string(config_.max_pending_connections) +
+                                       " connections were waiting for their hello, " +
+                                       std::to_string(held) + " of them from this address");
+        }
     }
-    int& from_source = pending_per_source_[connection->source()];
-    if (from_source >= config_.max_pending_per_source) {
-        connection->disconnect(pb::DISCONNECT_REASON_TRY_AGAIN,
-                               std::to_string(from_source) + " connections from " +
-                                   connection->remote() + "'s address wait for their hello");
-        return;
+    std::deque<std::uint32_t>& waiting = pending_by_source_[connection->source()];
+    if (waiting.size() >= static_cast<std::size_t>(config_.max_pending_per_source)) {
+        connection->hurry_hello(std::chrono::milliseconds(ServerConfig::kCrowdedHelloMs));
     }
-    ++from_source;
+    waiting.push_back(connection->client_id());
     pending_.emplace(connection->client_id(), connection->source());
 }
 
@@ -157,9 +169,11 @@ void Server::release_pending(std::uint32_t id) {
     if (it == pending_.end()) {
         return;
     }
-    const auto source = pending_per_source_.find(it->second);
-    if (--source->second == 0) {
-        pending_per_source_.erase(source);
+    const auto source = pending_by_source_.find(it->second);
+    std::deque<std::uint32_t>& waiting = source->second;
+    waiting.erase(std::find(waiting.begin(), waiting.end(), id));
+    if (waiting.empty()) {
+        pending_by_source_.erase(source);
     }
     pending_.erase(it);
 }
@@ -692,6 +706,7 @@ void Server::on_closed(Connection& session) {
             token_clients_.erase(it);
         }
     }
+    release_pending(id); // io thread, as every use of the pending connections
     // The entity, the policy's state and the client's buffers go when no phase runs:
     // a job may be using them now.
     pending_leaves_.push_back(id);

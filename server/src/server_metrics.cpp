@@ -62,6 +62,9 @@ std::string Server::render_metrics() const {
     out.gauge("dsoc_clients", "Clients in the game (after a valid hello).", d(clients_.size()));
     out.gauge("dsoc_connections", "Open connections, including those still in the handshake.",
               d(sessions_.size()));
+    out.gauge("dsoc_pending_connections",
+              "TCP connections waiting for their hello (max_pending_connections).",
+              d(pending_.size()));
     out.gauge("dsoc_entities", "Entities in the world (bots and players).",
               d(world_.entities().size()));
     out.counter("dsoc_frags_total",

@@ -49,15 +49,24 @@ Session::Session(asio::ip::tcp::socket socket, std::uint32_t client_id, const Se
 }
 
 void Session::start() {
-    deadline_.expires_after(std::chrono::milliseconds(config_.handshake_timeout_ms));
-    deadline_.async_wait([self = self()](const boost::system::error_code& ec) {
+    await_hello(std::chrono::milliseconds(config_.handshake_timeout_ms));
+    read_some();
+}
+
+void Session::await_hello(std::chrono::milliseconds within) {
+    deadline_.expires_after(within); // a wait already set ends with operation_aborted
+    deadline_.async_wait([self = self(), within](const boost::system::error_code& ec) {
         if (!ec && self->state_ == State::awaiting_hello) {
             self->disconnect(pb::DISCONNECT_REASON_HANDSHAKE_TIMEOUT,
-                             "no client_hello within " +
-                                 std::to_string(self->config_.handshake_timeout_ms) + " ms");
+                             "no client_hello within " + std::to_string(within.count()) + " ms");
         }
     });
-    read_some();
+}
+
+void Session::hurry_hello(std::chrono::milliseconds within) {
+    if (state_ == State::awaiting_hello && deadline_.expiry() - Clock::now() > within) {
+        await_hello(within);
+    }
 }
 
 void Session::read_some() {

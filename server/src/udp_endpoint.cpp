@@ -260,7 +260,7 @@ void UdpEndpoint::on_response(std::uint64_t nonce, std::span<const std::uint8_t>
                                                       sender_, config_, host_);
     by_session_.emplace(session, connection);
     session_of_nonce_.emplace(nonce, session);
-    open_(connection); // may disconnect it at once (a full server), as over TCP
+    open_(connection); // as over TCP
     if (connection->state() == Connection::State::awaiting_hello) {
         connection->hello(envelope.client_hello());
     }

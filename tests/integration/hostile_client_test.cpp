@@ -143,10 +143,9 @@ TEST_F(HostileClients, ConnectionsThatSayNoHelloTakeNoClientsPlace) {
     EXPECT_EQ(server.stats().disconnects.count("server_full"), 0u);
 }
 
-TEST_F(HostileClients, ConnectionsWaitingForTheirHelloAreCappedPerSourceAndInAll) {
+TEST_F(HostileClients, ASourceWithManyConnectionsWaitingMustSayItsHelloSoon) {
     auto c = config();
     c.max_pending_per_source = 3;
-    c.max_pending_connections = 5;
     c.handshake_timeout_ms = 5000; // the silent ones wait all through the test
     testing::RunningServer server(c);
     std::vector<std::unique_ptr<RawClient>> silent;
@@ -154,28 +153,51 @@ TEST_F(HostileClients, ConnectionsWaitingForTheirHelloAreCappedPerSourceAndInAll
         silent.push_back(std::make_unique<RawClient>(server.port()));
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    // A fourth from the same address is told to try again, at once.
-    RawClient fourth(server.port());
-    const auto refused = fourth.read_until_closed();
-    ASSERT_TRUE(refused.has_value());
-    EXPECT_EQ(refused->reason(), pb::DISCONNECT_REASON_TRY_AGAIN) << refused->text();
-    // Another address still connects, and joins.
-    RawClient other(server.port(), 0, "127.0.0.2");
-    other.send_message(client_hello());
-    EXPECT_TRUE(other.read_until_hello(std::chrono::seconds(3)));
-    // Once five wait in all (three here, two from a third address), a sixth from a
-    // fourth address is told to try again too.
-    RawClient third_a(server.port(), 0, "127.0.0.3");
-    RawClient third_b(server.port(), 0, "127.0.0.3");
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    RawClient sixth(server.port(), 0, "127.0.0.4");
-    sixth.send_message(client_hello());
-    std::optional<pb::Disconnect> full;
-    EXPECT_FALSE(sixth.read_until_hello(std::chrono::seconds(3), &full));
-    ASSERT_TRUE(full.has_value());
-    EXPECT_EQ(full->reason(), pb::DISCONNECT_REASON_TRY_AGAIN) << full->text();
+    {
+        // A fourth from the same address that says nothing is closed long before 5 s.
+        const auto started = std::chrono::steady_clock::now();
+        RawClient fourth(server.port());
+        const auto closed = fourth.read_until_closed();
+        const auto waited = std::chrono::steady_clock::now() - started;
+        ASSERT_TRUE(closed.has_value());
+        EXPECT_EQ(closed->reason(), pb::DISCONNECT_REASON_HANDSHAKE_TIMEOUT) << closed->text();
+        EXPECT_LT(waited, std::chrono::milliseconds(2000));
+    } // and closes its end
+    // One that says its hello at once joins, as a load generator's clients do.
+    RawClient talking(server.port());
+    talking.send_message(client_hello());
+    EXPECT_TRUE(talking.read_until_hello(std::chrono::seconds(3)));
+    // A waiting connection that closes gives its place back (and one that joins does):
+    // with one of the three silent ones gone, a fifth silent one gets the whole deadline.
+    silent.erase(silent.begin());
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    RawClient fifth(server.port());
+    std::optional<pb::Disconnect> early;
+    EXPECT_FALSE(fifth.read_until_hello(std::chrono::milliseconds(1500), &early));
+    EXPECT_FALSE(early.has_value()) << early->text();
     server.stop();
-    EXPECT_EQ(server.stats().disconnects.at("try_again"), 2u);
+    EXPECT_EQ(server.stats().disconnects.at("handshake_timeout"), 1u);
+}
+
+TEST_F(HostileClients, AtTheCapOfConnectionsWaitingTheOldestOfTheSourceHoldingTheMostMakesRoom) {
+    auto c = config();
+    c.max_pending_connections = 5;
+    c.handshake_timeout_ms = 5000;
+    testing::RunningServer server(c);
+    std::vector<std::unique_ptr<RawClient>> silent; // three from 127.0.0.1, two from .3
+    for (const char* source : {"127.0.0.1", "127.0.0.1", "127.0.0.1", "127.0.0.3", "127.0.0.3"}) {
+        silent.push_back(std::make_unique<RawClient>(server.port(), 0, source));
+        std::this_thread::sleep_for(std::chrono::milliseconds(20)); // in this order
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    RawClient newcomer(server.port(), 0, "127.0.0.4");
+    newcomer.send_message(client_hello());
+    EXPECT_TRUE(newcomer.read_until_hello(std::chrono::seconds(3)));
+    const auto evicted = silent.front()->read_until_closed();
+    ASSERT_TRUE(evicted.has_value());
+    EXPECT_EQ(evicted->reason(), pb::DISCONNECT_REASON_TRY_AGAIN) << evicted->text();
+    server.stop();
+    EXPECT_EQ(server.stats().disconnects.at("try_again"), 1u);
 }
 
 } // namespace

@@ -87,6 +87,11 @@ public:
     /// Tells the client `reason` as well as the transport can, stops handling its
     /// messages and closes; on_closed() follows (at once or after a grace period).
     virtual void disconnect(protocol::pb::DisconnectReason reason, const std::string& text) = 0;
+    /// A connection still waiting for its hello must say it within `within` from now (when
+    /// that is sooner than its own deadline), or is closed with handshake_timeout: what a
+    /// source with many connections waiting gets (ServerConfig::max_pending_per_source).
+    /// Nothing over UDP, whose connections open with their hello.
+    virtual void hurry_hello(std::chrono::milliseconds within) { (void)within; }
 
     /// The newest snapshot tick the client said it applied (acknowledged-delta transports
     /// only; nothing over TCP, or before the first acknowledgement).

@@ -62,6 +62,7 @@
 #include <boost/asio/executor_work_guard.hpp>
 
 #include <chrono>
+#include <deque>
 #include <exception>
 #include <functional>
 #include <map>
@@ -243,7 +244,8 @@ private:
     /// dropped and clamped) to those totals of `stats`: a closed session's to stats_, the
     /// open ones' to a count of their own for /metrics.
     static void add_session_counts(const Connection& session, ServerStats& stats);
-    /// A new connection (either transport): registered, and refused when over max_clients.
+    /// A new connection (either transport): registered; a TCP one counts among those
+    /// waiting for their hello (max_pending_per_source, max_pending_connections).
     void open_connection(const std::shared_ptr<Connection>& connection);
     /// A client id no open connection or client holds (client_ids.hpp).
     [[nodiscard]] std::uint32_t take_client_id();
@@ -269,10 +271,10 @@ private:
     std::vector<std::uint32_t> outgoing_ids_;            // role gateway: joins or leaves
     std::unique_ptr<interest::InterestPolicy> policy_;
     std::map<std::uint32_t, Client> clients_; // active (after hello)
-    // Connections waiting for their hello (max_pending_connections), and how many of
-    // them each source holds (max_pending_per_source).
+    // TCP connections waiting for their hello (max_pending_connections), and those of
+    // each source, oldest first (max_pending_per_source).
     std::unordered_map<std::uint32_t, SourceKey> pending_;
-    std::unordered_map<SourceKey, int, SourceKeyHash> pending_per_source_;
+    std::unordered_map<SourceKey, std::deque<std::uint32_t>, SourceKeyHash> pending_by_source_;
     std::map<std::uint32_t, std::shared_ptr<Connection>> sessions_; // all open connections
     std::uint32_t next_client_id_ = 1;
     std::unique_ptr<protocol::TokenKey> token_key_;        // null when insecure

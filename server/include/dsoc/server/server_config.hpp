@@ -172,15 +172,22 @@ struct ServerConfig {
     /// Connected clients at most; a hello beyond them is refused with `server_full`.
     /// Connections that have not said their hello yet do not count. [Limit: 1..100000]
     int max_clients = 256;
-    /// Connections waiting for their hello at most, from all sources together; a new one
-    /// beyond them is refused with `try_again`. Bounds what silent connections hold (each
-    /// until handshake_timeout_ms). [Limit: 1..1000000]
+    /// TCP connections waiting for their hello at most, from all sources together: a new
+    /// one beyond them closes the oldest waiting connection of the source holding the
+    /// most (with `try_again`). Bounds what silent connections hold (each until
+    /// handshake_timeout_ms), and a newcomer, who says its hello at once, still gets in.
+    /// [Limit: 1..1000000]
     int max_pending_connections = 1024;
-    /// Connections waiting for their hello from one source (an IPv4 address, or an IPv6
-    /// /64) at most; a new one beyond them is refused with `try_again`, so that one host's
-    /// silent connections cannot keep the others out. A load generator connects its
-    /// clients from one address, each saying its hello at once. [Limit: 1..1000000]
+    /// TCP connections waiting for their hello from one source (an IPv4 address, or an IPv6
+    /// /64) before a new one from it must say its hello within kCrowdedHelloMs (instead of
+    /// handshake_timeout_ms) or be closed with handshake_timeout: one host's silent
+    /// connections then hold few of the max_pending_connections places, while a load
+    /// generator connecting hundreds of clients at once from one address, each saying its
+    /// hello at once, is not refused. [Limit: 1..1000000]
     int max_pending_per_source = 64;
+    /// The hello deadline of a connection from a source with max_pending_per_source
+    /// connections waiting. [Units: ms]
+    static constexpr int kCrowdedHelloMs = 500;
     /// Largest frame payload a client may send. [Units: bytes] [Limit: 64..16 MiB]
     std::uint32_t max_frame_bytes = 64 * 1024;
     /// A client's queued, unsent bytes (its one pending snapshot plus replies) at most

@@ -46,6 +46,7 @@ public:
     /// Queues one message. Messages queued after disconnect() are dropped. When the
     /// queue would exceed max_send_queue_bytes the client is disconnected as too slow.
     void send(const protocol::pb::Envelope& message) override;
+    void hurry_hello(std::chrono::milliseconds within) override;
 
     /// Asks whether this client can take a snapshot now: true when it is active and
     /// its previous snapshot has been handed to the socket. False drops this tick's
@@ -91,6 +92,9 @@ public:
 
 private:
     void read_some();
+    /// Closes the connection with handshake_timeout unless it says its hello within
+    /// `within` from now (replacing the deadline set before).
+    void await_hello(std::chrono::milliseconds within);
     void on_read(std::size_t bytes);
     void handle(const protocol::pb::Envelope& message);
     void handle_hello(const protocol::pb::ClientHello& hello);

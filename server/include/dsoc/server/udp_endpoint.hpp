@@ -39,8 +39,8 @@ namespace dsoc::server {
 class UdpEndpoint {
 public:
     using Clock = std::chrono::steady_clock;
-    /// Registers a new connection with the server, which may disconnect it at once (a
-    /// full server), as it does a TCP connection it accepts.
+    /// Registers a new connection with the server, as it does a TCP connection it accepts;
+    /// its hello follows at once (a full server refuses that).
     using OpenConnection = std::function<void(const std::shared_ptr<Connection>&)>;
 
     UdpEndpoint(boost::asio::io_context& io, const ServerConfig& config, ConnectionHost& host,

@@ -22,7 +22,8 @@ inline constexpr std::string_view version_mismatch = "version_mismatch";
 inline constexpr std::string_view server_shutdown = "server_shutdown";
 /// A gateway's world process restarted: the session's player is gone; connect again.
 inline constexpr std::string_view world_restarted = "world_restarted";
-/// The server cannot take a player yet (a gateway waiting for entity ids): connect again.
+/// The server cannot take a player yet (a gateway waiting for entity ids, or the
+/// connection made room among too many waiting for their hello): connect again.
 inline constexpr std::string_view try_again = "try_again";
 /// The server ended the session for another reason (server_full, too_slow,
 /// handshake_timeout, input_flood, ...; the reason is in disconnect_reasons).
