@@ -121,6 +121,19 @@ TEST_F(HostileClients, ServerFullIsRefusedWithAReason) {
     EXPECT_EQ(d->reason(), pb::DISCONNECT_REASON_SERVER_FULL);
 }
 
+/// Connections from `sources` (loopback addresses) that say nothing, in this order, left
+/// a moment for the server to take them all.
+std::vector<std::unique_ptr<RawClient>> silent_connections(std::uint16_t port,
+                                                           std::vector<const char*> sources) {
+    std::vector<std::unique_ptr<RawClient>> silent;
+    for (const char* source : sources) {
+        silent.push_back(std::make_unique<RawClient>(port, 0, source));
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    return silent;
+}
+
 TEST_F(HostileClients, ConnectionsThatSayNoHelloTakeNoClientsPlace) {
     // Silent connections (until their handshake timeout) once made a full server: a host
     // could keep every player out by holding max_clients of them.
@@ -128,11 +141,7 @@ TEST_F(HostileClients, ConnectionsThatSayNoHelloTakeNoClientsPlace) {
     c.max_clients = 2;
     c.handshake_timeout_ms = 5000; // the silent ones wait all through the test
     testing::RunningServer server(c);
-    std::vector<std::unique_ptr<RawClient>> silent;
-    for (int i = 0; i < 4; ++i) {
-        silent.push_back(std::make_unique<RawClient>(server.port()));
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const auto silent = silent_connections(server.port(), {nullptr, nullptr, nullptr, nullptr});
     RawClient first(server.port());
     RawClient second(server.port());
     first.send_message(client_hello());
@@ -148,11 +157,7 @@ TEST_F(HostileClients, ASourceWithManyConnectionsWaitingMustSayItsHelloSoon) {
     c.max_pending_per_source = 3;
     c.handshake_timeout_ms = 5000; // the silent ones wait all through the test
     testing::RunningServer server(c);
-    std::vector<std::unique_ptr<RawClient>> silent;
-    for (int i = 0; i < 3; ++i) {
-        silent.push_back(std::make_unique<RawClient>(server.port()));
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    auto silent = silent_connections(server.port(), {nullptr, nullptr, nullptr});
     {
         // A fourth from the same address that says nothing is closed long before 5 s.
         const auto started = std::chrono::steady_clock::now();
@@ -184,12 +189,8 @@ TEST_F(HostileClients, AtTheCapOfConnectionsWaitingTheOldestOfTheSourceHoldingTh
     c.max_pending_connections = 5;
     c.handshake_timeout_ms = 5000;
     testing::RunningServer server(c);
-    std::vector<std::unique_ptr<RawClient>> silent; // three from 127.0.0.1, two from .3
-    for (const char* source : {"127.0.0.1", "127.0.0.1", "127.0.0.1", "127.0.0.3", "127.0.0.3"}) {
-        silent.push_back(std::make_unique<RawClient>(server.port(), 0, source));
-        std::this_thread::sleep_for(std::chrono::milliseconds(20)); // in this order
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const auto silent = silent_connections( // three from 127.0.0.1, two from .3
+        server.port(), {"127.0.0.1", "127.0.0.1", "127.0.0.1", "127.0.0.3", "127.0.0.3"});
     RawClient newcomer(server.port(), 0, "127.0.0.4");
     newcomer.send_message(client_hello());
     EXPECT_TRUE(newcomer.read_until_hello(std::chrono::seconds(3)));

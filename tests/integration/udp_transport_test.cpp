@@ -109,6 +109,22 @@ public:
         return session;
     }
 
+    /// Sends the request of `nonce` with `hello`.
+    void send_request(std::uint64_t nonce, const pb::Envelope& hello) {
+        std::vector<std::uint8_t> request;
+        EXPECT_TRUE(protocol::write_request(nonce, hello, request));
+        send(request);
+    }
+
+    /// How many datagrams of `kind` arrive until none has for `quiet`.
+    int count_kind(DatagramKind kind, std::chrono::milliseconds quiet) {
+        int count = 0;
+        while (receive_kind(kind, quiet)) {
+            ++count;
+        }
+        return count;
+    }
+
     /// The same with an insecure hello; the session id of a ServerHello (0 otherwise).
     std::uint64_t handshake(std::uint64_t nonce) {
         pb::Envelope reply;
@@ -469,17 +485,10 @@ TEST(UdpTransport, RequestsBeyondTheServersChallengeRateAreDroppedUnanswered) {
     c.udp_challenge_rate = 3;
     testing::RunningServer server(c);
     RawUdp raw(server.port());
-    pb::Envelope hello;
-    hello.mutable_client_hello()->set_protocol_version(protocol::kProtocolVersion);
-    std::vector<std::uint8_t> request;
-    ASSERT_TRUE(protocol::write_request(81, hello, request));
     for (int i = 0; i < 10; ++i) {
-        raw.send(request);
+        raw.send_request(81, RawUdp::plain_hello());
     }
-    int challenges = 0;
-    while (raw.receive_kind(DatagramKind::challenge, std::chrono::milliseconds(300))) {
-        ++challenges;
-    }
+    const int challenges = raw.count_kind(DatagramKind::challenge, std::chrono::milliseconds(300));
     server.stop();
     // A burst of one second's worth (3) is answered; the refill in the few milliseconds
     // the burst takes is well under one more. No source's budget is spent.
@@ -496,15 +505,10 @@ TEST(UdpTransport, RequestsFromAnAddressDoNotSpendItsBudgetSoASpooferCannotLockI
     c.udp_handshake_rate = 3;
     testing::RunningServer server(c);
     RawUdp spoofer(server.port());
-    pb::Envelope hello;
-    hello.mutable_client_hello()->set_protocol_version(protocol::kProtocolVersion);
     for (std::uint64_t nonce = 1; nonce <= 40; ++nonce) {
-        std::vector<std::uint8_t> request;
-        ASSERT_TRUE(protocol::write_request(nonce, hello, request));
-        spoofer.send(request);
+        spoofer.send_request(nonce, RawUdp::plain_hello());
     }
-    while (spoofer.receive_kind(DatagramKind::challenge, std::chrono::milliseconds(200))) {
-    }
+    EXPECT_EQ(spoofer.count_kind(DatagramKind::challenge, std::chrono::milliseconds(200)), 40);
     RawUdp victim(server.port());
     EXPECT_NE(victim.handshake(77), 0u);
     server.stop();
@@ -520,9 +524,7 @@ TEST(UdpTransport, ResponsesWithAValidCookieBeyondASourcesRateAreDroppedUnanswer
     const pb::Envelope hello = RawUdp::plain_hello();
     std::vector<std::vector<std::uint8_t>> responses;
     for (std::uint64_t nonce = 1; nonce <= 10; ++nonce) {
-        std::vector<std::uint8_t> request;
-        ASSERT_TRUE(protocol::write_request(nonce, hello, request));
-        raw.send(request);
+        raw.send_request(nonce, hello);
         const auto challenge = raw.receive_kind(DatagramKind::challenge, std::chrono::seconds(2));
         ASSERT_TRUE(challenge);
         protocol::DatagramHeader h;
@@ -533,10 +535,7 @@ TEST(UdpTransport, ResponsesWithAValidCookieBeyondASourcesRateAreDroppedUnanswer
     for (const auto& response : responses) {
         raw.send(response);
     }
-    int accepted = 0;
-    while (raw.receive_kind(DatagramKind::accepted, std::chrono::milliseconds(500))) {
-        ++accepted;
-    }
+    const int accepted = raw.count_kind(DatagramKind::accepted, std::chrono::milliseconds(500));
     server.stop();
     EXPECT_EQ(accepted, 3);
     EXPECT_EQ(drops(server, UdpDrop::rate_limited), 7u);
