@@ -127,10 +127,11 @@ void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
         "Coarser, rarer updates for distant entities (dsoc/occlusion) (true/false)");
     dsoc::cli::add_setting(app, "--max-clients", config.max_clients, "Connected clients at most");
     dsoc::cli::add_setting(app, "--max-pending-connections", config.max_pending_connections,
-                           "Connections waiting for their hello at most, in all");
+                           "TCP connections waiting for their hello at most, in all (beyond: "
+                           "the oldest of the address holding the most is closed)");
     dsoc::cli::add_setting(app, "--max-pending-per-source", config.max_pending_per_source,
-                           "Connections waiting for their hello at most from one address (an "
-                           "IPv6 /64)");
+                           "TCP connections waiting for their hello from one address (an IPv6 "
+                           "/64) before its new ones get 500 ms to say it");
     dsoc::cli::add_setting(app, "--max-frame-bytes", config.max_frame_bytes,
                            "Largest frame a client may send [bytes]");
     dsoc::cli::add_setting(app, "--max-send-queue-bytes", config.max_send_queue_bytes,

@@ -535,8 +535,7 @@ void Server::apply_leaves() {
         }
         policy_->remove_viewer(id);
         clients_.erase(id);
-        sessions_.erase(id);
-        release_pending(id);
+        sessions_.erase(id); // its pending place went in on_closed()
     }
     pending_leaves_.clear();
     if (feed_) {
