@@ -200,6 +200,14 @@ std::vector<MapFinding> check_map(const Map& map) {
                            std::to_string(s.degenerate.unbounded) + ", empty " +
                            std::to_string(s.degenerate.empty) + ")"});
     }
+    if (!map.shader_script_problems.empty()) {
+        out.push_back({FindingSeverity::warning, "shader_scripts_unread",
+                       std::to_string(map.shader_script_problems.size()) +
+                           " of the game's shader scripts or archives could not be read (first: " +
+                           map.shader_script_problems.front().message() +
+                           "): see-through shaders are told by their names instead, which "
+                           "culls less"});
+    }
     return out;
 }
 

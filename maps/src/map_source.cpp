@@ -4,11 +4,15 @@
 #include "dsoc/maps/map_spec.hpp"
 #include "dsoc/maps/pk3.hpp"
 #include "dsoc/maps/q3_map.hpp"
+#include "dsoc/maps/q3_shaders.hpp"
 
 #include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cstdlib>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <set>
 #include <system_error>
 
@@ -64,6 +68,57 @@ Result<Map> load_generated(std::string_view spec) {
     return LoadError{std::string(spec), "", "unknown generator (expected gen:city or gen:rooms)"};
 }
 
+/// read_shader_scripts(archives), read once per process while the archives are the same
+/// files (path, size and modification time): a test or a tool loads maps many times, and
+/// the game's archives hold hundreds of megabytes.
+std::shared_ptr<const ShaderScriptsRead> shader_scripts_of(const std::vector<fs::path>& archives) {
+    std::string key;
+    for (const fs::path& archive : archives) {
+        std::error_code ec;
+        const auto size = fs::file_size(archive, ec);
+        const auto time = fs::last_write_time(archive, ec).time_since_epoch().count();
+        key += archive.string() + '\n' + std::to_string(size) + '\n' + std::to_string(time) + '\n';
+    }
+    static std::mutex mutex;
+    static std::map<std::string, std::shared_ptr<const ShaderScriptsRead>> read;
+    const std::lock_guard lock(mutex);
+    auto& scripts = read[key];
+    if (scripts == nullptr) {
+        scripts = std::make_shared<const ShaderScriptsRead>(read_shader_scripts(archives));
+    }
+    return scripts;
+}
+
+/// A Quake 3 map given by `spec`: the .bsp or single-map .pk3 at `path`, else the map of
+/// that name on the search path.
+Result<Map> load_q3(std::string_view spec, const fs::path& path, bool is_pk3, bool is_bsp,
+                    const MapSearch& search, const ShaderScripts& scripts) {
+    if (is_bsp) {
+        return load_q3_map_from_bsp(path, &scripts);
+    }
+    if (is_pk3) {
+        auto names = list_pk3_maps(path);
+        if (!names) {
+            return names.error();
+        }
+        if (names.value().size() != 1) {
+            return LoadError{path.string(), "",
+                             "archive holds " + std::to_string(names.value().size()) +
+                                 " maps: give one map's name, with the archive on the map "
+                                 "search path (DSOC_MAP_PATH)"};
+        }
+        return load_q3_map_from_pk3(path, names.value().front(), &scripts);
+    }
+    if (spec.empty() || spec.find_first_of("/\\") != std::string_view::npos) {
+        return LoadError{std::string(spec), "", "no such file"};
+    }
+    auto bsp = find_q3_bsp(spec, search);
+    if (!bsp) {
+        return bsp.error();
+    }
+    return map_from_q3_bsp(bsp.value(), std::string(spec), &scripts);
+}
+
 } // namespace
 
 MapSearch MapSearch::from_environment() {
@@ -89,37 +144,28 @@ Result<Map> load_map(std::string_view spec, const MapSearch& search) {
     }
     const fs::path path{std::string(spec)};
     std::error_code ec;
-    if (fs::is_regular_file(path, ec)) {
-        if (path.extension() == ".bsp" || path.extension() == ".BSP") {
-            return load_q3_map_from_bsp(path);
+    const bool is_file = fs::is_regular_file(path, ec);
+    const bool is_pk3 = is_file && (path.extension() == ".pk3" || path.extension() == ".PK3");
+    const bool is_bsp = is_file && (path.extension() == ".bsp" || path.extension() == ".BSP");
+    if (!is_file || is_pk3 || is_bsp) {
+        // A Quake 3 map: the shader scripts of the archives the game would load with it
+        // (an archive given by path, then the search path's) tell its see-through shaders.
+        std::vector<fs::path> with_scripts = archives(search);
+        if (is_pk3) {
+            with_scripts.insert(with_scripts.begin(), path);
         }
-        if (path.extension() == ".pk3" || path.extension() == ".PK3") {
-            auto names = list_pk3_maps(path);
-            if (!names) {
-                return names.error();
-            }
-            if (names.value().size() != 1) {
-                return LoadError{path.string(), "",
-                                 "archive holds " + std::to_string(names.value().size()) +
-                                     " maps: give one map's name, with the archive on the map "
-                                     "search path (DSOC_MAP_PATH)"};
-            }
-            return load_q3_map_from_pk3(path, names.value().front());
+        const std::shared_ptr<const ShaderScriptsRead> read = shader_scripts_of(with_scripts);
+        auto map = load_q3(spec, path, is_pk3, is_bsp, search, read->scripts);
+        if (map) {
+            map.value().shader_script_problems = read->problems;
         }
-        auto text = read_text_map_file(path);
-        if (!text) {
-            return text.error();
-        }
-        return build_map(text.value(), path.string());
+        return map;
     }
-    if (spec.empty() || spec.find_first_of("/\\") != std::string_view::npos) {
-        return LoadError{std::string(spec), "", "no such file"};
+    auto text = read_text_map_file(path);
+    if (!text) {
+        return text.error();
     }
-    auto bsp = find_q3_bsp(spec, search);
-    if (!bsp) {
-        return bsp.error();
-    }
-    return map_from_q3_bsp(bsp.value(), std::string(spec));
+    return build_map(text.value(), path.string());
 }
 
 Result<q3::Q3Bsp> find_q3_bsp(std::string_view name, const MapSearch& search) {

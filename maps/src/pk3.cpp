@@ -62,20 +62,10 @@ std::string lower(std::string_view text) {
     return out;
 }
 
-} // namespace
-
-Result<std::vector<std::byte>> read_pk3_entry(const std::filesystem::path& pk3,
-                                              std::string_view entry) {
-    auto archive = open_archive(pk3);
-    if (!archive) {
-        return archive.error();
-    }
-    zip_t* zip = archive.value().get();
-    const std::string name(entry);
-    const zip_int64_t index = zip_name_locate(zip, name.c_str(), ZIP_FL_NOCASE);
-    if (index < 0) {
-        return LoadError{pk3.string(), name, "no such entry in the archive"};
-    }
+/// Entry `index` (named `name`) of the open archive `zip`, read whole as read_pk3_entry()
+/// promises.
+Result<std::vector<std::byte>> read_entry(zip_t* zip, const std::filesystem::path& pk3,
+                                          const std::string& name, zip_int64_t index) {
     zip_stat_t stat;
     zip_stat_init(&stat);
     if (zip_stat_index(zip, static_cast<zip_uint64_t>(index), 0, &stat) != 0 ||
@@ -133,30 +123,77 @@ Result<std::vector<std::byte>> read_pk3_entry(const std::filesystem::path& pk3,
     return bytes;
 }
 
-Result<std::vector<std::string>> list_pk3_maps(const std::filesystem::path& pk3) {
-    auto archive = open_archive(pk3);
-    if (!archive) {
-        return archive.error();
-    }
-    zip_t* zip = archive.value().get();
+/// The entries directly in `folder` whose names end in `extension` (both matched
+/// case-insensitively): each one's full name in the archive and its index, sorted by name.
+std::vector<std::pair<std::string, zip_int64_t>> entries_in(zip_t* zip, std::string_view folder,
+                                                            std::string_view extension) {
     const zip_int64_t count = zip_get_num_entries(zip, 0);
-    std::vector<std::string> names;
+    const std::string prefix = lower(folder);
+    const std::string suffix = lower(extension);
+    std::vector<std::pair<std::string, zip_int64_t>> found;
     for (zip_int64_t i = 0; i < count; ++i) {
         const char* raw = zip_get_name(zip, static_cast<zip_uint64_t>(i), 0);
         if (raw == nullptr) {
             continue;
         }
         const std::string name = lower(raw);
-        constexpr std::string_view prefix = "maps/";
-        constexpr std::string_view suffix = ".bsp";
         if (name.size() > prefix.size() + suffix.size() && name.starts_with(prefix) &&
             name.ends_with(suffix) && name.find('/', prefix.size()) == std::string::npos) {
-            names.push_back(std::string(raw).substr(prefix.size(),
-                                                    name.size() - prefix.size() - suffix.size()));
+            found.emplace_back(raw, i);
         }
     }
-    std::sort(names.begin(), names.end());
+    std::sort(found.begin(), found.end());
+    return found;
+}
+
+} // namespace
+
+Result<std::vector<std::byte>> read_pk3_entry(const std::filesystem::path& pk3,
+                                              std::string_view entry) {
+    auto archive = open_archive(pk3);
+    if (!archive) {
+        return archive.error();
+    }
+    zip_t* zip = archive.value().get();
+    const std::string name(entry);
+    const zip_int64_t index = zip_name_locate(zip, name.c_str(), ZIP_FL_NOCASE);
+    if (index < 0) {
+        return LoadError{pk3.string(), name, "no such entry in the archive"};
+    }
+    return read_entry(zip, pk3, name, index);
+}
+
+Result<std::vector<Pk3EntryRead>> read_pk3_entries_in(const std::filesystem::path& pk3,
+                                                      std::string_view folder,
+                                                      std::string_view extension) {
+    auto archive = open_archive(pk3);
+    if (!archive) {
+        return archive.error();
+    }
+    zip_t* zip = archive.value().get();
+    std::vector<Pk3EntryRead> out;
+    for (const auto& [name, index] : entries_in(zip, folder, extension)) {
+        out.push_back({name, read_entry(zip, pk3, name, index)});
+    }
+    return out;
+}
+
+Result<std::vector<std::string>> list_pk3_entries_in(const std::filesystem::path& pk3,
+                                                     std::string_view folder,
+                                                     std::string_view extension) {
+    auto archive = open_archive(pk3);
+    if (!archive) {
+        return archive.error();
+    }
+    std::vector<std::string> names;
+    for (const auto& [name, index] : entries_in(archive.value().get(), folder, extension)) {
+        names.push_back(name.substr(folder.size(), name.size() - folder.size() - extension.size()));
+    }
     return names;
+}
+
+Result<std::vector<std::string>> list_pk3_maps(const std::filesystem::path& pk3) {
+    return list_pk3_entries_in(pk3, "maps/", ".bsp");
 }
 
 } // namespace dsoc::maps

@@ -1,10 +1,11 @@
 #include "dsoc/maps/pvs.hpp"
 
 #include <algorithm>
+#include <bit>
 
 namespace dsoc::maps {
 
-Pvs::Pvs(const q3::Q3Bsp& bsp)
+Pvs::Pvs(const q3::Q3Bsp& bsp, const std::vector<visibility::Aabb>& see_through)
     : num_clusters_(bsp.visibility.num_clusters),
       bytes_per_cluster_(bsp.visibility.bytes_per_cluster), bits_(bsp.visibility.bits) {
     nodes_.reserve(bsp.nodes.size());
@@ -16,6 +17,61 @@ Pvs::Pvs(const q3::Q3Bsp& bsp)
     for (const q3::Leaf& l : bsp.leafs) {
         leaf_cluster_.push_back(l.cluster);
     }
+    open_through(see_through);
+}
+
+void Pvs::open_through(const std::vector<visibility::Aabb>& see_through) {
+    if (!has_visibility() || see_through.empty()) {
+        return;
+    }
+    const auto row_bytes = static_cast<std::size_t>(bytes_per_cluster_);
+    const auto set_bits = [&] {
+        std::uint64_t count = 0;
+        for (const std::uint8_t byte : bits_) {
+            count += static_cast<std::uint64_t>(std::popcount(byte));
+        }
+        return count;
+    };
+    const std::uint64_t before = set_bits();
+    // The clusters touching each brush: the leaves around it, one unit out (its own
+    // interior is solid leaves, which have none).
+    constexpr float kTouch = 1.0f;
+    std::vector<std::vector<std::int32_t>> gates;
+    for (const visibility::Aabb& brush : see_through) {
+        std::vector<std::int32_t> clusters;
+        const visibility::Aabb around{brush.min - glm::vec3(kTouch), brush.max + glm::vec3(kTouch)};
+        const Walk walked = walk(around, clusters);
+        if (walked == Walk::unknown) {
+            std::fill(bits_.begin(), bits_.end(), std::uint8_t{0xff}); // cannot tell: all
+            opened_pairs_ = set_bits() - before;
+            return;
+        }
+        if (walked == Walk::found) {
+            gates.push_back(std::move(clusters));
+        }
+    }
+    std::vector<std::uint8_t> beyond;
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (const std::vector<std::int32_t>& gate : gates) {
+            union_of_rows(gate, beyond); // what the clusters around the brush see
+            for (std::int32_t from = 0; from < num_clusters_; ++from) {
+                std::uint8_t* row = bits_.data() + static_cast<std::size_t>(from) * row_bytes;
+                const bool sees_gate = std::any_of(gate.begin(), gate.end(), [&](std::int32_t g) {
+                    return g >= num_clusters_ || (row[g >> 3] & (1u << (g & 7))) != 0;
+                });
+                if (!sees_gate) {
+                    continue;
+                }
+                for (std::size_t i = 0; i < row_bytes; ++i) {
+                    const auto opened = static_cast<std::uint8_t>(row[i] | beyond[i]);
+                    changed = changed || opened != row[i];
+                    row[i] = opened;
+                }
+            }
+        }
+    }
+    opened_pairs_ = set_bits() - before;
 }
 
 bool Pvs::clusters_of(const visibility::Aabb& box, std::vector<std::int32_t>& out) const {

@@ -3,6 +3,7 @@
 #include "brush_builder.hpp"
 #include "dsoc/maps/entities.hpp"
 #include "dsoc/maps/pk3.hpp"
+#include "dsoc/maps/q3_shaders.hpp"
 
 #include <cctype>
 #include <cmath>
@@ -13,36 +14,14 @@
 
 namespace dsoc::maps {
 
-namespace {
-
-/// Shaders that draw something a player can see through (grates, fences, windows)
-/// but that the compiled map does not mark CONTENTS_TRANSLUCENT: their alpha test or
-/// blend lives in shader scripts that are not in the map archive. A name match keeps
-/// such brushes out of the occluders - conservative: it only ever culls less.
-bool looks_see_through(std::string_view shader) {
-    static constexpr std::string_view kHints[] = {"grate", "window", "glass",  "fence", "mesh",
-                                                  "chain", "cage",   "web",    "trans", "alpha",
-                                                  "net",   "grill",  "lattice"};
-    std::string lower(shader);
-    for (char& c : lower) {
-        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    }
-    for (const auto hint : kHints) {
-        if (lower.find(hint) != std::string::npos) {
-            return true;
-        }
-    }
-    return false;
-}
-
-} // namespace
-
-Result<Map> map_from_q3_bsp(const q3::Q3Bsp& bsp, std::string name) {
+Result<Map> map_from_q3_bsp(const q3::Q3Bsp& bsp, std::string name, const ShaderScripts* scripts) {
     Map map;
     map.name = std::move(name);
     map.source = bsp.file;
     map.stats.brushes_total = bsp.brushes.size();
     map.stats.patches_left_out = bsp.patch_surface_count;
+    map.stats.shader_scripts =
+        scripts != nullptr && scripts->complete() && scripts->size() > 0 ? scripts->scripts() : 0;
 
     const q3::Model& world = bsp.models.front(); // parse_q3_bsp guarantees one model
     map.stats.world_brushes = static_cast<std::size_t>(world.num_brushes);
@@ -82,7 +61,7 @@ Result<Map> map_from_q3_bsp(const q3::Q3Bsp& bsp, std::string name) {
             const q3::Shader& shader = bsp.shaders[static_cast<std::size_t>(side.shader)];
             const bool side_draws = (shader.surface_flags & q3::kSurfNoDraw) == 0;
             draws = draws || side_draws;
-            see_through = see_through || (side_draws && looks_see_through(shader.name));
+            see_through = see_through || (side_draws && lets_sight_through(shader.name, scripts));
         }
         if (solid && translucent) {
             ++map.stats.translucent_skipped;
@@ -90,6 +69,15 @@ Result<Map> map_from_q3_bsp(const q3::Q3Bsp& bsp, std::string name) {
             ++map.stats.nodraw_skipped;
         } else if (solid && see_through) {
             ++map.stats.see_through_skipped;
+            // The compiler's vis stopped here as at a wall: the PVS is opened through it.
+            if (planes.size() <= kMaxBrushPlanes) {
+                visibility::PolyhedronResult result;
+                const auto brush_solid =
+                    visibility::ConvexPolyhedron::from_planes(planes, result, kBrushTolerance);
+                if (result.ok()) {
+                    map.see_through.push_back(brush_solid.bounds());
+                }
+            }
         }
         const bool opaque = solid && !translucent && draws && !see_through;
         std::uint32_t ours = 0;
@@ -138,11 +126,12 @@ Result<Map> map_from_q3_bsp(const q3::Q3Bsp& bsp, std::string name) {
         map.hazards.push_back({box, "trigger_hurt dmg " + std::to_string(damage)});
     }
     detail::finish_map(map);
-    map.pvs = std::make_shared<const Pvs>(bsp);
+    map.pvs = std::make_shared<const Pvs>(bsp, map.see_through);
     return map;
 }
 
-Result<Map> load_q3_map_from_pk3(const std::filesystem::path& pk3, std::string_view name) {
+Result<Map> load_q3_map_from_pk3(const std::filesystem::path& pk3, std::string_view name,
+                                 const ShaderScripts* scripts) {
     const std::string entry = "maps/" + std::string(name) + ".bsp";
     auto bytes = read_pk3_entry(pk3, entry);
     if (!bytes) {
@@ -152,15 +141,16 @@ Result<Map> load_q3_map_from_pk3(const std::filesystem::path& pk3, std::string_v
     if (!bsp) {
         return bsp.error();
     }
-    return map_from_q3_bsp(bsp.value(), std::string(name));
+    return map_from_q3_bsp(bsp.value(), std::string(name), scripts);
 }
 
-Result<Map> load_q3_map_from_bsp(const std::filesystem::path& bsp_file) {
+Result<Map> load_q3_map_from_bsp(const std::filesystem::path& bsp_file,
+                                 const ShaderScripts* scripts) {
     auto bsp = q3::read_q3_bsp_file(bsp_file);
     if (!bsp) {
         return bsp.error();
     }
-    return map_from_q3_bsp(bsp.value(), bsp_file.stem().string());
+    return map_from_q3_bsp(bsp.value(), bsp_file.stem().string(), scripts);
 }
 
 } // namespace dsoc::maps

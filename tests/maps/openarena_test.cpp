@@ -1,9 +1,11 @@
 // The 50 OpenArena maps: every one loads; counts agree with an independent reading
-// (tests/maps/q3_lump_counts.py); every spawn point is in open space.
+// (tests/maps/q3_lump_counts.py), both with see-through shaders told by name and by the
+// game's shader scripts (openarena-data's archives); every spawn point is in open space.
 
 #include "dsoc/maps/map_source.hpp"
 #include "dsoc/maps/pk3.hpp"
 #include "dsoc/maps/q3_map.hpp"
+#include "dsoc/maps/q3_shaders.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -11,9 +13,13 @@
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 
 namespace dsoc::maps {
 namespace {
@@ -43,13 +49,23 @@ TEST(OpenArena, AllFiftyMapsLoad) {
     }
 }
 
-/// Runs the Python reader and returns, per map, its key -> count.
+/// Runs the Python reader (with `scripts_dir`, telling see-through shaders by the shader
+/// scripts of the archives there; without, by name) and returns, per map, its key -> count.
 std::map<std::string, std::map<std::string, long>>
-independent_counts(const std::vector<std::string>& names) {
-    std::string command = std::string(DSOC_PYTHON3) + " " + DSOC_TEST_MAPS_DIR +
-                          "/q3_lump_counts.py " + test::kOpenArenaPak.string();
+independent_counts(const std::vector<std::string>& names,
+                   const std::optional<std::filesystem::path>& scripts_dir = std::nullopt) {
+    std::string command =
+        std::string(DSOC_PYTHON3) + " " + DSOC_TEST_MAPS_DIR + "/q3_lump_counts.py";
+    // Built by appending (GCC 12 warns falsely on " ..." + a string).
+    if (scripts_dir) {
+        command += " --scripts-dir ";
+        command += scripts_dir->string();
+    }
+    command += " ";
+    command += test::kOpenArenaPak.string();
     for (const std::string& name : names) {
-        command += " " + name;
+        command += " ";
+        command += name;
     }
     std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
     std::map<std::string, std::map<std::string, long>> out;
@@ -73,13 +89,14 @@ independent_counts(const std::vector<std::string>& names) {
     return out;
 }
 
-TEST(OpenArena, CountsMatchIndependentReading) {
-    DSOC_REQUIRE_OPENARENA();
-    const auto names = openarena_maps();
-    const auto expected = independent_counts(names);
+/// Loads every map with `scripts` and expects its stats to be what the Python reader
+/// counted (`expected`, read with the same scripts or none), see-through brushes too.
+void expect_counts_match(const std::vector<std::string>& names,
+                         const std::map<std::string, std::map<std::string, long>>& expected,
+                         const ShaderScripts* scripts) {
     ASSERT_EQ(expected.size(), names.size()) << "q3_lump_counts.py did not report every map";
     for (const std::string& name : names) {
-        const auto map = load_q3_map_from_pk3(test::kOpenArenaPak, name);
+        const auto map = load_q3_map_from_pk3(test::kOpenArenaPak, name, scripts);
         ASSERT_TRUE(map.ok()) << map.error().message();
         const auto& want = expected.at(name);
         const MapStats& s = map->stats;
@@ -88,9 +105,49 @@ TEST(OpenArena, CountsMatchIndependentReading) {
         EXPECT_EQ(static_cast<long>(s.collision_candidates), want.at("collision_candidates"))
             << name;
         EXPECT_EQ(static_cast<long>(s.opaque_candidates), want.at("opaque_candidates")) << name;
+        EXPECT_EQ(static_cast<long>(s.see_through_skipped), want.at("see_through")) << name;
         EXPECT_EQ(static_cast<long>(map->spawn_points.size()), want.at("spawn_points")) << name;
         EXPECT_EQ(static_cast<long>(s.patches_left_out), want.at("patches")) << name;
+        EXPECT_EQ(static_cast<long>(s.shader_scripts), want.at("shader_scripts")) << name;
+        EXPECT_EQ(static_cast<long>(scripts != nullptr ? scripts->size() : 0),
+                  want.at("shader_definitions"))
+            << name;
     }
+}
+
+TEST(OpenArena, CountsMatchIndependentReading) {
+    DSOC_REQUIRE_OPENARENA();
+    const auto names = openarena_maps();
+    expect_counts_match(names, independent_counts(names), nullptr);
+}
+
+TEST(OpenArena, CountsMatchIndependentReadingWithShaderScripts) {
+    DSOC_REQUIRE_OPENARENA();
+    const std::filesystem::path base_dir(kOpenArenaBaseDir);
+    if (!std::filesystem::exists(base_dir / "pak0.pk3")) {
+        GTEST_SKIP() << "OpenArena's shader scripts not installed (" << base_dir / "pak0.pk3"
+                     << " missing; scripts/setup installs openarena-data)";
+    }
+    // Every archive of the base dir, as the game loads them with the maps.
+    std::vector<std::filesystem::path> archives;
+    for (const auto& entry : std::filesystem::directory_iterator(base_dir)) {
+        std::string extension = entry.path().extension().string();
+        std::transform(extension.begin(), extension.end(), extension.begin(),
+                       [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        if (entry.is_regular_file() && extension == ".pk3") {
+            archives.push_back(entry.path());
+        }
+    }
+    std::sort(archives.begin(), archives.end());
+    const ShaderScriptsRead read = read_shader_scripts(archives);
+    // A script that does not read whole is no failure here (the reader must then say the
+    // same: shader_scripts 0, names no script defines told by name), but worth seeing.
+    for (const LoadError& problem : read.problems) {
+        std::printf("note: %s\n", problem.message().c_str());
+    }
+    ASSERT_GT(read.scripts.size(), 0u) << "no shader defined by the scripts of " << base_dir;
+    const auto names = openarena_maps();
+    expect_counts_match(names, independent_counts(names, base_dir), &read.scripts);
 }
 
 /// Brute force, independent of dsoc::sim's grid: does the box [p + mins, p + maxs]

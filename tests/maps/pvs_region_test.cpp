@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <optional>
 #include <random>
 
 namespace dsoc::maps {
@@ -133,6 +134,81 @@ TEST(Pvs, MapsWithoutVisDataPassEverything) {
     PvsRegionVisibility stage(loaded.value().pvs, std::make_unique<NothingHidden>());
     stage.build({glm::vec3(0), glm::vec3(10)});
     EXPECT_EQ(stage.test_box({glm::vec3(1000), glm::vec3(1030)}), visibility::Visibility::visible);
+}
+
+// oa_dm6's floor grates (alpha-tested in the game's scripts, solid and not translucent in
+// the compiled map) are walls to the compiler's vis: its PVS hides what is seen through
+// them. Eyes and boxes around each see-through brush, judged by brute-force rays: the
+// compiler's bits hide some that are seen (the test has teeth), the opened PVS none.
+TEST(PvsThroughSeeThroughBrushes, HidesNothingAGrateLetsBeSeen) {
+    DSOC_REQUIRE_OPENARENA();
+    const MapSearch search = MapSearch::from_environment();
+    auto loaded = load_map("oa_dm6", search);
+    ASSERT_TRUE(loaded) << loaded.error().message();
+    const Map& map = loaded.value();
+    if (map.stats.shader_scripts == 0) {
+        GTEST_SKIP() << "OpenArena's shader scripts (Debian openarena-data) are not installed: "
+                        "by name alone oa_dm6's grates are not all see-through";
+    }
+    ASSERT_GT(map.see_through.size(), 20u);
+    auto bsp = find_q3_bsp("oa_dm6", search);
+    ASSERT_TRUE(bsp) << bsp.error().message();
+    const Pvs compiled(bsp.value()); // the compiler's bits, not opened
+    const Pvs& opened = *map.pvs;
+    EXPECT_GT(opened.opened_pairs(), 0u);
+    visibility::OccluderWorld world;
+    for (const auto& o : map.occluders) {
+        world.add(o);
+    }
+    const visibility::ReferenceVisibility ref(world);
+    std::mt19937 random(6);
+    const auto around = [&](const visibility::Aabb& box, float by) {
+        std::uniform_real_distribution<float> x(box.min.x - by, box.max.x + by);
+        std::uniform_real_distribution<float> y(box.min.y - by, box.max.y + by);
+        std::uniform_real_distribution<float> z(box.min.z - by, box.max.z + by);
+        return glm::vec3(x(random), y(random), z(random));
+    };
+    std::vector<std::int32_t> clusters;
+    std::vector<std::uint8_t> rows;
+    // Whether `pvs` lets the eye's cluster see `box`; nullopt when the eye is in solid.
+    const auto pvs_may_see = [&](const Pvs& pvs, glm::vec3 eye,
+                                 const visibility::Aabb& box) -> std::optional<bool> {
+        if (!pvs.clusters_of({eye - glm::vec3(0.5f), eye + glm::vec3(0.5f)}, clusters)) {
+            return std::nullopt;
+        }
+        pvs.union_of_rows(clusters, rows);
+        return pvs.may_see(rows, box, clusters);
+    };
+    const glm::vec3 half(15.0f, 15.0f, 28.0f);
+    int judged = 0;
+    int seen_but_compiled_hides = 0;
+    for (const visibility::Aabb& grate : map.see_through) {
+        for (int e = 0; e < 40; ++e) {
+            const glm::vec3 eye = around(grate, 160.0f);
+            for (int b = 0; b < 40; ++b) {
+                const glm::vec3 centre = around(grate, 600.0f);
+                const visibility::Aabb box{centre - half, centre + half};
+                const auto compiled_sees = pvs_may_see(compiled, eye, box);
+                if (!compiled_sees || *compiled_sees) {
+                    continue; // in solid, or the compiler's PVS already lets it be seen
+                }
+                ++judged;
+                if (ref.test_box(eye, box, 3) == visibility::Visibility::occluded) {
+                    continue;
+                }
+                ++seen_but_compiled_hides;
+                ASSERT_TRUE(pvs_may_see(opened, eye, box).value_or(true))
+                    << "the opened PVS hides a box seen from (" << eye.x << ", " << eye.y << ", "
+                    << eye.z << ") at (" << centre.x << ", " << centre.y << ", " << centre.z << ")";
+            }
+        }
+    }
+    EXPECT_GT(seen_but_compiled_hides, 0)
+        << "no box seen through a grate was found (of " << judged << " the compiler hides)";
+    std::printf("oa_dm6: %d boxes the compiler's PVS hides are seen (of %d it hides near %zu "
+                "see-through brushes); %llu cluster pairs opened\n",
+                seen_but_compiled_hides, judged, map.see_through.size(),
+                static_cast<unsigned long long>(opened.opened_pairs()));
 }
 
 } // namespace

@@ -34,6 +34,15 @@ void print_text(const dsoc::maps::Map& map, const std::vector<dsoc::maps::MapFin
                 s.collision_candidates);
     std::printf("not occluding       %zu translucent, %zu all-nodraw, %zu see-through shader\n",
                 s.translucent_skipped, s.nodraw_skipped, s.see_through_skipped);
+    std::printf("shader scripts      %zu%s\n", s.shader_scripts,
+                s.shader_scripts == 0 ? " (none read whole: see-through told by shader names)"
+                                      : "");
+    if (map.pvs != nullptr && map.pvs->has_visibility()) {
+        std::printf("pvs                 %d clusters, %llu pairs opened through see-through "
+                    "brushes\n",
+                    map.pvs->cluster_count(),
+                    static_cast<unsigned long long>(map.pvs->opened_pairs()));
+    }
     std::printf("degenerate skipped  %zu (too many planes %zu, too few planes %zu, non-finite "
                 "%zu, unbounded %zu, empty %zu)\n",
                 s.degenerate.total(), s.degenerate.too_many_planes, s.degenerate.too_few_planes,
@@ -72,6 +81,11 @@ void print_json(const dsoc::maps::Map& map, const std::vector<dsoc::maps::MapFin
     out["translucent_skipped"] = s.translucent_skipped;
     out["nodraw_skipped"] = s.nodraw_skipped;
     out["see_through_skipped"] = s.see_through_skipped;
+    out["shader_scripts"] = s.shader_scripts;
+    if (map.pvs != nullptr && map.pvs->has_visibility()) {
+        out["pvs_clusters"] = map.pvs->cluster_count();
+        out["pvs_opened_pairs"] = map.pvs->opened_pairs();
+    }
     out["patches_left_out"] = s.patches_left_out;
     out["degenerate_skipped"] = s.degenerate.total();
     out["degenerate_by_reason"] = {{"too_many_planes", s.degenerate.too_many_planes},

@@ -2,6 +2,7 @@
 // A loaded map, whatever it came from (Quake 3 BSP, our text format, a generator):
 // what blocks sight, what blocks movement, and where players start.
 
+#include "dsoc/maps/load_error.hpp"
 #include "dsoc/maps/pvs.hpp"
 #include "dsoc/visibility/convex_polyhedron.hpp"
 #include "dsoc/visibility/geometry.hpp"
@@ -70,10 +71,14 @@ struct MapStats {
     std::size_t collision_brushes = 0;    ///< of those, with usable geometry
     std::size_t translucent_skipped = 0; ///< solid but translucent (glass): collide, do not occlude
     std::size_t nodraw_skipped = 0; ///< solid, every side nodraw (caulk): collide, do not occlude
-    std::size_t see_through_skipped = 0; ///< solid, drawn with a see-through looking shader
-                                         ///< (grate, fence, window...): collide, do not occlude
-    std::size_t patches_left_out = 0;    ///< curved patch surfaces not turned into occluders
-    DegenerateCounts degenerate;         ///< collision candidates with unusable geometry
+    std::size_t see_through_skipped =
+        0; ///< solid, drawn with a shader that lets sight
+           ///< through (grate, fence, window...): collide, do not occlude
+    /// Shader scripts that told see-through shaders apart (0: none read whole, so a
+    /// shader's name did: q3_shaders.hpp).
+    std::size_t shader_scripts = 0;
+    std::size_t patches_left_out = 0; ///< curved patch surfaces not turned into occluders
+    DegenerateCounts degenerate;      ///< collision candidates with unusable geometry
 };
 
 struct Map {
@@ -86,12 +91,19 @@ struct Map {
     std::vector<CollisionBrush> collision_brushes;
     std::vector<SpawnPoint> spawn_points;
     std::vector<Hazard> hazards;
+    /// The bounds of the solid brushes that let sight through (stats.see_through_skipped:
+    /// grates, windows), which the compiler's vis took for walls (the PVS is opened
+    /// through them: pvs.hpp).
+    std::vector<visibility::Aabb> see_through;
     /// Union of the collision brushes' bounds (empty when there are none).
     visibility::Aabb bounds;
     MapStats stats;
     /// The compiler's potentially visible set, for Quake 3 maps (null for text and
     /// generated maps).
     std::shared_ptr<const Pvs> pvs;
+    /// Shader scripts of the game that could not be read whole (q3_shaders.hpp): where
+    /// they do not answer, a shader's name tells whether it lets sight through.
+    std::vector<LoadError> shader_script_problems;
 };
 
 /// Adds the axial bevel planes a CollisionBrush needs (those of `bounds` whose

@@ -21,8 +21,15 @@ namespace dsoc::maps {
 
 class Pvs {
 public:
-    /// Copies the nodes, planes, leaf clusters and vis bits of `bsp`.
-    explicit Pvs(const q3::Q3Bsp& bsp);
+    /// Copies the nodes, planes, leaf clusters and vis bits of `bsp`, then opens them
+    /// through `see_through`: the bounds of solid brushes the compiler's vis stopped at as
+    /// at walls but that let sight through (q3_shaders.hpp: grates, windows). A line of
+    /// sight through such a brush leaves it in a cluster touching it, and goes on as from
+    /// there: so every cluster whose row holds a cluster touching the brush gets the rows
+    /// of all the clusters touching it, until nothing changes (a line through several
+    /// such brushes in a row). Without that, a box seen only through a grate would be
+    /// proven hidden. A brush whose clusters the tree walk cannot tell opens every pair.
+    explicit Pvs(const q3::Q3Bsp& bsp, const std::vector<visibility::Aabb>& see_through = {});
 
     /// True when the map has vis data; without it every query answers "may see".
     [[nodiscard]] bool has_visibility() const { return num_clusters_ > 0; }
@@ -55,6 +62,10 @@ public:
     /// Whether cluster `from` may see cluster `to` (true for -1 or out of range).
     [[nodiscard]] bool cluster_visible(int from, int to) const;
 
+    /// Cluster pairs the see-through brushes opened (false in the compiler's bits, true
+    /// here).
+    [[nodiscard]] std::uint64_t opened_pairs() const { return opened_pairs_; }
+
 private:
     enum class Walk { found, none, unknown };
     /// The clusters of the leaves `box` overlaps into `out`; `unknown` (out empty)
@@ -71,6 +82,9 @@ private:
     std::int32_t num_clusters_ = 0;
     std::int32_t bytes_per_cluster_ = 0;
     std::vector<std::uint8_t> bits_;
+    std::uint64_t opened_pairs_ = 0;
+
+    void open_through(const std::vector<visibility::Aabb>& see_through);
 };
 
 } // namespace dsoc::maps
