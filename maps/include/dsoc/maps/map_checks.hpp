@@ -40,8 +40,8 @@ inline constexpr float kSpawnHeadroom = 256.0f;
 /// Every finding about `map`, warnings and unusable alike, in a fixed order (codes:
 /// non_finite_geometry, no_spawn_points, no_usable_spawn_point, spawn_outside_world,
 /// spawn_in_solid, spawn_in_hazard, no_occluders, no_collision_brushes,
-/// beyond_world_limit, degenerate_brushes, shader_scripts_unread). Empty for a sound map. Pure: may be called
-/// from several threads at once.
+/// beyond_world_limit, degenerate_brushes, shader_scripts_unread). Empty for a sound map. Pure: may
+/// be called from several threads at once.
 [[nodiscard]] std::vector<MapFinding> check_map(const Map& map);
 
 /// True when some finding is FindingSeverity::unusable.
