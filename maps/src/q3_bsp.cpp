@@ -27,6 +27,7 @@ constexpr std::size_t kModelSize = 40;
 constexpr std::size_t kBrushSize = 12;
 constexpr std::size_t kBrushSideSize = 8;
 constexpr std::size_t kSurfaceSize = 104;
+constexpr std::size_t kDrawVertSize = 44; // position, st, lightmap st, normal, colour
 constexpr std::int32_t kSurfacePatch = 2;
 
 class Parser {
@@ -235,12 +236,62 @@ std::optional<LoadError> Parser::parse_surfaces() {
     if (auto failure = count_records(Lump::surfaces, kSurfaceSize, count)) {
         return failure;
     }
+    std::size_t vert_count = 0;
+    if (auto failure = count_records(Lump::draw_verts, kDrawVertSize, vert_count)) {
+        return failure;
+    }
     const auto data = lump_bytes(Lump::surfaces);
+    const auto verts = lump_bytes(Lump::draw_verts);
     bsp_.surface_count = static_cast<std::uint32_t>(count);
+    std::size_t patch_points = 0; // bounded by vert_count: memory bounded by the input
     for (std::size_t i = 0; i < count; ++i) {
-        if (read_i32(data, i * kSurfaceSize + 8) == kSurfacePatch) {
-            ++bsp_.patch_surface_count;
+        const auto record = data.subspan(i * kSurfaceSize, kSurfaceSize);
+        if (read_i32(record, 8) != kSurfacePatch) {
+            continue;
         }
+        ++bsp_.patch_surface_count;
+        Patch patch;
+        patch.surface = static_cast<std::int32_t>(i);
+        patch.shader = read_i32(record, 0);
+        const std::int32_t first_vert = read_i32(record, 12);
+        const std::int32_t num_verts = read_i32(record, 16);
+        patch.width = read_i32(record, 96);
+        patch.height = read_i32(record, 100);
+        if (auto bad = check_index(Lump::surfaces, "surface", i, "shader", patch.shader,
+                                   bsp_.shaders.size(), "shaders")) {
+            return bad;
+        }
+        if (auto bad = check_range(Lump::surfaces, "surface", i, "vertices", first_vert, num_verts,
+                                   vert_count, "draw vertices")) {
+            return bad;
+        }
+        const auto side_ok = [](std::int32_t n) {
+            return n >= 3 && n <= kMaxPatchSide && n % 2 == 1;
+        };
+        if (!side_ok(patch.width) || !side_ok(patch.height) ||
+            static_cast<std::int64_t>(patch.width) * patch.height != num_verts) {
+            return error(Lump::surfaces,
+                         "surface " + std::to_string(i) + ": patch of " +
+                             std::to_string(patch.width) + " x " + std::to_string(patch.height) +
+                             " control points with " + std::to_string(num_verts) +
+                             " vertices (each side odd, 3 to " + std::to_string(kMaxPatchSide) +
+                             ", and width x height vertices)");
+        }
+        patch_points += static_cast<std::size_t>(num_verts);
+        if (patch_points > vert_count) {
+            return error(Lump::surfaces,
+                         "surface " + std::to_string(i) + ": the patches so far hold " +
+                             std::to_string(patch_points) + " control points, more than the " +
+                             std::to_string(vert_count) +
+                             " draw vertices (patches share vertices)");
+        }
+        patch.points.reserve(static_cast<std::size_t>(num_verts));
+        for (std::int32_t v = 0; v < num_verts; ++v) {
+            const auto vert = verts.subspan(
+                static_cast<std::size_t>(first_vert + v) * kDrawVertSize, kDrawVertSize);
+            patch.points.emplace_back(read_f32(vert, 0), read_f32(vert, 4), read_f32(vert, 8));
+        }
+        bsp_.patches.push_back(std::move(patch));
     }
     std::size_t leaf_surfaces = 0;
     if (auto failure = count_records(Lump::leaf_surfaces, kIndexSize, leaf_surfaces)) {

@@ -5,6 +5,7 @@
 #include "dsoc/maps/pk3.hpp"
 #include "dsoc/maps/q3_shaders.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -86,6 +87,28 @@ Result<Map> map_from_q3_bsp(const q3::Q3Bsp& bsp, std::string name, const Shader
         ours |= translucent ? contents_translucent : 0u;
         detail::add_brush(map, planes, ours, opaque);
     }
+
+    // Curved surfaces of the world that the game draws opaque: not occluders, but they
+    // block sight (curved_surface.hpp).
+    for (const q3::Patch& patch : bsp.patches) {
+        if (patch.surface < world.first_surface ||
+            patch.surface >= world.first_surface + world.num_surfaces) {
+            continue; // a door's or a platform's: moves, not part of the static world
+        }
+        const q3::Shader& shader = bsp.shaders[static_cast<std::size_t>(patch.shader)];
+        if ((shader.surface_flags & q3::kSurfNoDraw) != 0 ||
+            (shader.content_flags & q3::kContentsTranslucent) != 0 ||
+            lets_sight_through(shader.name, scripts)) {
+            continue;
+        }
+        const bool finite = std::all_of(patch.points.begin(), patch.points.end(), [](glm::vec3 p) {
+            return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+        });
+        if (finite) {
+            map.opaque_patches.push_back({patch.width, patch.height, patch.points});
+        }
+    }
+    map.stats.opaque_patches = map.opaque_patches.size();
 
     auto entities = parse_entities(bsp.entities, bsp.file);
     if (!entities) {

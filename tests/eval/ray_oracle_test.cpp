@@ -2,8 +2,11 @@
 // two independent implementations of "does an occluder's interior cross this segment".
 
 #include "dsoc/eval/ray_oracle.hpp"
+#include "dsoc/maps/curved_surface.hpp"
+#include "dsoc/maps/map_source.hpp"
 #include "dsoc/visibility/occluder_world.hpp"
 #include "dsoc/visibility/reference_visibility.hpp"
+#include "support/openarena.hpp"
 #include "support/test_maps.hpp"
 
 #include <gtest/gtest.h>
@@ -108,6 +111,72 @@ TEST(RayOracle, TouchingAFaceIsNotBlocking) {
     EXPECT_TRUE(oracle.segment_blocked({-5, 5, 5}, {15, 5, 5}));
     EXPECT_FALSE(oracle.segment_blocked({-5, 5, 5}, {0, 5, 5}));    // ends on the face
     EXPECT_FALSE(oracle.segment_blocked({-5, 20, 5}, {15, 20, 5})); // misses
+}
+
+// A long ray that rises into a point just above a block's top edge crosses the block's
+// corner about half a unit before its end. The crossing blocks (the reference agrees);
+// a trim in proportion to the length (1e-3 of 2,236 units) once dropped it, and so
+// "saw" entities standing right behind walls from far away (pul1ctf: a player 0.9
+// units behind a wall's corner, seen from 1,175 units).
+TEST(RayOracle, ACornerCrossedNearTheEndOfALongRayBlocks) {
+    const auto block = visibility::ConvexPolyhedron::from_aabb({{0, 0, 0}, {10, 10, 10}});
+    const RayOracle oracle(std::span(&block, 1));
+    const glm::vec3 point{0.5f, 5.0f, 10.2f};
+    const glm::vec3 eye = point - 2000.5f * glm::vec3{1.0f, 0.0f, 0.5f};
+    ASSERT_TRUE(visibility::segment_blocked_by(eye, point, block.planes()));
+    EXPECT_TRUE(oracle.segment_blocked(eye, point));
+    const glm::vec3 points[] = {point};
+    EXPECT_FALSE(oracle.any_visible(eye, points)); // the 16-ray path trims alike
+    // Just above the corner's reach the same ray is clear.
+    const glm::vec3 higher = point + glm::vec3{0.0f, 0.0f, 0.3f};
+    ASSERT_FALSE(
+        visibility::segment_blocked_by(eye + glm::vec3{0.0f, 0.0f, 0.3f}, higher, block.planes()));
+    EXPECT_FALSE(oracle.segment_blocked(eye + glm::vec3{0.0f, 0.0f, 0.3f}, higher));
+}
+
+TEST(RayOracle, SurfaceTrianglesBlockToo) {
+    const auto far_block =
+        visibility::ConvexPolyhedron::from_aabb({{100, 100, 100}, {110, 110, 110}});
+    const glm::vec3 triangle[] = {{5, -10, -10}, {5, 10, -10}, {5, 0, 10}};
+    const RayOracle with(std::span(&far_block, 1), triangle);
+    const RayOracle without(std::span(&far_block, 1));
+    EXPECT_EQ(with.triangle_count(), without.triangle_count() + 1);
+    EXPECT_TRUE(with.segment_blocked({0, 0, 0}, {10, 0, 0}));
+    EXPECT_FALSE(without.segment_blocked({0, 0, 0}, {10, 0, 0}));
+    EXPECT_FALSE(with.segment_blocked({0, 20, 0}, {10, 20, 0})); // beside it
+    const glm::vec3 points[] = {{10, 0, 0}, {10, 0, 1}};
+    EXPECT_FALSE(with.any_visible({0, 0, 0}, points));
+    EXPECT_TRUE(without.any_visible({0, 0, 0}, points));
+}
+
+// pul1ctf draws its round walls as curved patches with a caulk brush behind each: the
+// compiler's vis stops at the caulk, the occluders hold neither. An eye and a player
+// box where the occluders alone leave a clear line, through patches the game draws
+// opaque, and the compiler's PVS (rightly) hides the box: the oracle with the patches
+// agrees with the PVS.
+TEST(RayOracle, Pul1ctfsPatchesBlockWhatTheCompilersVisHides) {
+    DSOC_REQUIRE_OPENARENA();
+    const auto map = maps::load_map("pul1ctf", maps::MapSearch::from_environment());
+    ASSERT_TRUE(map.ok()) << map.error().message();
+    ASSERT_GT(map->opaque_patches.size(), 100u);
+    std::vector<glm::vec3> triangles;
+    for (const maps::CurvedSurface& patch : map->opaque_patches) {
+        maps::tessellate(patch, 16, triangles);
+    }
+    const RayOracle occluders_only(map->occluders);
+    const RayOracle with_patches(map->occluders, triangles);
+    const glm::vec3 eye{262.44833f, -895.3668f, 404.7917f};
+    const visibility::Aabb box{{-530.6101f, 1466.7593f, 0.13233376f},
+                               {-500.6101f, 1496.7593f, 56.13233f}};
+    EXPECT_TRUE(occluders_only.box_visible(eye, box, 5));
+    EXPECT_FALSE(with_patches.box_visible(eye, box, 5));
+    ASSERT_NE(map->pvs, nullptr);
+    std::vector<std::int32_t> eye_clusters;
+    ASSERT_TRUE(map->pvs->clusters_of({eye, eye}, eye_clusters));
+    std::vector<std::uint8_t> row;
+    map->pvs->union_of_rows(eye_clusters, row);
+    std::vector<std::int32_t> scratch;
+    EXPECT_FALSE(map->pvs->may_see(row, box, scratch));
 }
 
 TEST(RayOracle, FrontSamplesCoverTheFacesTurnedToTheEye) {

@@ -108,6 +108,7 @@ void expect_counts_match(const std::vector<std::string>& names,
         EXPECT_EQ(static_cast<long>(s.see_through_skipped), want.at("see_through")) << name;
         EXPECT_EQ(static_cast<long>(map->spawn_points.size()), want.at("spawn_points")) << name;
         EXPECT_EQ(static_cast<long>(s.patches_left_out), want.at("patches")) << name;
+        EXPECT_EQ(static_cast<long>(s.opaque_patches), want.at("opaque_patches")) << name;
         EXPECT_EQ(static_cast<long>(s.shader_scripts), want.at("shader_scripts")) << name;
         EXPECT_EQ(static_cast<long>(scripts != nullptr ? scripts->size() : 0),
                   want.at("shader_definitions"))

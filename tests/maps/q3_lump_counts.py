@@ -15,6 +15,8 @@ before any geometry is computed:
                        sight through
   spawn_points         entities of the spawn classes (found with a regular expression)
   patches              surfaces of type 2 (curved patches)
+  opaque_patches       of those, surfaces of model 0 whose shader lacks SURF_NODRAW and
+                       CONTENTS_TRANSLUCENT and does not let sight through
   shader_scripts       scripts read, when every one was read whole and some define a
                        shader (else 0: the name hints decide)
   shader_definitions   distinct shader names the scripts define (case-insensitive)
@@ -215,14 +217,17 @@ def count(data, scripts=None):
     text = lump[0].split(b"\0")[0].decode("latin-1")
     classnames = re.findall(r'"classname"\s+"([^"]*)"', text)
     spawns = sum(1 for c in classnames if c in SPAWN_CLASSES)
-    # Surfaces are 104-byte records; the type is the third int.
-    surface_types = [struct.unpack_from("<i", lump[13], off + 8)[0]
-                     for off in range(0, len(lump[13]), 104)]
-    patches = surface_types.count(2)
+    # Surfaces are 104-byte records: the shader is the first int, the type the third.
+    surfaces = [struct.unpack_from("<3i", lump[13], off) for off in range(0, len(lump[13]), 104)]
+    patches = sum(1 for _, _, kind in surfaces if kind == 2)
+    first_surface, num_surfaces = models[0][6], models[0][7]
+    opaque_patches = sum(1 for shader, _, kind in surfaces[first_surface:first_surface + num_surfaces]
+                         if kind == 2 and not shaders[shader][0] & SURF_NODRAW
+                         and not shaders[shader][1] & CONTENTS_TRANSLUCENT and not shaders[shader][2])
     sight, scripts_read, whole = scripts if scripts is not None else ({}, 0, False)
     return {"brushes": len(brushes), "world_brushes": num_brushes,
             "collision_candidates": collision, "opaque_candidates": opaque,
-            "see_through": see_through, "spawn_points": spawns, "patches": patches,
+            "see_through": see_through, "spawn_points": spawns, "patches": patches, "opaque_patches": opaque_patches,
             "shader_scripts": scripts_read if whole and sight else 0, "shader_definitions": len(sight)}
 
 

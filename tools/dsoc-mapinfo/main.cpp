@@ -47,7 +47,9 @@ void print_text(const dsoc::maps::Map& map, const std::vector<dsoc::maps::MapFin
                 "%zu, unbounded %zu, empty %zu)\n",
                 s.degenerate.total(), s.degenerate.too_many_planes, s.degenerate.too_few_planes,
                 s.degenerate.non_finite_plane, s.degenerate.unbounded, s.degenerate.empty);
-    std::printf("patches left out    %zu\n", s.patches_left_out);
+    std::printf("patches left out    %zu (%zu of the world's drawn opaque: they block the oracle's "
+                "rays)\n",
+                s.patches_left_out, s.opaque_patches);
     std::printf("spawn points        %zu\n", map.spawn_points.size());
     std::printf("hazards             %zu\n", map.hazards.size());
     if (map.bounds.is_empty()) {
@@ -87,6 +89,7 @@ void print_json(const dsoc::maps::Map& map, const std::vector<dsoc::maps::MapFin
         out["pvs_opened_pairs"] = map.pvs->opened_pairs();
     }
     out["patches_left_out"] = s.patches_left_out;
+    out["opaque_patches"] = s.opaque_patches;
     out["degenerate_skipped"] = s.degenerate.total();
     out["degenerate_by_reason"] = {{"too_many_planes", s.degenerate.too_many_planes},
                                    {"too_few_planes", s.degenerate.too_few_planes},

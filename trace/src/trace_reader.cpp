@@ -61,7 +61,8 @@ bool TraceReader::open(const std::string& path) {
     if (j.is_discarded() || !j.is_object()) {
         return fail("header: not a JSON object");
     }
-    if (j.value("type", "") != "header") {
+    // Not j.value("type", ""), which throws when the type is not a string.
+    if (!j.contains("type") || !j["type"].is_string() || j["type"] != "header") {
         return fail("first line must have \"type\":\"header\"");
     }
     if (!j.contains("version") || j["version"] != kTraceVersion) {
@@ -100,6 +101,39 @@ bool TraceReader::open(const std::string& path) {
             occ.planes.push_back(plane);
         }
         header_.occluders.push_back(std::move(occ));
+    }
+    header_.patches.clear();
+    if (j.contains("patches")) {
+        if (!j["patches"].is_array()) {
+            return fail("header: patches must be an array");
+        }
+        for (const auto& p : j["patches"]) {
+            const std::string which = "header: patch " + std::to_string(header_.patches.size());
+            TracePatch patch;
+            const auto side_ok = [](const json& n) {
+                return n.is_number_integer() && n.get<long long>() >= 3 &&
+                       n.get<long long>() <= 31 && n.get<long long>() % 2 == 1;
+            };
+            if (!p.is_object() || !p.contains("width") || !side_ok(p["width"]) ||
+                !p.contains("height") || !side_ok(p["height"]) || !p.contains("points") ||
+                !p["points"].is_array()) {
+                return fail(which + " needs width and height (odd, 3 to 31) and points");
+            }
+            patch.width = p["width"].get<int>();
+            patch.height = p["height"].get<int>();
+            if (p["points"].size() != static_cast<std::size_t>(patch.width * patch.height)) {
+                return fail(which + ": " + std::to_string(p["points"].size()) + " points for " +
+                            std::to_string(patch.width) + " x " + std::to_string(patch.height));
+            }
+            for (const auto& point : p["points"]) {
+                glm::vec3 v;
+                if (!get_vec3(point, v)) {
+                    return fail(which + ": a point must be [x,y,z] of finite numbers");
+                }
+                patch.points.push_back(v);
+            }
+            header_.patches.push_back(std::move(patch));
+        }
     }
     return true;
 }

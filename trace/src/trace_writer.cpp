@@ -42,7 +42,8 @@ bool TraceWriter::open(const std::string& path, const TraceHeader& header, std::
     any_tick_ = false;
     std::string& out = line_;
     out.clear();
-    // Strings we write (map, policy) are names; escape the two characters JSON needs.
+    // Strings we write (map, policy) are names: the quote and the backslash escaped,
+    // control characters as \u00XX, so that a reader reads back the same string.
     const auto quoted = [](const std::string& s) {
         std::string q = "\"";
         for (const char c : s) {
@@ -51,6 +52,8 @@ bool TraceWriter::open(const std::string& path, const TraceHeader& header, std::
             }
             if (static_cast<unsigned char>(c) >= 0x20) {
                 q += c;
+            } else {
+                fmt::format_to(std::back_inserter(q), "\\u{:04x}", static_cast<unsigned>(c));
             }
         }
         return q + "\"";
@@ -70,7 +73,23 @@ bool TraceWriter::open(const std::string& path, const TraceHeader& header, std::
         }
         out += "]}";
     }
-    out += "]}\n";
+    out += "]";
+    if (!header.patches.empty()) {
+        out += R"(,"patches":[)";
+        for (std::size_t i = 0; i < header.patches.size(); ++i) {
+            const auto& patch = header.patches[i];
+            fmt::format_to(std::back_inserter(out), R"({}{{"width":{},"height":{},"points":[)",
+                           i ? "," : "", patch.width, patch.height);
+            for (std::size_t k = 0; k < patch.points.size(); ++k) {
+                const glm::vec3 p = patch.points[k];
+                fmt::format_to(std::back_inserter(out), "{}[{},{},{}]", k ? "," : "", p.x, p.y,
+                               p.z);
+            }
+            out += "]}";
+        }
+        out += "]";
+    }
+    out += "}\n";
     if (!put(out)) {
         error = "cannot write trace file '" + path + "'";
         return false;

@@ -22,6 +22,12 @@ namespace dsoc::eval {
 
 namespace {
 
+/// Grid steps along each parameter of a 3 x 3 curved patch when the oracle takes it as
+/// triangles: within about 0.1 unit of the curved surface for an arc of 64-unit radius
+/// (curved_surface.hpp). The renderer's own tessellation is coarser, so near a curved
+/// silhouette the game and the oracle may differ by up to its error (a few units).
+constexpr int kOraclePatchSteps = 16;
+
 double thread_cpu_us() {
     timespec ts{};
     clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
@@ -183,7 +189,11 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
     }();
     result.map_source = map.source;
     result.occluders = map.occluders.size();
-    const RayOracle rays(map.occluders);
+    std::vector<glm::vec3> patch_triangles;
+    for (const maps::CurvedSurface& patch : map.opaque_patches) {
+        maps::tessellate(patch, kOraclePatchSteps, patch_triangles);
+    }
+    const RayOracle rays(map.occluders, patch_triangles);
     result.oracle_triangles = rays.triangle_count();
     WorldSim world(map, sc, lookahead);
     const std::size_t viewers = world.viewer_count();
@@ -266,6 +276,9 @@ EvalResult run_evaluation(const EvalOptions& options, std::ostream* progress) {
             o.id = static_cast<std::uint32_t>(i);
             o.planes = map.occluders[i].planes();
             header.occluders.push_back(std::move(o));
+        }
+        for (const maps::CurvedSurface& patch : map.opaque_patches) {
+            header.patches.push_back({patch.width, patch.height, patch.points});
         }
         std::string error;
         if (!trace_writer.open(options.trace_path, header, error)) {

@@ -1,6 +1,7 @@
 #include "dsoc/eval/ray_oracle.hpp"
 
 #include <embree3/rtcore.h>
+#include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <stdexcept>
@@ -19,9 +20,18 @@ RTCScene as_scene(void* p) {
 
 constexpr int kPacket = 16;
 
+/// The ray parameter (0 at the eye, 1 at the point) kEndTrim from the start; 0.5 for a
+/// segment shorter than two trims, which is then never blocked (all of it lies within
+/// a trim of an end).
+float end_trim(glm::vec3 d) {
+    const float length = glm::length(d);
+    return length > 2.0f * RayOracle::kEndTrim ? RayOracle::kEndTrim / length : 0.5f;
+}
+
 } // namespace
 
-RayOracle::RayOracle(std::span<const visibility::ConvexPolyhedron> occluders) {
+RayOracle::RayOracle(std::span<const visibility::ConvexPolyhedron> occluders,
+                     std::span<const glm::vec3> triangles) {
     RTCDevice device = rtcNewDevice("threads=1");
     if (device == nullptr) {
         throw std::runtime_error("embree: rtcNewDevice failed");
@@ -48,6 +58,14 @@ RayOracle::RayOracle(std::span<const visibility::ConvexPolyhedron> occluders) {
                 indices.insert(indices.end(), {base + vi[0], base + vi[k - 1], base + vi[k]});
             }
         }
+    }
+    for (std::size_t t = 0; t + 2 < triangles.size(); t += 3) {
+        const auto base = static_cast<unsigned>(vertices.size() / 3);
+        for (std::size_t k = 0; k < 3; ++k) {
+            const glm::vec3 v = triangles[t + k];
+            vertices.insert(vertices.end(), {v.x, v.y, v.z});
+        }
+        indices.insert(indices.end(), {base, base + 1, base + 2});
     }
     triangles_ = indices.size() / 3;
     if (triangles_ > 0) {
@@ -85,8 +103,9 @@ bool RayOracle::segment_blocked(glm::vec3 from, glm::vec3 to) const {
     ray.dir_x = d.x;
     ray.dir_y = d.y;
     ray.dir_z = d.z;
-    ray.tnear = kRelativeEpsilon;
-    ray.tfar = 1.0f - kRelativeEpsilon;
+    const float trim = end_trim(d);
+    ray.tnear = trim;
+    ray.tfar = 1.0f - trim;
     ray.mask = 0xffffffffu;
     rtcOccluded1(as_scene(scene_), &context, &ray);
     return ray.tfar < 0.0f; // Embree sets tfar to -inf on a hit
@@ -110,8 +129,9 @@ bool RayOracle::any_visible(glm::vec3 eye, std::span<const glm::vec3> points) co
             rays.dir_x[k] = p.x - eye.x;
             rays.dir_y[k] = p.y - eye.y;
             rays.dir_z[k] = p.z - eye.z;
-            rays.tnear[k] = kRelativeEpsilon;
-            rays.tfar[k] = 1.0f - kRelativeEpsilon;
+            const float trim = end_trim(p - eye);
+            rays.tnear[k] = trim;
+            rays.tfar[k] = 1.0f - trim;
             rays.time[k] = 0.0f;
             rays.mask[k] = 0xffffffffu;
             rays.id[k] = static_cast<unsigned>(k);

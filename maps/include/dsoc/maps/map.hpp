@@ -2,6 +2,7 @@
 // A loaded map, whatever it came from (Quake 3 BSP, our text format, a generator):
 // what blocks sight, what blocks movement, and where players start.
 
+#include "dsoc/maps/curved_surface.hpp"
 #include "dsoc/maps/load_error.hpp"
 #include "dsoc/maps/pvs.hpp"
 #include "dsoc/visibility/convex_polyhedron.hpp"
@@ -78,6 +79,7 @@ struct MapStats {
     /// shader's name did: q3_shaders.hpp).
     std::size_t shader_scripts = 0;
     std::size_t patches_left_out = 0; ///< curved patch surfaces not turned into occluders
+    std::size_t opaque_patches = 0;   ///< of those, the world's drawn opaque (= opaque_patches)
     DegenerateCounts degenerate;      ///< collision candidates with unusable geometry
 };
 
@@ -95,6 +97,10 @@ struct Map {
     /// grates, windows), which the compiler's vis took for walls (the PVS is opened
     /// through them: pvs.hpp).
     std::vector<visibility::Aabb> see_through;
+    /// The world's curved surfaces that the game draws opaque (Quake 3 maps): not
+    /// occluders (a culler may not trust what it does not use), but they block sight,
+    /// so the evaluation's ray oracle takes them (curved_surface.hpp).
+    std::vector<CurvedSurface> opaque_patches;
     /// Union of the collision brushes' bounds (empty when there are none).
     visibility::Aabb bounds;
     MapStats stats;

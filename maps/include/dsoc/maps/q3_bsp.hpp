@@ -116,6 +116,23 @@ struct BrushSide {
     std::int32_t shader = 0;
 };
 
+/// A curved surface (surface type 2): a width x height grid of control points, read as
+/// biquadratic Bezier patches of 3 x 3 points sharing their edges (both sizes odd,
+/// from 3 to kMaxPatchSide; each patch has its own vertices, so all patches together
+/// hold at most the draw vertices lump's). Points are as in the file (possibly not
+/// finite).
+struct Patch {
+    std::int32_t surface = 0; ///< its index in the surfaces lump (models own ranges of it)
+    std::int32_t shader = 0;
+    std::int32_t width = 0;
+    std::int32_t height = 0;
+    std::vector<glm::vec3> points; ///< row by row: points[row * width + column]
+};
+
+/// Most control points along a side of a patch: the game refuses a patch of more than
+/// MAX_PATCH_SIZE (32) a side, and sides are odd.
+inline constexpr std::int32_t kMaxPatchSide = 31;
+
 /// Cluster-to-cluster potentially visible set. Empty (num_clusters == 0) when the
 /// map was compiled without vis (e.g. oa_ctf2): then everything is potentially visible.
 struct Visibility {
@@ -143,8 +160,9 @@ struct Q3Bsp {
     std::vector<Model> models;
     std::vector<Brush> brushes;
     std::vector<BrushSide> brush_sides;
-    std::uint32_t surface_count = 0;       ///< records in the surfaces lump (not decoded)
+    std::uint32_t surface_count = 0;       ///< records in the surfaces lump
     std::uint32_t patch_surface_count = 0; ///< of which curved patches (type 2)
+    std::vector<Patch> patches;            ///< those patches, decoded
     std::uint32_t leaf_surface_count = 0;
     Visibility visibility;
 

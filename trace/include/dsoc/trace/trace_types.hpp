@@ -19,6 +19,15 @@ struct TraceOccluder {
     std::vector<visibility::Plane> planes;
 };
 
+/// A curved surface the game draws opaque (a Quake 3 patch): a width x height grid of
+/// control points, read as biquadratic Bezier patches of 3 x 3 points sharing edges.
+/// It blocks sight like an occluder, though the culling did not use it.
+struct TracePatch {
+    int width = 0;                 ///< odd, 3..31
+    int height = 0;                ///< odd, 3..31
+    std::vector<glm::vec3> points; ///< row by row, width x height
+};
+
 struct TraceHeader {
     std::string map;
     int tick_rate = 30;
@@ -26,6 +35,7 @@ struct TraceHeader {
     /// Ticks of the client's own movement the server promises to cover (0: present eye only).
     int lookahead_ticks = 0;
     std::vector<TraceOccluder> occluders;
+    std::vector<TracePatch> patches; ///< written only when there are some
 };
 
 struct TraceEntity {

@@ -1,12 +1,15 @@
 #pragma once
 // The evaluation's independent visibility oracle: Embree ray casts against the
-// occluders' triangles, sharing no code with dsoc's rasterizer. An entity is visible
+// occluders' triangles (and the map's opaque curved surfaces, which block sight in the
+// game though no culler uses them), sharing no code with dsoc's rasterizer. An entity is visible
 // from an eye when any ray from the eye to a dense set of sample points on its box is
 // unblocked (the spec's test, sampled: a `visible` answer is a certificate, an
 // `occluded` one can miss a gap narrower than the sample spacing).
 //
 // Touching a face is not blocking (replication-trace spec): every ray is shortened at
-// both ends by kRelativeEpsilon of its length.
+// both ends by kEndTrim world units, a fixed length, so that a wall crossed within a
+// unit of an entity far away still blocks (a trim in proportion to the length let a
+// ray 1,175 units long pass under a wall's corner 0.9 units in front of a box).
 //
 // Threading: built once; every const member may run concurrently (Embree's
 // rtcOccluded on a committed scene is thread-safe).
@@ -24,12 +27,18 @@ namespace dsoc::eval {
 
 class RayOracle {
 public:
-    /// Share of a ray's length dropped at each end (so endpoints on a face do not
-    /// count as blocked). [Units: fraction]
-    static constexpr float kRelativeEpsilon = 1e-3f;
+    /// Length dropped at each end of a ray, so that an endpoint on a face (a box
+    /// resting on a floor or against a wall) does not count as blocked. Far above the
+    /// float spacing of map coordinates (under 0.001 below 8,192 units) and the brush
+    /// tolerance (1/64), far below the 0.125 units players keep from walls.
+    /// [Units: world units]
+    static constexpr float kEndTrim = 1.0f / 32.0f;
 
-    /// Fan-triangulates every face of every non-empty polyhedron.
-    explicit RayOracle(std::span<const visibility::ConvexPolyhedron> occluders);
+    /// Fan-triangulates every face of every non-empty polyhedron; `triangles` (three
+    /// points each) block sight too: surfaces that the game draws opaque and that are
+    /// not occluders, such as a Quake 3 map's curved patches (Map::opaque_patches).
+    explicit RayOracle(std::span<const visibility::ConvexPolyhedron> occluders,
+                       std::span<const glm::vec3> triangles = {});
     ~RayOracle();
     RayOracle(const RayOracle&) = delete;
     RayOracle& operator=(const RayOracle&) = delete;
