@@ -17,7 +17,75 @@ Pvs::Pvs(const q3::Q3Bsp& bsp, const std::vector<visibility::Aabb>& see_through)
     for (const q3::Leaf& l : bsp.leafs) {
         leaf_cluster_.push_back(l.cluster);
     }
+    make_symmetric();
     open_through(see_through);
+}
+
+namespace {
+
+/// The 8 x 8 bit matrix `m` (byte k is row k; bit j of it, column j) transposed
+/// (Hacker's Delight, "transpose8", on a 64-bit word).
+constexpr std::uint64_t transpose8x8(std::uint64_t m) {
+    std::uint64_t t = (m ^ (m >> 7)) & 0x00AA00AA00AA00AAull;
+    m = m ^ t ^ (t << 7);
+    t = (m ^ (m >> 14)) & 0x0000CCCC0000CCCCull;
+    m = m ^ t ^ (t << 14);
+    t = (m ^ (m >> 28)) & 0x00000000F0F0F0F0ull;
+    return m ^ t ^ (t << 28);
+}
+static_assert(transpose8x8(0x02) == 0x0100, "(row 0, column 1) goes to (row 1, column 0)");
+static_assert(transpose8x8(0x8000000000000000ull) == 0x8000000000000000ull);
+
+} // namespace
+
+void Pvs::make_symmetric() {
+    if (!has_visibility()) {
+        return;
+    }
+    // In blocks of 8 x 8 clusters: block (i, j) is byte j of rows 8i..8i+7, and its
+    // mirror block (j, i), transposed, holds the same pairs the other way round. Each
+    // row is read a byte at a time along it, where a bit at a time down the columns
+    // missed the cache once a pair on maps of thousands of clusters.
+    const auto n = static_cast<std::size_t>(num_clusters_);
+    const auto row_bytes = static_cast<std::size_t>(bytes_per_cluster_);
+    const std::size_t blocks = (n + 7) / 8;
+    const auto load = [&](std::size_t i, std::size_t j) {
+        std::uint64_t m = 0;
+        for (std::size_t k = 0; k < 8 && 8 * i + k < n; ++k) {
+            m |= std::uint64_t{bits_[(8 * i + k) * row_bytes + j]} << (8 * k);
+        }
+        return m;
+    };
+    const auto store = [&](std::size_t i, std::size_t j, std::uint64_t m) {
+        for (std::size_t k = 0; k < 8 && 8 * i + k < n; ++k) {
+            bits_[(8 * i + k) * row_bytes + j] = static_cast<std::uint8_t>(m >> (8 * k));
+        }
+    };
+    // The bits of block column j that are clusters (not the last byte's padding), in
+    // every row of a block.
+    const auto clusters_in = [&](std::size_t j) {
+        const std::size_t columns = std::min<std::size_t>(8, n - 8 * j);
+        const std::uint64_t byte = (std::uint64_t{1} << columns) - 1;
+        return byte * 0x0101010101010101ull;
+    };
+    for (std::size_t i = 0; i < blocks; ++i) {
+        for (std::size_t j = i; j < blocks; ++j) {
+            const std::uint64_t here = load(i, j);
+            const std::uint64_t mask = clusters_in(j);
+            const std::uint64_t mine = here & mask;
+            const std::uint64_t theirs = transpose8x8(load(j, i) & clusters_in(i));
+            const std::uint64_t both = mine | theirs;
+            // Off the diagonal each pair is once in (i, j); on it, twice.
+            const auto disagree = static_cast<std::uint64_t>(std::popcount(mine ^ theirs));
+            one_way_pairs_ += i == j ? disagree / 2 : disagree;
+            store(i, j, (here & ~mask) | both);
+            if (i != j) {
+                const std::uint64_t there = load(j, i);
+                const std::uint64_t there_mask = clusters_in(i);
+                store(j, i, (there & ~there_mask) | transpose8x8(both));
+            }
+        }
+    }
 }
 
 void Pvs::open_through(const std::vector<visibility::Aabb>& see_through) {

@@ -38,9 +38,10 @@ void print_text(const dsoc::maps::Map& map, const std::vector<dsoc::maps::MapFin
                 s.shader_scripts == 0 ? " (none read whole: see-through told by shader names)"
                                       : "");
     if (map.pvs != nullptr && map.pvs->has_visibility()) {
-        std::printf("pvs                 %d clusters, %llu pairs opened through see-through "
-                    "brushes\n",
+        std::printf("pvs                 %d clusters, %llu one-way pairs made two-way, %llu pairs "
+                    "opened through see-through brushes\n",
                     map.pvs->cluster_count(),
+                    static_cast<unsigned long long>(map.pvs->one_way_pairs()),
                     static_cast<unsigned long long>(map.pvs->opened_pairs()));
     }
     std::printf("degenerate skipped  %zu (too many planes %zu, too few planes %zu, non-finite "
@@ -86,6 +87,7 @@ void print_json(const dsoc::maps::Map& map, const std::vector<dsoc::maps::MapFin
     out["shader_scripts"] = s.shader_scripts;
     if (map.pvs != nullptr && map.pvs->has_visibility()) {
         out["pvs_clusters"] = map.pvs->cluster_count();
+        out["pvs_one_way_pairs"] = map.pvs->one_way_pairs();
         out["pvs_opened_pairs"] = map.pvs->opened_pairs();
     }
     out["patches_left_out"] = s.patches_left_out;

@@ -4,8 +4,9 @@
 // the queries an interest policy needs: the clusters a box touches, and whether some
 // cluster of one set may see some cluster of a box.
 //
-// Conservative meaning (as far as the compiler's vis is, once opened through the
-// brushes it took for walls but that let sight through: see the constructor): if any
+// Conservative meaning (as far as the compiler's vis is, once made symmetric and opened
+// through the brushes it took for walls but that let sight through: see the
+// constructor): if any
 // point of box B can be seen from any point of region R, then some cluster of B is in
 // the PVS of some cluster of R. Clusters are those of the non-solid leaves a box
 // overlaps; a box that overlaps no such leaf (in solid, or outside the map), a map
@@ -22,7 +23,11 @@ namespace dsoc::maps {
 
 class Pvs {
 public:
-    /// Copies the nodes, planes, leaf clusters and vis bits of `bsp`, then opens them
+    /// Copies the nodes, planes, leaf clusters and vis bits of `bsp` and makes the bits
+    /// symmetric: a pair of clusters one of whose rows holds the other is visible both
+    /// ways. Sight goes both ways along a line, but the compiler's rows need not agree
+    /// (kaos: cluster 725 sees 646, 646 does not see 725, and a clear line joins an eye in
+    /// 646 to a player in 725), and the wrong one hides what is seen. Then it opens them
     /// through `see_through`: the bounds of solid brushes the compiler's vis stopped at as
     /// at walls but that let sight through (q3_shaders.hpp: grates, windows). A line of
     /// sight through such a brush leaves it in a cluster touching it, and goes on as from
@@ -63,9 +68,12 @@ public:
     /// Whether cluster `from` may see cluster `to` (true for -1 or out of range).
     [[nodiscard]] bool cluster_visible(int from, int to) const;
 
-    /// Cluster pairs the see-through brushes opened (false in the compiler's bits, true
-    /// here).
+    /// Ordered cluster pairs the see-through brushes opened (false in the symmetric
+    /// bits, true here).
     [[nodiscard]] std::uint64_t opened_pairs() const { return opened_pairs_; }
+    /// Unordered cluster pairs the compiler's rows disagreed on (one saw the other, not
+    /// the reverse), now visible both ways.
+    [[nodiscard]] std::uint64_t one_way_pairs() const { return one_way_pairs_; }
 
 private:
     enum class Walk { found, none, unknown };
@@ -84,7 +92,9 @@ private:
     std::int32_t bytes_per_cluster_ = 0;
     std::vector<std::uint8_t> bits_;
     std::uint64_t opened_pairs_ = 0;
+    std::uint64_t one_way_pairs_ = 0;
 
+    void make_symmetric();
     void open_through(const std::vector<visibility::Aabb>& see_through);
 };
 

@@ -31,9 +31,9 @@ public:
         }
         for (const std::int32_t from : a) {
             for (const std::int32_t to : b) {
-                // Both ways: the bake clears both bits of a pair, and the compiler's
-                // vis need not be symmetric.
-                if (pvs_->cluster_visible(from, to) || pvs_->cluster_visible(to, from)) {
+                // One way: the loaded PVS is symmetric (pvs.hpp), and the bake clears
+                // both bits of the pair.
+                if (pvs_->cluster_visible(from, to)) {
                     return false;
                 }
             }

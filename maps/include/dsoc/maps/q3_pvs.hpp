@@ -3,9 +3,12 @@
 // cluster a point is in, and whether one cluster may see another. Read-only queries on
 // a parsed Q3Bsp; safe to call from many threads.
 //
-// Conservative meaning: cluster_visible() == false means the compiler proved nothing
-// in `to` can be seen from anywhere in `from`. When there is no answer (no vis data,
-// as in oa_ctf2, or a point in solid / outside the map, cluster -1) it says visible.
+// Meaning: cluster_visible() == false means the compiler's row of `from` does not hold
+// `to`, read as it is in the file. That is what the compiler claims, not a proof: its
+// rows need not agree both ways (kaos), and its vis takes see-through brushes for
+// walls, so only maps::Pvs (pvs.hpp), which mends both, is conservative. When there is
+// no answer (no vis data, as in oa_ctf2, or a point in solid / outside the map, cluster
+// -1) it says visible.
 
 #include "dsoc/maps/q3_bsp.hpp"
 
@@ -20,7 +23,7 @@ namespace dsoc::maps::q3 {
 /// Cluster of the leaf containing `point`; -1 in solid, outside the map or without leafs.
 [[nodiscard]] int cluster_at(const Q3Bsp& bsp, glm::vec3 point);
 
-/// True unless the PVS proves `to` invisible from `from` (see above).
+/// True unless the compiler's row of `from` leaves out `to` (see above).
 [[nodiscard]] bool cluster_visible(const Q3Bsp& bsp, int from, int to);
 
 /// True when the map has vis data (num_clusters > 0).
