@@ -71,17 +71,17 @@ void Pvs::make_symmetric() {
     for (std::size_t i = 0; i < blocks; ++i) {
         for (std::size_t j = i; j < blocks; ++j) {
             const std::uint64_t here = load(i, j);
+            const std::uint64_t there = load(j, i); // here itself on the diagonal
             const std::uint64_t mask = clusters_in(j);
+            const std::uint64_t there_mask = clusters_in(i);
             const std::uint64_t mine = here & mask;
-            const std::uint64_t theirs = transpose8x8(load(j, i) & clusters_in(i));
+            const std::uint64_t theirs = transpose8x8(there & there_mask);
             const std::uint64_t both = mine | theirs;
             // Off the diagonal each pair is once in (i, j); on it, twice.
             const auto disagree = static_cast<std::uint64_t>(std::popcount(mine ^ theirs));
             one_way_pairs_ += i == j ? disagree / 2 : disagree;
             store(i, j, (here & ~mask) | both);
             if (i != j) {
-                const std::uint64_t there = load(j, i);
-                const std::uint64_t there_mask = clusters_in(i);
                 store(j, i, (there & ~there_mask) | transpose8x8(both));
             }
         }

@@ -6,11 +6,11 @@
 //
 // Conservative meaning (as far as the compiler's vis is, once made symmetric and opened
 // through the brushes it took for walls but that let sight through: see the
-// constructor): if any
-// point of box B can be seen from any point of region R, then some cluster of B is in
-// the PVS of some cluster of R. Clusters are those of the non-solid leaves a box
-// overlaps; a box that overlaps no such leaf (in solid, or outside the map), a map
-// without vis data (oa_ctf2), or a leaf without a cluster all answer "may see".
+// constructor): if any point of box B can be seen from any point of region R, then some
+// cluster of B is in the PVS of some cluster of R. Clusters are those of the non-solid
+// leaves a box overlaps; a box that overlaps no such leaf (in solid, or outside the
+// map), a map without vis data (oa_ctf2), or a leaf without a cluster all answer "may
+// see".
 // Threading: immutable after construction; all queries are const and thread-safe.
 
 #include "dsoc/maps/q3_bsp.hpp"
