@@ -3,6 +3,7 @@
 #include "dsoc/interest/culler_stages.hpp"
 #include "dsoc/interest/culling_policy.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include <glm/common.hpp>
@@ -81,16 +82,25 @@ void PvsPolicy::begin_tick(const WorldView& world, std::uint64_t /*tick*/) {
     ids_.resize(count);
     always_sent_.resize(count);
     teams_.resize(count);
-    if (clusters_.size() < count) {
-        clusters_.resize(count);
-    }
+    cluster_start_.resize(count + 1);
+    clusters_.clear();
     const bool vis = pvs_ != nullptr && pvs_->has_visibility();
     for (std::size_t i = 0; i < count; ++i) {
         const EntityView e = world.entity(i);
         ids_[i] = e.id;
         teams_[i] = e.team;
-        always_sent_[i] = !vis || !pvs_->clusters_of(e.box, clusters_[i]);
+        cluster_start_[i] = static_cast<std::uint32_t>(clusters_.size());
+        // Pvs::may_see_clusters()'s answer for a cluster outside the rows: may see.
+        const bool always = !vis || !pvs_->clusters_of(e.box, scratch_) ||
+                            std::any_of(scratch_.begin(), scratch_.end(), [&](std::int32_t c) {
+                                return c < 0 || c >= pvs_->cluster_count();
+                            });
+        always_sent_[i] = always ? 1 : 0;
+        if (!always) {
+            clusters_.insert(clusters_.end(), scratch_.begin(), scratch_.end());
+        }
     }
+    cluster_start_[count] = static_cast<std::uint32_t>(clusters_.size());
 }
 
 void PvsPolicy::select(const WorldView& /*world*/, const Viewer& viewer,
@@ -100,9 +110,16 @@ void PvsPolicy::select(const WorldView& /*world*/, const Viewer& viewer,
     thread_local std::vector<std::int32_t> eye_clusters;
     thread_local std::vector<std::uint8_t> rows;
     thread_local std::vector<std::uint8_t> arrival_rows;
-    const bool known = viewer_pvs_rows(pvs_.get(), viewer, eye_clusters, rows, arrival_rows);
+    // clusters_ holds only clusters below cluster_count(), whose bits union_of_rows() keeps
+    // (a row the size of the map's; rows too short for them answer nothing: all sent).
+    const bool known = viewer_pvs_rows(pvs_.get(), viewer, eye_clusters, rows, arrival_rows) &&
+                       rows.size() * 8 >= static_cast<std::size_t>(pvs_->cluster_count());
+    const std::uint8_t* const row_bits = rows.data();
     for (std::size_t i = 0; i < ids_.size(); ++i) {
-        const bool seen = !known || always_sent_[i] || pvs_->may_see_clusters(rows, clusters_[i]);
+        bool seen = !known || always_sent_[i] != 0;
+        for (std::uint32_t k = cluster_start_[i]; !seen && k < cluster_start_[i + 1]; ++k) {
+            seen = (row_bits[clusters_[k] >> 3] >> (clusters_[k] & 7) & 1u) != 0;
+        }
         if (visibility::replicated_under(visibility::team_relevance(viewer.team, teams_[i]),
                                          seen)) {
             out.push_back({ids_[i], 0});

@@ -215,18 +215,6 @@ bool Pvs::may_see(const std::vector<std::uint8_t>& visible_clusters, const visib
     return may_see_clusters(visible_clusters, scratch);
 }
 
-bool Pvs::may_see_clusters(const std::vector<std::uint8_t>& visible_clusters,
-                           const std::vector<std::int32_t>& clusters) const {
-    for (const std::int32_t to : clusters) {
-        const std::size_t byte = static_cast<std::size_t>(to >> 3);
-        if (to >= num_clusters_ || byte >= visible_clusters.size() ||
-            (visible_clusters[byte] & (1u << (to & 7))) != 0) {
-            return true;
-        }
-    }
-    return false;
-}
-
 bool Pvs::cluster_visible(int from, int to) const {
     if (num_clusters_ <= 0 || from < 0 || to < 0 || from >= num_clusters_ || to >= num_clusters_) {
         return true;

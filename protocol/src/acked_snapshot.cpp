@@ -212,6 +212,18 @@ void AckedSnapshotEncoder::leave_baseline_below(std::uint32_t id, pb::Snapshot& 
     }
 }
 
+bool AckedSnapshotEncoder::meets_baseline(std::uint32_t id, pb::Snapshot& out) {
+    if (base_ == nullptr) {
+        return false;
+    }
+    const std::vector<FrameEntity>& base = base_->entities;
+    // The call only when there is something to leave (most entities stay known).
+    if (base_at_ < base.size() && base[base_at_].id < id) {
+        leave_baseline_below(id, out);
+    }
+    return base_at_ < base.size() && base[base_at_].id == id;
+}
+
 void AckedSnapshotEncoder::write_entry(std::uint32_t id, std::uint32_t fields,
                                        const std::int32_t* values, std::size_t count,
                                        pb::Snapshot& out) {
@@ -257,9 +269,7 @@ void AckedSnapshotEncoder::enter(std::uint32_t id, const QuantizedPose& pose, st
 
 bool AckedSnapshotEncoder::carry(std::uint32_t id, const QuantizedPose& pose, std::uint8_t tier,
                                  pb::Snapshot& out) {
-    leave_baseline_below(id, out);
-    if (base_ == nullptr || base_at_ == base_->entities.size() ||
-        base_->entities[base_at_].id != id) {
+    if (!meets_baseline(id, out)) {
         return false;
     }
     // Each entity is written once, in place: a frame is rewritten for every client every
@@ -315,9 +325,7 @@ bool AckedSnapshotEncoder::carry(std::uint32_t id, const QuantizedPose& pose, st
 }
 
 bool AckedSnapshotEncoder::carry_unwritten(std::uint32_t id, pb::Snapshot& out) {
-    leave_baseline_below(id, out);
-    if (base_ == nullptr || base_at_ == base_->entities.size() ||
-        base_->entities[base_at_].id != id) {
+    if (!meets_baseline(id, out)) {
         return false;
     }
     const FrameEntity& b = base_->entities[base_at_++];
@@ -390,7 +398,7 @@ std::optional<SnapshotProblem> carry(const FrameEntity& b, const UpdateEntry* e,
     const auto where = [&] { return "the update entry of " + entity_name(b.id); };
     if (e != nullptr && e->fields == kFieldRebase) {
         const std::int32_t* values = s.update_values().data() + e->at;
-        if (auto problem = rebase_problem(values, steps, where())) {
+        if (auto problem = rebase_problem(values, steps, where)) {
             return problem;
         }
         n.tier = static_cast<std::uint8_t>(values[0]);

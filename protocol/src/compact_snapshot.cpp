@@ -160,7 +160,7 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
         }
         ReplicaEntity& r = *known;
         if ((fields & kFieldRebase) != 0) {
-            if (auto problem = rebase_problem(values.data() + at, settings_.angle_steps, where())) {
+            if (auto problem = rebase_problem(values.data() + at, settings_.angle_steps, where)) {
                 problems.push_back(std::move(*problem));
                 continue;
             }

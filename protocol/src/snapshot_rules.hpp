@@ -56,7 +56,17 @@ inline std::int32_t add_angle_steps(std::int32_t yaw, std::int32_t delta, std::i
 /// How many update_values an entry with valid_update_fields() `fields` carries: a rebase
 /// the tier and five absolute values, otherwise one value per field.
 [[nodiscard]] inline int update_value_count(std::uint32_t fields) {
-    return (fields & kFieldRebase) != 0 ? 6 : std::popcount(fields);
+    // A table, not std::popcount: without a -m flag for it that is a call into libgcc,
+    // for every entry a client reads.
+    constexpr auto kBitsSet = [] {
+        std::array<std::uint8_t, 32> bits{};
+        for (std::uint32_t f = 0; f < bits.size(); ++f) {
+            bits[f] = static_cast<std::uint8_t>(std::popcount(f));
+        }
+        return bits;
+    }();
+    static_assert(((kFieldX | kFieldY | kFieldZ | kFieldYaw | kFieldPitch) >> 5) == 0);
+    return (fields & kFieldRebase) != 0 ? 6 : kBitsSet[fields & 31u];
 }
 
 /// "entity <id>", as problems name an entity.
@@ -216,25 +226,26 @@ inline std::optional<SnapshotProblem> read_update_entries(const pb::Snapshot& s,
 
 /// What is wrong with a rebase entry's values (the new tier, x, y, z, yaw, pitch), if
 /// anything (the tier, angles on the heard tier, the yaw step, a position beyond
-/// +-kMaxQuantizedCoordinate); `where` names the entry.
-[[nodiscard]] inline std::optional<SnapshotProblem>
-rebase_problem(const std::int32_t* values, std::uint32_t steps, const std::string& where) {
+/// +-kMaxQuantizedCoordinate); `where()` names the entry (called only for a problem).
+template <class Where>
+[[nodiscard]] std::optional<SnapshotProblem> rebase_problem(const std::int32_t* values,
+                                                            std::uint32_t steps, Where&& where) {
     const std::int32_t tier = values[0];
     const std::int32_t yaw = values[4];
     if (tier < 0 || static_cast<std::size_t>(tier) >= kTiers) {
-        return SnapshotProblem{"bad_tier", where + ": rebase to tier " + std::to_string(tier)};
+        return SnapshotProblem{"bad_tier", where() + ": rebase to tier " + std::to_string(tier)};
     }
     if (tier == kHeardTier && (yaw != 0 || values[5] != 0)) {
         return SnapshotProblem{"angles_on_heard_tier",
-                               where + ": rebase to heard with view angles"};
+                               where() + ": rebase to heard with view angles"};
     }
     if (yaw < 0 || static_cast<std::uint32_t>(yaw) >= steps) {
         return SnapshotProblem{"malformed_update",
-                               where + ": rebase yaw step " + std::to_string(yaw)};
+                               where() + ": rebase yaw step " + std::to_string(yaw)};
     }
     for (int k = 1; k <= 3; ++k) {
         if (values[k] < -kMaxQuantizedCoordinate || values[k] > kMaxQuantizedCoordinate) {
-            return SnapshotProblem{"malformed_update", where + ": rebase beyond +-2^30 quanta"};
+            return SnapshotProblem{"malformed_update", where() + ": rebase beyond +-2^30 quanta"};
         }
     }
     return std::nullopt;

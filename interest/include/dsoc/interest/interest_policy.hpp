@@ -165,13 +165,19 @@ public:
 
 private:
     std::shared_ptr<const maps::Pvs> pvs_; ///< read-only after construction
-    // This tick's entities (world order) and their clusters (Pvs::clusters_of); an
-    // entity in no clustered leaf (or any, without vis data) is always sent. Written
-    // by begin_tick(), read-only during select(); the vectors keep their capacity.
+    // This tick's entities (world order) and their clusters (Pvs::clusters_of), all in
+    // one array: entity i's at [cluster_start_[i], cluster_start_[i + 1]), so that a
+    // viewer's pass reads them in order (one vector per entity was a pointer to chase per
+    // entity, 11% of a 500-client pvs server). An entity in no clustered leaf, in a
+    // cluster the PVS has no row for, or any without vis data, is always sent (has no
+    // clusters here). Written by begin_tick(), read-only during select(); the vectors keep
+    // their capacity.
     std::vector<std::uint32_t> ids_;
-    std::vector<std::vector<std::int32_t>> clusters_;
-    std::vector<bool> always_sent_;
+    std::vector<std::uint32_t> clusters_;
+    std::vector<std::uint32_t> cluster_start_;
+    std::vector<std::uint8_t> always_sent_;
     std::vector<visibility::TeamId> teams_;
+    std::vector<std::int32_t> scratch_; ///< begin_tick()'s
 };
 
 /// What make_policy() reads: which policy, and the settings of the one it makes. The

@@ -16,6 +16,7 @@
 #include "dsoc/maps/q3_bsp.hpp"
 #include "dsoc/visibility/geometry.hpp"
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -62,8 +63,18 @@ public:
 
     /// may_see() for a box whose clusters_of() (true) gave `clusters`: true unless none of
     /// them is set in `visible_clusters`.
+    /// (Inline: the PVS stage asks it for every entity of every client.)
     [[nodiscard]] bool may_see_clusters(const std::vector<std::uint8_t>& visible_clusters,
-                                        const std::vector<std::int32_t>& clusters) const;
+                                        const std::vector<std::int32_t>& clusters) const {
+        for (const std::int32_t to : clusters) {
+            const auto byte = static_cast<std::size_t>(to >> 3); // huge for a negative `to`
+            if (to >= num_clusters_ || byte >= visible_clusters.size() ||
+                (visible_clusters[byte] & (1u << (to & 7))) != 0) {
+                return true;
+            }
+        }
+        return false;
+    }
 
     /// Whether cluster `from` may see cluster `to` (true for -1 or out of range).
     [[nodiscard]] bool cluster_visible(int from, int to) const;

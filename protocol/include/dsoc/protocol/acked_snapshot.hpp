@@ -114,6 +114,8 @@ public:
 
 private:
     void leave_baseline_below(std::uint32_t id, pb::Snapshot& out);
+    /// leave_baseline_below(id), then whether the baseline's next entity is `id`.
+    bool meets_baseline(std::uint32_t id, pb::Snapshot& out);
     void write_entry(std::uint32_t id, std::uint32_t fields, const std::int32_t* values,
                      std::size_t count, pb::Snapshot& out);
 

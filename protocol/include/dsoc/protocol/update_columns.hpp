@@ -72,17 +72,24 @@ public:
         if (count_ == capacity_) {
             grow();
         }
-        heads_.used = static_cast<std::size_t>(
-            google::protobuf::io::CodedOutputStream::WriteVarint64ToArray(
-                update_head(id_step, fields), heads_.bytes.data() + heads_.used) -
-            heads_.bytes.data());
+        using google::protobuf::io::CodedOutputStream;
+        // Through local pointers: a byte stored through a pointer may be any object's, so
+        // the compiler would load the columns' members again after every byte written.
+        std::uint8_t* const heads = heads_.bytes.data();
+        heads_.used =
+            static_cast<std::size_t>(CodedOutputStream::WriteVarint64ToArray(
+                                         update_head(id_step, fields), heads + heads_.used) -
+                                     heads);
         if (mask_apart(fields)) {
             fields_.used = write_varint(fields, fields_);
         }
+        std::uint8_t* const value_bytes = values_.bytes.data();
+        std::uint8_t* at = value_bytes + values_.used;
         for (const std::int32_t value : values) {
-            values_.used = write_varint(
-                google::protobuf::internal::WireFormatLite::ZigZagEncode32(value), values_);
+            at = CodedOutputStream::WriteVarint32ToArray(
+                google::protobuf::internal::WireFormatLite::ZigZagEncode32(value), at);
         }
+        values_.used = static_cast<std::size_t>(at - value_bytes);
         ++count_;
         assert(heads_.used <= heads_.bytes.size() && fields_.used <= fields_.bytes.size() &&
                values_.used <= values_.bytes.size());
