@@ -110,8 +110,8 @@ void PvsPolicy::select(const WorldView& /*world*/, const Viewer& viewer,
     thread_local std::vector<std::int32_t> eye_clusters;
     thread_local std::vector<std::uint8_t> rows;
     thread_local std::vector<std::uint8_t> arrival_rows;
-    // clusters_ holds only clusters below cluster_count(), whose bits union_of_rows() keeps
-    // (a row the size of the map's; rows too short for them answer nothing: all sent).
+    // Rows hold cluster_count() bits (the map loader rejects shorter ones), and clusters_
+    // only clusters below it; the size check is defensive: without it, everything is sent.
     const bool known = viewer_pvs_rows(pvs_.get(), viewer, eye_clusters, rows, arrival_rows) &&
                        rows.size() * 8 >= static_cast<std::size_t>(pvs_->cluster_count());
     const std::uint8_t* const row_bits = rows.data();

@@ -56,9 +56,9 @@ inline std::int32_t add_angle_steps(std::int32_t yaw, std::int32_t delta, std::i
 /// How many update_values an entry with valid_update_fields() `fields` carries: a rebase
 /// the tier and five absolute values, otherwise one value per field.
 [[nodiscard]] inline int update_value_count(std::uint32_t fields) {
-    // A table, not std::popcount: without a -m flag for it that is a call into libgcc,
-    // for every entry a client reads.
-    constexpr auto kBitsSet = [] {
+    // A table, not std::popcount: built without -mpopcnt that is a call into libgcc, for
+    // every entry a client reads.
+    static constexpr auto kBitsSet = [] {
         std::array<std::uint8_t, 32> bits{};
         for (std::uint32_t f = 0; f < bits.size(); ++f) {
             bits[f] = static_cast<std::uint8_t>(std::popcount(f));

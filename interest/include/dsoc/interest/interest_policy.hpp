@@ -166,9 +166,8 @@ public:
 private:
     std::shared_ptr<const maps::Pvs> pvs_; ///< read-only after construction
     // This tick's entities (world order) and their clusters (Pvs::clusters_of), all in
-    // one array: entity i's at [cluster_start_[i], cluster_start_[i + 1]), so that a
-    // viewer's pass reads them in order (one vector per entity was a pointer to chase per
-    // entity, 11% of a 500-client pvs server). An entity in no clustered leaf, in a
+    // one array, so that a viewer's pass reads them in order: entity i's at
+    // [cluster_start_[i], cluster_start_[i + 1]). An entity in no clustered leaf, in a
     // cluster the PVS has no row for, or any without vis data, is always sent (has no
     // clusters here). Written by begin_tick(), read-only during select(); the vectors keep
     // their capacity.

@@ -63,7 +63,6 @@ public:
 
     /// may_see() for a box whose clusters_of() (true) gave `clusters`: true unless none of
     /// them is set in `visible_clusters`.
-    /// (Inline: the PVS stage asks it for every entity of every client.)
     [[nodiscard]] bool may_see_clusters(const std::vector<std::uint8_t>& visible_clusters,
                                         const std::vector<std::int32_t>& clusters) const {
         for (const std::int32_t to : clusters) {
