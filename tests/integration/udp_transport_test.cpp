@@ -315,6 +315,31 @@ TEST(UdpTransport, HostileDatagramsAreDroppedByReasonWhileClientsKeepTheirSnapsh
     EXPECT_EQ(drops(server, UdpDrop::rate_limited), 0u);
 }
 
+TEST(UdpTransport, ABurstIsReadManyToASystemCallEachDatagramWithItsOwnSource) {
+    // The server reads what waits on its socket 32 datagrams to a system call: datagrams
+    // from two sources, interleaved and sent faster than it reads them, must each be
+    // judged by their own source, none lost or counted twice.
+    testing::RunningServer server(udp_config());
+    RawUdp raw(server.port());
+    const std::uint64_t session = raw.handshake(81);
+    ASSERT_NE(session, 0u);
+    RawUdp elsewhere(server.port());
+    constexpr std::uint32_t kPairs = 200;
+    const std::vector<std::uint8_t> garbage(40, 0xff);
+    for (std::uint32_t k = 0; k < kPairs; ++k) {
+        elsewhere.send(input_datagram(session, 1000 + k)); // wrong_source
+        raw.send(garbage);                                 // not_dsoc
+    }
+    // Read after stop(): the counters are the io thread's.
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    server.stop();
+    EXPECT_EQ(server.udp_endpoint()->datagrams_received(), 2 + 2 * kPairs)
+        << "with the handshake's two";
+    EXPECT_EQ(drops(server, UdpDrop::wrong_source), kPairs);
+    EXPECT_EQ(drops(server, UdpDrop::not_dsoc), kPairs);
+    EXPECT_EQ(drops(server, UdpDrop::replayed), 0u);
+}
+
 /// The Disconnect the server sends `raw` within `timeout`, if any (other datagrams skipped).
 std::optional<pb::Disconnect> disconnect_within(RawUdp& raw, std::chrono::milliseconds timeout) {
     const auto start = std::chrono::steady_clock::now();

@@ -27,12 +27,15 @@
 #include <boost/asio/ip/udp.hpp>
 #include <boost/asio/steady_timer.hpp>
 
+#include <sys/socket.h>
+
 #include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
 #include <unordered_map>
+#include <vector>
 
 namespace dsoc::server {
 
@@ -66,8 +69,13 @@ public:
     [[nodiscard]] std::size_t sessions() const { return by_session_.size(); }
 
 private:
+    /// Waits for the next datagram (asio's read: no arrival is missed between waits).
     void receive_next();
-    void on_datagram(std::size_t bytes);
+    /// After one datagram: the others already waiting, kReceiveBatch to a system call
+    /// (recvmmsg), at most kReceiveRounds calls before the io_context's other work.
+    void receive_waiting();
+    /// One datagram from `sender_`.
+    void on_datagram(std::span<const std::uint8_t> datagram);
     void on_request(std::uint64_t nonce, std::span<const std::uint8_t> body);
     void on_response(std::uint64_t nonce, std::span<const std::uint8_t> body);
     /// The body checks of a handshake datagram (counted when it fails them); `cookie`
@@ -96,8 +104,14 @@ private:
     boost::asio::steady_timer sweep_timer_;
     protocol::TokenKey cookie_key_; ///< random per run: cookies die with the process
     /// One byte over the largest datagram, so that an oversized one is seen as such.
-    std::array<std::uint8_t, protocol::kMaxDatagramBytes + 1> buffer_{};
-    boost::asio::ip::udp::endpoint sender_;
+    using DatagramBuffer = std::array<std::uint8_t, protocol::kMaxDatagramBytes + 1>;
+    DatagramBuffer buffer_{};
+    /// receive_waiting()'s buffers and source addresses, one per datagram of a call.
+    static constexpr std::size_t kReceiveBatch = 32;
+    static constexpr int kReceiveRounds = 8;
+    std::vector<DatagramBuffer> batch_;
+    std::vector<sockaddr_storage> batch_sources_;
+    boost::asio::ip::udp::endpoint sender_; ///< the source of the datagram being handled
     std::vector<std::uint8_t> reply_;
     std::unordered_map<std::uint64_t, std::shared_ptr<UdpConnection>> by_session_;
     std::unordered_map<std::uint64_t, std::uint64_t> session_of_nonce_;
