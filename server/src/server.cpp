@@ -1,5 +1,7 @@
 #include "dsoc/server/server.hpp"
 
+#include "dsoc/server/datagram_batch.hpp"
+
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/connect_token.hpp"
 #include "dsoc/scaleout/world_tick.hpp"
@@ -506,10 +508,29 @@ void Server::send_snapshots() {
             client.session->send_snapshot_frame(client.frame);
         }
     }
+    // Over UDP, kClientsPerCall clients' datagrams to a system call (DatagramBatch).
+    constexpr std::size_t kClientsPerCall = 32;
     direct_written_.assign(direct_writes_.size(), 0);
-    pool_.run(direct_writes_.size(), [this](std::size_t k) {
-        Client& client = *direct_writes_[k];
-        direct_written_[k] = client.session->write_now(client.frame);
+    const std::size_t calls = (direct_writes_.size() + kClientsPerCall - 1) / kClientsPerCall;
+    pool_.run(calls, [this](std::size_t call) {
+        thread_local DatagramBatch batch; // its memory kept from tick to tick
+        batch.clear();
+        const std::size_t from = call * kClientsPerCall;
+        const std::size_t to = std::min(direct_writes_.size(), from + kClientsPerCall);
+        std::array<bool, kClientsPerCall> queued{};
+        for (std::size_t k = from; k < to; ++k) {
+            Client& client = *direct_writes_[k];
+            queued[k - from] = client.session->queue_now(client.frame, batch);
+            if (!queued[k - from]) {
+                direct_written_[k] = client.session->write_now(client.frame);
+            }
+        }
+        batch.send();
+        for (std::size_t k = from; k < to; ++k) {
+            if (queued[k - from]) {
+                direct_written_[k] = direct_writes_[k]->session->written_from(batch);
+            }
+        }
     });
     for (std::size_t k = 0; k < direct_writes_.size(); ++k) {
         Client& client = *direct_writes_[k];

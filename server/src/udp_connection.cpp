@@ -1,5 +1,7 @@
 #include "dsoc/server/udp_connection.hpp"
 
+#include "dsoc/server/datagram_batch.hpp"
+
 #include "dsoc/protocol/buffer_room.hpp"
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/delta_frame.hpp"
@@ -115,9 +117,18 @@ void UdpConnection::send_snapshot_frame(std::vector<std::uint8_t>& frame) {
 }
 
 std::size_t UdpConnection::write_now(std::span<const std::uint8_t> frame) noexcept {
+    thread_local DatagramBatch batch; // its memory kept from call to call
+    batch.clear();
+    queue_now(frame, batch);
+    batch.send();
+    return written_from(batch);
+}
+
+bool UdpConnection::queue_now(std::span<const std::uint8_t> frame, DatagramBatch& batch) noexcept {
     last_write_whole_ = false;
+    batch_count_ = 0;
     if (frame.size() <= kTickBytes || next_sequence_ > kLastSequence) {
-        return 0;
+        return true;
     }
     const std::uint64_t tick = get_u64(frame.data());
     protocol::clear_to_need(packed_, kScratchSlackBytes);
@@ -125,54 +136,36 @@ std::size_t UdpConnection::write_now(std::span<const std::uint8_t> frame) noexce
         session_, next_sequence_, tick, frame.subspan(kTickBytes), packed_);
     if (count == 0) {
         oversized_ = true; // warned on the io thread (finish_write_now)
-        return 0;
+        return true;
     }
     next_sequence_ += static_cast<std::uint32_t>(count);
-    // The snapshot's datagrams in one system call (sendmmsg) per kBatch, not one each: every
-    // client's snapshot every tick, and a system call's entry and exit cost as much as a
-    // small datagram's trip through loopback. A datagram the kernel refuses (its buffer
-    // full) is counted and the ones after it still go, as with a call each.
-    constexpr std::size_t kBatch = 16;
-    std::array<mmsghdr, kBatch> messages{};
-    std::array<iovec, kBatch> parts{};
+    batch_first_ = batch.size();
+    batch_count_ = count;
+    batch_tick_ = tick;
+    for (std::size_t at = 0; at + 2 <= packed_.size();) {
+        const std::size_t size = packed_[at] | (static_cast<std::size_t>(packed_[at + 1]) << 8);
+        batch.add(endpoint_.native_handle(), std::span(packed_.data() + at + 2, size), peer_.data(),
+                  static_cast<socklen_t>(peer_.size()));
+        at += 2 + size;
+    }
+    return true;
+}
+
+std::size_t UdpConnection::written_from(const DatagramBatch& batch) noexcept {
     std::size_t sent = 0;
     std::size_t refused = 0;
-    std::size_t at = 0;
-    while (at + 2 <= packed_.size()) {
-        std::size_t batch = 0;
-        for (; batch < kBatch && at + 2 <= packed_.size(); ++batch) {
-            const std::size_t size = packed_[at] | (static_cast<std::size_t>(packed_[at + 1]) << 8);
-            parts[batch] = {packed_.data() + at + 2, size};
-            msghdr& h = messages[batch].msg_hdr;
-            h = {};
-            h.msg_name = const_cast<sockaddr*>(peer_.data()); // not written by sendmmsg
-            h.msg_namelen = static_cast<socklen_t>(peer_.size());
-            h.msg_iov = &parts[batch];
-            h.msg_iovlen = 1;
-            at += 2 + size;
-        }
-        for (std::size_t from = 0; from < batch;) {
-            const int n =
-                ::sendmmsg(endpoint_.native_handle(), messages.data() + from,
-                           static_cast<unsigned>(batch - from), MSG_DONTWAIT | MSG_NOSIGNAL);
-            const std::size_t done = n > 0 ? static_cast<std::size_t>(n) : 0;
-            for (std::size_t k = from; k < from + done; ++k) {
-                sent += messages[k].msg_len;
-            }
-            from += done;
-            if (from < batch) {
-                ++refused; // the first not sent: refused; try the ones after it
-                ++from;
-            }
-        }
+    for (std::size_t i = batch_first_; i < batch_first_ + batch_count_; ++i) {
+        sent += batch.sent(i);
+        refused += batch.refused(i) ? 1 : 0;
     }
     datagrams_refused_ += refused;
-    if (refused == 0 && tick > newest_snapshot_tick_) {
-        const std::uint64_t shift = tick - newest_snapshot_tick_;
+    if (batch_count_ > 0 && refused == 0 && batch_tick_ > newest_snapshot_tick_) {
+        const std::uint64_t shift = batch_tick_ - newest_snapshot_tick_;
         sent_ticks_ = (shift >= 64 ? 0 : sent_ticks_ << shift) | 1;
-        newest_snapshot_tick_ = tick;
+        newest_snapshot_tick_ = batch_tick_;
         last_write_whole_ = true;
     }
+    batch_count_ = 0;
     return sent;
 }
 

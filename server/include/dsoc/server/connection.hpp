@@ -21,6 +21,8 @@
 
 namespace dsoc::server {
 
+class DatagramBatch;
+
 class Connection;
 
 /// What a connection asks of the server. Called on the io_context thread.
@@ -83,6 +85,17 @@ public:
     [[nodiscard]] virtual bool writable_now() const = 0;
     [[nodiscard]] virtual std::size_t write_now(std::span<const std::uint8_t> frame) noexcept = 0;
     virtual bool finish_write_now(std::vector<std::uint8_t>& frame, std::size_t written) = 0;
+    /// write_now() in two steps, for a transport of datagrams, so that one system call
+    /// writes many clients' frames: queue_now() puts the frame's datagrams in `batch`
+    /// (false: this transport cannot, call write_now()); after batch.send(),
+    /// written_from() returns what write_now() would have. The same thread as write_now().
+    virtual bool queue_now(std::span<const std::uint8_t> /*frame*/,
+                           DatagramBatch& /*batch*/) noexcept {
+        return false;
+    }
+    [[nodiscard]] virtual std::size_t written_from(const DatagramBatch& /*batch*/) noexcept {
+        return 0;
+    }
 
     /// Tells the client `reason` as well as the transport can, stops handling its
     /// messages and closes; on_closed() follows (at once or after a grace period).

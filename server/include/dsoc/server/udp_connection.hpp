@@ -54,12 +54,16 @@ public:
     void send_snapshot_frame(std::vector<std::uint8_t>& frame) override;
     /// A snapshot frame is snapshot_frame()'s form: the tick, then the serialized envelope.
     [[nodiscard]] bool writable_now() const override { return active(); }
-    /// Splits the frame into snapshot datagrams and sends them; returns the bytes the
-    /// kernel took. A snapshot the kernel did not take whole (a full socket buffer), or
-    /// one too large for kMaxSnapshotFragments datagrams (warned once), is dropped: the
-    /// client cannot assemble it, and its tick is never taken as an acknowledgement.
+    /// Splits the frame into snapshot datagrams and sends them (queue_now(), a batch of
+    /// its own, written_from()); returns the bytes the kernel took. A snapshot the kernel did not
+    /// take whole (a full socket buffer), or one too large for kMaxSnapshotFragments datagrams
+    /// (warned once), is dropped: the client cannot assemble it, and its tick is never taken as an
+    /// acknowledgement.
     [[nodiscard]] std::size_t write_now(std::span<const std::uint8_t> frame) noexcept override;
     bool finish_write_now(std::vector<std::uint8_t>& frame, std::size_t written) override;
+    /// The frame's datagrams into `batch` (on the endpoint's socket); always true.
+    bool queue_now(std::span<const std::uint8_t> frame, DatagramBatch& batch) noexcept override;
+    [[nodiscard]] std::size_t written_from(const DatagramBatch& batch) noexcept override;
     /// Sends the Disconnect (twice, in case one is lost: no acknowledgement is awaited)
     /// and closes at once.
     void disconnect(protocol::pb::DisconnectReason reason, const std::string& text) override;
@@ -117,7 +121,11 @@ private:
     Clock::time_point last_heard_;
     std::vector<std::uint8_t> accepted_; ///< the accepted datagram, for a duplicate response
     std::vector<std::uint8_t> datagram_; ///< scratch of the io thread
-    std::vector<std::uint8_t> packed_;   ///< scratch of write_now()
+    std::vector<std::uint8_t> packed_;   ///< scratch of write_now(), until its batch is sent
+    /// queue_now()'s datagrams in its batch: the first's index, how many, and the tick.
+    std::size_t batch_first_ = 0;
+    std::size_t batch_count_ = 0;
+    std::uint64_t batch_tick_ = 0;
     std::uint64_t datagrams_refused_ = 0;
 };
 
