@@ -1,12 +1,11 @@
 #include "dsoc/server/datagram_batch.hpp"
 
 #include <algorithm>
-#include <cassert>
 
 namespace dsoc::server {
 
 void DatagramBatch::clear() {
-    socket_ = -1;
+    sockets_.clear();
     messages_.clear();
     parts_.clear();
     refused_.clear();
@@ -14,8 +13,7 @@ void DatagramBatch::clear() {
 
 std::size_t DatagramBatch::add(int socket, std::span<const std::uint8_t> bytes,
                                const sockaddr* peer, socklen_t peer_size) {
-    assert(socket_ == -1 || socket_ == socket);
-    socket_ = socket;
+    sockets_.push_back(socket);
     parts_.push_back({const_cast<std::uint8_t*>(bytes.data()), bytes.size()}); // not written
     mmsghdr& m = messages_.emplace_back();
     m = {};
@@ -33,11 +31,17 @@ void DatagramBatch::send() {
         messages_[i].msg_len = 0;
     }
     for (std::size_t from = 0; from < messages_.size();) {
-        const auto count = static_cast<unsigned>(std::min(kMaxPerCall, messages_.size() - from));
+        // The run of datagrams on from's socket, at most kMaxPerCall of them.
+        std::size_t end = from + 1;
+        while (end < messages_.size() && end - from < kMaxPerCall &&
+               sockets_[end] == sockets_[from]) {
+            ++end;
+        }
+        const auto count = static_cast<unsigned>(end - from);
         const int n =
-            ::sendmmsg(socket_, messages_.data() + from, count, MSG_DONTWAIT | MSG_NOSIGNAL);
+            ::sendmmsg(sockets_[from], messages_.data() + from, count, MSG_DONTWAIT | MSG_NOSIGNAL);
         from += n > 0 ? static_cast<std::size_t>(n) : 0;
-        if (n < static_cast<int>(count) && from < messages_.size()) {
+        if (n < static_cast<int>(count)) {
             refused_[from] = 1; // the first not sent: refused; try the ones after it
             ++from;
         }

@@ -508,16 +508,21 @@ void Server::send_snapshots() {
             client.session->send_snapshot_frame(client.frame);
         }
     }
-    // Over UDP, kClientsPerCall clients' datagrams to a system call (DatagramBatch).
-    constexpr std::size_t kClientsPerCall = 32;
-    direct_written_.assign(direct_writes_.size(), 0);
-    const std::size_t calls = (direct_writes_.size() + kClientsPerCall - 1) / kClientsPerCall;
-    pool_.run(calls, [this](std::size_t call) {
+    // Jobs of up to kMaxClientsPerJob clients, as many as the pool has threads when
+    // fewer: over UDP a job's datagrams go in one DatagramBatch (as few system calls as
+    // it takes); a transport that does not batch writes each frame (write_now()).
+    constexpr std::size_t kMaxClientsPerJob = 32;
+    const std::size_t writes = direct_writes_.size();
+    const auto threads = static_cast<std::size_t>(std::max(1, pool_.threads()));
+    const std::size_t per_job =
+        std::clamp<std::size_t>((writes + threads - 1) / threads, 1, kMaxClientsPerJob);
+    direct_written_.assign(writes, 0);
+    pool_.run((writes + per_job - 1) / per_job, [this, per_job](std::size_t job) {
         thread_local DatagramBatch batch; // its memory kept from tick to tick
         batch.clear();
-        const std::size_t from = call * kClientsPerCall;
-        const std::size_t to = std::min(direct_writes_.size(), from + kClientsPerCall);
-        std::array<bool, kClientsPerCall> queued{};
+        const std::size_t from = job * per_job;
+        const std::size_t to = std::min(direct_writes_.size(), from + per_job);
+        std::array<bool, kMaxClientsPerJob> queued{};
         for (std::size_t k = from; k < to; ++k) {
             Client& client = *direct_writes_[k];
             queued[k - from] = client.session->queue_now(client.frame, batch);
@@ -528,7 +533,7 @@ void Server::send_snapshots() {
         batch.send();
         for (std::size_t k = from; k < to; ++k) {
             if (queued[k - from]) {
-                direct_written_[k] = direct_writes_[k]->session->written_from(batch);
+                direct_written_[k] = direct_writes_[k]->session->finish_queued(batch);
             }
         }
     });

@@ -121,7 +121,7 @@ std::size_t UdpConnection::write_now(std::span<const std::uint8_t> frame) noexce
     batch.clear();
     queue_now(frame, batch);
     batch.send();
-    return written_from(batch);
+    return finish_queued(batch);
 }
 
 bool UdpConnection::queue_now(std::span<const std::uint8_t> frame, DatagramBatch& batch) noexcept {
@@ -140,7 +140,6 @@ bool UdpConnection::queue_now(std::span<const std::uint8_t> frame, DatagramBatch
     }
     next_sequence_ += static_cast<std::uint32_t>(count);
     batch_first_ = batch.size();
-    batch_count_ = count;
     batch_tick_ = tick;
     for (std::size_t at = 0; at + 2 <= packed_.size();) {
         const std::size_t size = packed_[at] | (static_cast<std::size_t>(packed_[at + 1]) << 8);
@@ -148,14 +147,15 @@ bool UdpConnection::queue_now(std::span<const std::uint8_t> frame, DatagramBatch
                   static_cast<socklen_t>(peer_.size()));
         at += 2 + size;
     }
+    batch_count_ = batch.size() - batch_first_;
     return true;
 }
 
-std::size_t UdpConnection::written_from(const DatagramBatch& batch) noexcept {
+std::size_t UdpConnection::finish_queued(const DatagramBatch& batch) noexcept {
     std::size_t sent = 0;
     std::size_t refused = 0;
     for (std::size_t i = batch_first_; i < batch_first_ + batch_count_; ++i) {
-        sent += batch.sent(i);
+        sent += batch.sent_bytes(i);
         refused += batch.refused(i) ? 1 : 0;
     }
     datagrams_refused_ += refused;

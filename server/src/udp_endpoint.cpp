@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include <netinet/in.h>
+
 namespace dsoc::server {
 
 namespace asio = boost::asio;
@@ -109,18 +111,18 @@ void UdpEndpoint::receive_next() {
 }
 
 void UdpEndpoint::receive_waiting() {
-    // Every client's input arrives each tick: one system call per datagram was a large
-    // part of the io thread's work, which shares the cores with the tick's phase.
-    batch_.resize(kReceiveBatch);
-    batch_sources_.resize(kReceiveBatch);
+    // At most kReceiveBatch * kMaxReceiveCalls datagrams, then the io_context's other
+    // work (a flood cannot hold the thread); the rest are read by the next read.
+    receive_buffers_.resize(kReceiveBatch);
+    receive_sources_.resize(kReceiveBatch);
     std::array<mmsghdr, kReceiveBatch> messages{};
     std::array<iovec, kReceiveBatch> parts{};
-    for (int round = 0; round < kReceiveRounds && !stopped_; ++round) {
+    for (int call = 0; call < kMaxReceiveCalls && !stopped_; ++call) {
         for (std::size_t k = 0; k < kReceiveBatch; ++k) {
-            parts[k] = {batch_[k].data(), batch_[k].size()};
+            parts[k] = {receive_buffers_[k].data(), receive_buffers_[k].size()};
             msghdr& h = messages[k].msg_hdr;
             h = {};
-            h.msg_name = &batch_sources_[k];
+            h.msg_name = &receive_sources_[k];
             h.msg_namelen = sizeof(sockaddr_storage);
             h.msg_iov = &parts[k];
             h.msg_iovlen = 1;
@@ -128,16 +130,20 @@ void UdpEndpoint::receive_waiting() {
         const int n = ::recvmmsg(socket_.native_handle(), messages.data(), kReceiveBatch,
                                  MSG_DONTWAIT, nullptr);
         if (n <= 0) {
-            return; // none waiting (or an error, which the next read reports)
+            return; // none waiting, or an error: dropped, as receive_next()'s handler does
         }
         for (std::size_t k = 0; k < static_cast<std::size_t>(n) && !stopped_; ++k) {
             const socklen_t source_size = messages[k].msg_hdr.msg_namelen;
-            if (source_size > sender_.capacity()) {
+            if (source_size < sizeof(sockaddr_in) || source_size > sender_.capacity()) {
                 continue; // not an IPv4 or IPv6 source: cannot be a client
             }
-            std::memcpy(sender_.data(), &batch_sources_[k], source_size);
+            std::memcpy(sender_.data(), &receive_sources_[k], source_size);
             sender_.resize(source_size);
-            on_datagram(std::span(batch_[k].data(), messages[k].msg_len));
+            // Without MSG_TRUNC msg_len is what the buffer holds: one byte over the
+            // largest datagram for an oversized one (dropped as such).
+            const std::size_t bytes =
+                std::min<std::size_t>(messages[k].msg_len, receive_buffers_[k].size());
+            on_datagram(std::span(receive_buffers_[k].data(), bytes));
         }
         if (static_cast<std::size_t>(n) < kReceiveBatch) {
             return;

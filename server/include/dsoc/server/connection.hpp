@@ -4,8 +4,9 @@
 // a connection its hello reply, its snapshots and its disconnect, and hears back through
 // ConnectionHost.
 //
-// Threading: every call on the io_context thread, but write_now(), which another thread
-// may make while that thread waits for it (the hand-over, server.hpp).
+// Threading: every call on the io_context thread, but write_now(), queue_now() and
+// finish_queued(), which another thread may make while that thread waits for it (the
+// hand-over, server.hpp).
 
 #include "dsoc/protocol/messages.hpp"
 #include "dsoc/server/input_guard.hpp"
@@ -87,13 +88,15 @@ public:
     virtual bool finish_write_now(std::vector<std::uint8_t>& frame, std::size_t written) = 0;
     /// write_now() in two steps, for a transport of datagrams, so that one system call
     /// writes many clients' frames: queue_now() puts the frame's datagrams in `batch`
-    /// (false: this transport cannot, call write_now()); after batch.send(),
-    /// written_from() returns what write_now() would have. The same thread as write_now().
+    /// (false: this transport does not batch, call write_now()); after batch.send(),
+    /// finish_queued() returns what write_now() would have and takes the frame as
+    /// written. At most one queue_now() per connection and batch, each followed by
+    /// finish_queued(); on the thread write_now() may use, under the same rule.
     virtual bool queue_now(std::span<const std::uint8_t> /*frame*/,
                            DatagramBatch& /*batch*/) noexcept {
         return false;
     }
-    [[nodiscard]] virtual std::size_t written_from(const DatagramBatch& /*batch*/) noexcept {
+    [[nodiscard]] virtual std::size_t finish_queued(const DatagramBatch& /*batch*/) noexcept {
         return 0;
     }
 

@@ -55,15 +55,16 @@ public:
     /// A snapshot frame is snapshot_frame()'s form: the tick, then the serialized envelope.
     [[nodiscard]] bool writable_now() const override { return active(); }
     /// Splits the frame into snapshot datagrams and sends them (queue_now(), a batch of
-    /// its own, written_from()); returns the bytes the kernel took. A snapshot the kernel did not
+    /// its own, finish_queued()); returns the bytes the kernel took. A snapshot the kernel did not
     /// take whole (a full socket buffer), or one too large for kMaxSnapshotFragments datagrams
     /// (warned once), is dropped: the client cannot assemble it, and its tick is never taken as an
     /// acknowledgement.
     [[nodiscard]] std::size_t write_now(std::span<const std::uint8_t> frame) noexcept override;
     bool finish_write_now(std::vector<std::uint8_t>& frame, std::size_t written) override;
-    /// The frame's datagrams into `batch` (on the endpoint's socket); always true.
+    /// The frame's datagrams into `batch` (on the endpoint's socket): none for a frame
+    /// too large or a session out of sequence numbers. True: this transport batches.
     bool queue_now(std::span<const std::uint8_t> frame, DatagramBatch& batch) noexcept override;
-    [[nodiscard]] std::size_t written_from(const DatagramBatch& batch) noexcept override;
+    [[nodiscard]] std::size_t finish_queued(const DatagramBatch& batch) noexcept override;
     /// Sends the Disconnect (twice, in case one is lost: no acknowledgement is awaited)
     /// and closes at once.
     void disconnect(protocol::pb::DisconnectReason reason, const std::string& text) override;
@@ -115,13 +116,13 @@ private:
     /// kernel (only those may be acknowledged).
     std::uint64_t sent_ticks_ = 0;
     bool warned_oversized_ = false;
-    bool oversized_ = false;         ///< write_now() met a snapshot too large (pool thread)
-    bool last_write_whole_ = false;  ///< write_now() sent every datagram (pool thread)
+    bool oversized_ = false;         ///< queue_now() met a snapshot too large (pool thread)
+    bool last_write_whole_ = false;  ///< finish_queued(): every datagram went (pool thread)
     std::uint64_t newest_input_ = 0; ///< ClientInput.tick of the newest input taken
     Clock::time_point last_heard_;
     std::vector<std::uint8_t> accepted_; ///< the accepted datagram, for a duplicate response
     std::vector<std::uint8_t> datagram_; ///< scratch of the io thread
-    std::vector<std::uint8_t> packed_;   ///< scratch of write_now(), until its batch is sent
+    std::vector<std::uint8_t> packed_;   ///< queue_now()'s datagrams, until finish_queued()
     /// queue_now()'s datagrams in its batch: the first's index, how many, and the tick.
     std::size_t batch_first_ = 0;
     std::size_t batch_count_ = 0;

@@ -72,7 +72,7 @@ private:
     /// Waits for the next datagram (asio's read: no arrival is missed between waits).
     void receive_next();
     /// After one datagram: the others already waiting, kReceiveBatch to a system call
-    /// (recvmmsg), at most kReceiveRounds calls before the io_context's other work.
+    /// (recvmmsg), at most kMaxReceiveCalls calls before the io_context's other work.
     void receive_waiting();
     /// One datagram from `sender_`.
     void on_datagram(std::span<const std::uint8_t> datagram);
@@ -106,11 +106,13 @@ private:
     /// One byte over the largest datagram, so that an oversized one is seen as such.
     using DatagramBuffer = std::array<std::uint8_t, protocol::kMaxDatagramBytes + 1>;
     DatagramBuffer buffer_{};
-    /// receive_waiting()'s buffers and source addresses, one per datagram of a call.
+    /// receive_waiting()'s buffers and source addresses, one per datagram of a call: at
+    /// most kReceiveBatch datagrams a call, kMaxReceiveCalls calls a read (so at most
+    /// 1 + 32 * 8 datagrams handled before the io_context's other work).
     static constexpr std::size_t kReceiveBatch = 32;
-    static constexpr int kReceiveRounds = 8;
-    std::vector<DatagramBuffer> batch_;
-    std::vector<sockaddr_storage> batch_sources_;
+    static constexpr int kMaxReceiveCalls = 8;
+    std::vector<DatagramBuffer> receive_buffers_;
+    std::vector<sockaddr_storage> receive_sources_;
     boost::asio::ip::udp::endpoint sender_; ///< the source of the datagram being handled
     std::vector<std::uint8_t> reply_;
     std::unordered_map<std::uint64_t, std::shared_ptr<UdpConnection>> by_session_;
