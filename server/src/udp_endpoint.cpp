@@ -67,6 +67,8 @@ std::uint16_t UdpEndpoint::start(const std::string& address, std::uint16_t port)
     boost::system::error_code ec; // best effort: the kernel caps them at its maxima
     socket_.set_option(asio::socket_base::send_buffer_size(kSocketBufferBytes), ec);
     socket_.set_option(asio::socket_base::receive_buffer_size(kSocketBufferBytes), ec);
+    receive_buffers_.resize(kReceiveBatch);
+    receive_sources_.resize(kReceiveBatch);
     receive_next();
     sweep();
     return socket_.local_endpoint().port();
@@ -113,8 +115,6 @@ void UdpEndpoint::receive_next() {
 void UdpEndpoint::receive_waiting() {
     // At most kReceiveBatch * kMaxReceiveCalls datagrams, then the io_context's other
     // work (a flood cannot hold the thread); the rest are read by the next read.
-    receive_buffers_.resize(kReceiveBatch);
-    receive_sources_.resize(kReceiveBatch);
     std::array<mmsghdr, kReceiveBatch> messages{};
     std::array<iovec, kReceiveBatch> parts{};
     for (int call = 0; call < kMaxReceiveCalls && !stopped_; ++call) {
