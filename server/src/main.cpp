@@ -22,6 +22,7 @@
 #include "dsoc/server/server.hpp"
 #include "dsoc/server/startup_stop.hpp"
 #include "dsoc/server/stats_report.hpp"
+#include "dsoc/server/thread_metrics.hpp"
 #include "dsoc/server/world_role.hpp"
 
 #include "program_options.hpp"
@@ -413,6 +414,7 @@ int serve(const ServerConfig& config, const ProgramOptions& options) {
             dsoc::server::write_build_info(process, build.version, build.commit);
             dsoc::server::write_process_metrics(
                 process, dsoc::server::read_process_sample(config.heap_metrics));
+            dsoc::server::write_thread_metrics(process, dsoc::server::read_thread_roles());
             return text + process.text();
         },
         [&] {

@@ -99,6 +99,11 @@ struct Phases {
     double encode = 0.0;     // the frame
     double decode = 0.0;     // client side: parse + SnapshotDecoder::apply
 
+    /// The server's phases (all but the client's decode). [ms]
+    [[nodiscard]] double server() const {
+        return movement + begin_tick + select + hearing + snapshot + encode;
+    }
+
     Phases& operator+=(const Phases& p) {
         movement += p.movement;
         begin_tick += p.begin_tick;
@@ -170,7 +175,8 @@ int main(int argc, char** argv) {
     std::mt19937_64 rng(config.seed);
     const float dt = 1.0f / static_cast<float>(config.tick_rate);
     Phases total;
-    double on_cpu = 0.0; // the thread's CPU time over the measured ticks [ms]
+    std::vector<double> server_ms_of_tick; // each measured tick's server phases [ms]
+    double on_cpu = 0.0;                   // the thread's CPU time over the measured ticks [ms]
     std::uint64_t updates = 0;
     std::uint64_t bytes = 0;
     std::uint64_t decode_problems = 0;
@@ -291,13 +297,12 @@ int main(int argc, char** argv) {
         }
         if (measured) {
             total += p;
+            server_ms_of_tick.push_back(p.server());
             on_cpu += thread_cpu_ms() - cpu_at_start;
         }
     }
     const double n = ticks;
-    const double server_ms = (total.movement + total.begin_tick + total.select + total.hearing +
-                              total.snapshot + total.encode) /
-                             n;
+    const double server_ms = total.server() / n;
     const double client_tick = static_cast<double>(clients.size()) * n;
     fmt::print("dsoc-tick-bench: map {} policy {} bots {} players {} tick rate {} Hz, {} ticks "
                "measured after {}, snapshots {}\n",
@@ -306,6 +311,15 @@ int main(int argc, char** argv) {
                udp ? "acknowledged deltas in datagrams (--udp)" : "compact, TCP frames");
     fmt::print("  server CPU per tick  {:8.2f} ms (one thread; budget {:.1f} ms per core)\n",
                server_ms, 1000.0 / config.tick_rate);
+    // The spread of the work itself, tick to tick (one thread, no sockets, nothing else
+    // of the server's beside it): what a live server's tick tail has beyond it is waiting.
+    std::sort(server_ms_of_tick.begin(), server_ms_of_tick.end());
+    const auto at_quantile = [&](double q) {
+        return server_ms_of_tick[static_cast<std::size_t>(
+            q * static_cast<double>(server_ms_of_tick.size() - 1))];
+    };
+    fmt::print("  a tick's spread      p50 {:.2f} / p90 {:.2f} / p99 {:.2f} / max {:.2f} ms\n",
+               at_quantile(0.5), at_quantile(0.9), at_quantile(0.99), server_ms_of_tick.back());
     const double all_phases_ms = server_ms * n + total.decode;
     fmt::print("  on a CPU             {:.1f}% of the phases' time (below 100: preempted)\n",
                100.0 * on_cpu / all_phases_ms);

@@ -1,5 +1,7 @@
 #include "dsoc/server/worker_pool.hpp"
 
+#include <pthread.h>
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -17,6 +19,7 @@ WorkerPool::WorkerPool(int threads, Caller caller) : caller_(caller) {
     helpers_.reserve(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) {
         helpers_.emplace_back([this] { helper_loop(); });
+        ::pthread_setname_np(helpers_.back().native_handle(), kThreadName); // best effort
     }
 }
 

@@ -233,7 +233,10 @@ TEST(ServerProbes, HealthReadinessAndMetricsOfTheRunningProcess) {
           "process_max_fds ", "process_start_time_seconds ", "process_virtual_memory_bytes ",
           // the server's own, unchanged
           "dsoc_ticks_total ", "dsoc_clients ", "dsoc_tick_duration_seconds_count ",
-          "dsoc_bytes_sent_total "}) {
+          "dsoc_bytes_sent_total ",
+          // where its threads' time goes: its pool's threads are told apart by name
+          "dsoc_thread_runqueue_wait_seconds_total{role=\"io\"} ",
+          "dsoc_thread_cpu_seconds_total{role=\"worker\"} "}) {
         EXPECT_NE(metrics.find(std::string("\n") + name), std::string::npos) << name;
     }
     // The allocator it runs on; its figures always on jemalloc, where they are cheap, and

@@ -37,6 +37,10 @@ namespace dsoc::server {
 
 class WorkerPool {
 public:
+    /// The name of the pool's own threads (as top -H, perf and the thread metrics show
+    /// them; at most 15 characters).
+    static constexpr const char* kThreadName = "dsoc-worker";
+
     /// Whether the caller of run() counts as one of the pool's threads.
     enum class Caller : std::uint8_t { takes_part, stays_out };
 
