@@ -324,7 +324,10 @@ public:
     IoDuringStartup(boost::asio::io_context& io, bool needed) : io_(io) {
         if (needed) {
             work_.emplace(io.get_executor());
-            thread_ = std::thread([&io] { io.run(); });
+            thread_ = std::thread([&io] {
+                dsoc::server::mark_io_thread();
+                io.run();
+            });
         }
     }
     ~IoDuringStartup() {
@@ -369,7 +372,10 @@ int serve_world(const ServerConfig& config, const std::shared_ptr<const dsoc::ma
         spdlog::info("signal received while starting");
         stop.store(true);
     }
-    std::thread io_thread([&io] { io.run(); });
+    std::thread io_thread([&io] {
+        dsoc::server::mark_io_thread();
+        io.run();
+    });
     std::printf("world %s publishing on %s\n", config.world_name.c_str(),
                 dsoc::scaleout::world_subject(config.world_name, "tick").c_str());
     std::fflush(stdout);
@@ -532,6 +538,7 @@ int serve(const ServerConfig& config, const ProgramOptions& options) {
         });
     }
 
+    dsoc::server::mark_io_thread();
     io_loop.run();
 
     std::cout << dsoc::server::format_summary(server->stats(), config);

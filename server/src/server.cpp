@@ -241,7 +241,7 @@ void Server::start_tick() {
         scaleout::apply_world_tick(std::move(arrived->tick), world_);
     } else {
         const float dt = 1.0f / static_cast<float>(config_.tick_rate);
-        // The moves on the pool's threads (idle between phases); this thread waits.
+        // The moves on the pool's threads (idle between phases), this thread taking part.
         world_.step(dt, [this](std::size_t count, const std::function<void(std::size_t)>& body) {
             pool_.run(count, body);
         });

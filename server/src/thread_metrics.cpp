@@ -3,12 +3,17 @@
 #include "dsoc/server/worker_pool.hpp"
 
 #include <dirent.h>
+#include <sys/types.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <charconv>
 #include <fstream>
 #include <iterator>
+#include <memory>
+#include <mutex>
 #include <string>
+#include <unordered_map>
 
 namespace dsoc::server {
 
@@ -35,6 +40,10 @@ std::optional<SchedStat> parse_schedstat(std::string_view text) {
 
 namespace {
 
+std::atomic<pid_t> io_thread{0}; // mark_io_thread()'s; 0: none marked
+
+enum class Role : std::uint8_t { io, worker, other };
+
 std::string read_file(const std::string& path) {
     std::ifstream in(path);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -46,36 +55,79 @@ void add(SchedStat& to, const SchedStat& s) {
     to.timeslices += s.timeslices;
 }
 
+SchedStat& of_role(ThreadRoleSample& sample, Role role) {
+    return role == Role::io ? sample.io : (role == Role::worker ? sample.workers : sample.other);
+}
+
+/// What read_thread_roles() keeps between calls: every live thread's last reading, and
+/// the sums of those that ended.
+struct Meter {
+    struct Seen {
+        Role role = Role::other;
+        SchedStat last;
+        bool alive = false; ///< found by the current listing
+    };
+    std::mutex mutex;
+    std::unordered_map<pid_t, Seen> threads;
+    ThreadRoleSample ended;
+};
+
 } // namespace
 
+void mark_io_thread() {
+    io_thread.store(::gettid());
+}
+
 ThreadRoleSample read_thread_roles() {
-    ThreadRoleSample sample;
-    DIR* dir = ::opendir("/proc/self/task");
+    static Meter meter;
+    const std::lock_guard lock(meter.mutex);
+    const std::unique_ptr<DIR, int (*)(DIR*)> dir(::opendir("/proc/self/task"), &::closedir);
     if (dir == nullptr) {
-        return sample;
+        return {};
     }
-    const std::string main_thread = std::to_string(::getpid());
-    while (const dirent* entry = ::readdir(dir)) {
-        const std::string tid = entry->d_name;
-        if (tid == "." || tid == "..") {
+    for (auto& [tid, seen] : meter.threads) {
+        seen.alive = false;
+    }
+    const pid_t io = io_thread.load();
+    bool ran = false;
+    while (const dirent* entry = ::readdir(dir.get())) {
+        const std::string name = entry->d_name;
+        if (name == "." || name == "..") {
             continue;
         }
-        const std::string task = "/proc/self/task/" + tid;
+        const std::string task = "/proc/self/task/" + name;
         const auto stat = parse_schedstat(read_file(task + "/schedstat"));
         if (!stat) {
             continue; // ended meanwhile, or a kernel without schedstat
         }
-        std::string name = read_file(task + "/comm");
-        if (!name.empty() && name.back() == '\n') {
-            name.pop_back();
+        std::string comm = read_file(task + "/comm");
+        if (!comm.empty() && comm.back() == '\n') {
+            comm.pop_back();
         }
-        add(tid == main_thread                ? sample.io
-            : name == WorkerPool::kThreadName ? sample.workers
-                                              : sample.other,
-            *stat);
-        sample.read = true;
+        pid_t tid = 0;
+        if (std::from_chars(name.data(), name.data() + name.size(), tid).ec != std::errc()) {
+            continue;
+        }
+        Meter::Seen& seen = meter.threads[tid];
+        seen.role = tid == io                         ? Role::io
+                    : comm == WorkerPool::kThreadName ? Role::worker
+                                                      : Role::other;
+        seen.last = *stat;
+        seen.alive = true;
+        ran = ran || stat->run_seconds > 0.0;
     }
-    ::closedir(dir);
+    ThreadRoleSample sample = meter.ended;
+    for (auto it = meter.threads.begin(); it != meter.threads.end();) {
+        if (it->second.alive) {
+            add(of_role(sample, it->second.role), it->second.last);
+            ++it;
+        } else { // ended: what it had counts on
+            add(of_role(meter.ended, it->second.role), it->second.last);
+            add(of_role(sample, it->second.role), it->second.last);
+            it = meter.threads.erase(it);
+        }
+    }
+    sample.read = ran; // a kernel that keeps no schedstat reads 0 for every thread
     return sample;
 }
 
@@ -90,9 +142,11 @@ void write_thread_metrics(PrometheusText& out, const ThreadRoleSample& sample) {
             {{{"role", "other"}}, sample.other.*field}};
     };
     out.counter_family("dsoc_thread_cpu_seconds_total",
-                       "CPU time of the server's threads by role: io (the I/O thread: sockets, "
-                       "the tick's serial parts), worker (the pool: interest and snapshots), "
-                       "other (the allocator's and libraries' threads).",
+                       "CPU time of the server's threads by role: io (the thread serving the "
+                       "sockets, which also runs the tick's serial parts and a share of its "
+                       "moves and writes), worker (the pool: interest, snapshots, moves, "
+                       "writes), other (the allocator's background threads, a bake's at "
+                       "start-up, libnats', a world process's tick loop).",
                        by_role(&SchedStat::run_seconds));
     out.counter_family("dsoc_thread_runqueue_wait_seconds_total",
                        "Time the server's threads were ready to run but waited for a core, by "

@@ -311,8 +311,9 @@ int main(int argc, char** argv) {
                udp ? "acknowledged deltas in datagrams (--udp)" : "compact, TCP frames");
     fmt::print("  server CPU per tick  {:8.2f} ms (one thread; budget {:.1f} ms per core)\n",
                server_ms, 1000.0 / config.tick_rate);
-    // The spread of the work itself, tick to tick (one thread, no sockets, nothing else
-    // of the server's beside it): what a live server's tick tail has beyond it is waiting.
+    // How the ticks spread: the wall time of one thread's phases, tick to tick, with no
+    // socket and nothing else of the server's beside it (the host's own hiccups are in
+    // it, so it bounds the work's own spread from above).
     std::sort(server_ms_of_tick.begin(), server_ms_of_tick.end());
     const auto at_quantile = [&](double q) {
         return server_ms_of_tick[static_cast<std::size_t>(

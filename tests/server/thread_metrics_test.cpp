@@ -36,7 +36,15 @@ double thread_cpu_seconds() {
     return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_nsec) * 1e-9;
 }
 
-TEST(ThreadMetrics, ThePoolsBusyThreadsCountAsWorkers) {
+/// Spins the calling thread for `seconds` of its CPU time.
+void spin(double seconds) {
+    const double until = thread_cpu_seconds() + seconds;
+    while (thread_cpu_seconds() < until) {
+    }
+}
+
+TEST(ThreadMetrics, TheIoThreadAndThePoolsThreadsEachCountUnderTheirRole) {
+    mark_io_thread(); // this test's thread stands for the I/O thread
     const ThreadRoleSample before = read_thread_roles();
     if (!before.read) {
         GTEST_SKIP() << "this kernel keeps no /proc/self/task/*/schedstat";
@@ -48,13 +56,14 @@ TEST(ThreadMetrics, ThePoolsBusyThreadsCountAsWorkers) {
     pool.start(
         2,
         [&](std::size_t i) {
-            const double until = thread_cpu_seconds() + kBusySeconds;
-            while (thread_cpu_seconds() < until) {
-            }
+            spin(kBusySeconds);
             ::pthread_getname_np(::pthread_self(), names[i].data(), names[i].size());
         },
         [](const std::exception_ptr&) {});
     pool.wait_idle();
+    const double io_cpu_before = thread_cpu_seconds();
+    spin(0.02);
+    const double io_spun = thread_cpu_seconds() - io_cpu_before;
     const ThreadRoleSample after = read_thread_roles();
     ASSERT_TRUE(after.read);
     for (const auto& name : names) { // named as the metrics expect
@@ -62,9 +71,28 @@ TEST(ThreadMetrics, ThePoolsBusyThreadsCountAsWorkers) {
     }
     EXPECT_GE(after.workers.run_seconds - before.workers.run_seconds, 2 * kBusySeconds * 0.9);
     EXPECT_GE(after.workers.timeslices - before.workers.timeslices, 2.0);
-    EXPECT_GE(after.workers.wait_seconds, 0.0);
-    // The busy loop is the pool's, not this thread's.
-    EXPECT_LT(after.io.run_seconds - before.io.run_seconds, kBusySeconds);
+    // The kernel's run time and the thread's CPU clock are the same count.
+    EXPECT_GE(after.io.run_seconds - before.io.run_seconds, io_spun * 0.9);
+    // The pool's busy loops are not this thread's.
+    EXPECT_LT(after.io.run_seconds - before.io.run_seconds, io_spun + kBusySeconds);
+}
+
+TEST(ThreadMetrics, AThreadThatEndedKeepsCounting) {
+    const ThreadRoleSample first = read_thread_roles();
+    if (!first.read) {
+        GTEST_SKIP() << "this kernel keeps no /proc/self/task/*/schedstat";
+    }
+    double while_alive = 0.0;
+    {
+        WorkerPool pool(1, WorkerPool::Caller::stays_out);
+        pool.start(
+            1, [](std::size_t) { spin(0.03); }, [](const std::exception_ptr&) {});
+        pool.wait_idle();
+        while_alive = read_thread_roles().workers.run_seconds;
+    } // the pool's thread ends here
+    const ThreadRoleSample after = read_thread_roles();
+    EXPECT_GE(while_alive - first.workers.run_seconds, 0.03 * 0.9);
+    EXPECT_GE(after.workers.run_seconds, while_alive); // a counter never goes back
 }
 
 TEST(ThreadMetrics, WritesASamplePerRoleAndNothingUnread) {
