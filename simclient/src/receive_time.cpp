@@ -3,6 +3,8 @@
 #include <sys/socket.h>
 #include <sys/uio.h>
 
+#include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cstring>
 #include <ctime>
@@ -33,24 +35,9 @@ std::chrono::steady_clock::time_point on_steady_clock(const timespec& stamp,
     return now - std::chrono::duration_cast<std::chrono::steady_clock::duration>(age);
 }
 
-} // namespace
-
-StampedRead receive_stamped(int fd, std::span<std::uint8_t> buffer) {
-    iovec io{buffer.data(), buffer.size()};
-    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
-    msghdr message{};
-    message.msg_iov = &io;
-    message.msg_iovlen = 1;
-    message.msg_control = control;
-    message.msg_controllen = sizeof control;
-    StampedRead read;
-    const ssize_t n = ::recvmsg(fd, &message, MSG_DONTWAIT);
-    const auto now = std::chrono::steady_clock::now();
-    if (n < 0) {
-        read.error = errno;
-        return read;
-    }
-    read.bytes = static_cast<std::size_t>(n);
+/// The arrival of the datagram `message` holds (its SCM_TIMESTAMPNS, if any), read at `now`.
+std::chrono::steady_clock::time_point arrival_of(msghdr& message,
+                                                 std::chrono::steady_clock::time_point now) {
     timespec stamp{};
     for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr; c = CMSG_NXTHDR(&message, c)) {
         if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS &&
@@ -58,8 +45,53 @@ StampedRead receive_stamped(int fd, std::span<std::uint8_t> buffer) {
             std::memcpy(&stamp, CMSG_DATA(c), sizeof stamp);
         }
     }
-    read.arrival = on_steady_clock(stamp, now);
+    return on_steady_clock(stamp, now);
+}
+
+} // namespace
+
+StampedRead receive_stamped(int fd, std::span<std::uint8_t> buffer) {
+    StampedRead read;
+    const std::span<std::uint8_t> one[1] = {buffer};
+    (void)receive_stamped(fd, one, std::span(&read, 1));
     return read;
+}
+
+std::size_t receive_stamped(int fd, std::span<const std::span<std::uint8_t>> buffers,
+                            std::span<StampedRead> reads) {
+    const std::size_t n = std::min({buffers.size(), reads.size(), kMaxStampedReads});
+    if (n == 0) {
+        return 0;
+    }
+    std::array<mmsghdr, kMaxStampedReads> messages{};
+    std::array<iovec, kMaxStampedReads> parts{};
+    struct alignas(cmsghdr) Control {
+        char bytes[CMSG_SPACE(sizeof(timespec))];
+    };
+    std::array<Control, kMaxStampedReads> controls{};
+    for (std::size_t k = 0; k < n; ++k) {
+        parts[k] = {buffers[k].data(), buffers[k].size()};
+        msghdr& h = messages[k].msg_hdr;
+        h.msg_iov = &parts[k];
+        h.msg_iovlen = 1;
+        h.msg_control = controls[k].bytes;
+        h.msg_controllen = sizeof controls[k].bytes;
+    }
+    const int got =
+        ::recvmmsg(fd, messages.data(), static_cast<unsigned>(n), MSG_DONTWAIT, nullptr);
+    const auto now = std::chrono::steady_clock::now();
+    if (got <= 0) {
+        reads[0] = {};
+        reads[0].error = got < 0 ? errno : EAGAIN;
+        return 0;
+    }
+    for (std::size_t k = 0; k < static_cast<std::size_t>(got); ++k) {
+        // Without MSG_TRUNC msg_len is what the buffer holds.
+        reads[k].bytes = std::min<std::size_t>(messages[k].msg_len, buffers[k].size());
+        reads[k].error = 0;
+        reads[k].arrival = arrival_of(messages[k].msg_hdr, now);
+    }
+    return static_cast<std::size_t>(got);
 }
 
 } // namespace dsoc::simclient

@@ -150,11 +150,12 @@ void UdpLink::transmit(std::span<const std::uint8_t> datagram) {
 }
 
 void UdpLink::receive_next() {
-    // Woken when the socket has something, then every datagram waiting is read, each with
-    // its arrival in the same system call (receive_time.hpp): a snapshot's datagrams come
-    // together, and an asio read apiece cost a read that found nothing before each wait.
-    // The reactor wakes on new data only (edge-triggered), so the socket is drained to
-    // EAGAIN before waiting again.
+    // Woken when the socket has something, then every datagram waiting is read, up to
+    // kReadBatch to a system call, each with its arrival (receive_time.hpp): a snapshot's
+    // datagrams come together, and a read apiece cost a read that found nothing before
+    // each wait. The reactor wakes on new data only (edge-triggered), so the socket is
+    // drained before waiting again: until a read finds it empty or returns fewer than it
+    // asked for (asio's wait re-arms the registration, which reports data that came since).
     socket_.async_wait(asio::socket_base::wait_read,
                        [this, keep = owner_](const boost::system::error_code& ec) {
                            if (closed_ || ec == asio::error::operation_aborted) {
@@ -170,43 +171,54 @@ void UdpLink::receive_next() {
 }
 
 bool UdpLink::drain() {
+    std::array<std::span<std::uint8_t>, kReadBatch> buffers;
+    for (std::size_t k = 0; k < kReadBatch; ++k) {
+        buffers[k] = buffers_[k];
+    }
     for (;;) {
-        const StampedRead read = receive_stamped(socket_.native_handle(), buffer_);
-        if (read.error == EAGAIN || read.error == EWOULDBLOCK) {
-            return true;
-        }
-        if (read.error == ECONNREFUSED) {
-            if (session_ != 0) {
-                continue; // a lost server shows as silence
+        const std::size_t got = receive_stamped(socket_.native_handle(), buffers, reads_);
+        if (got == 0) {
+            const int error = reads_[0].error;
+            if (error == EAGAIN || error == EWOULDBLOCK) {
+                return true;
             }
-            // Nothing listens at this address: the next one the name resolved to, as a TCP
-            // connect tries each, or the owner's to decide.
-            std::string why;
-            if (next_server_ < servers_.size() && open_next(why)) {
-                return false; // receiving on the new socket
+            if (error == ECONNREFUSED) {
+                if (session_ != 0) {
+                    continue; // a lost server shows as silence
+                }
+                // Nothing listens at this address: the next one the name resolved to, as
+                // a TCP connect tries each, or the owner's to decide.
+                std::string why;
+                if (next_server_ < servers_.size() && open_next(why)) {
+                    return false; // receiving on the new socket
+                }
+                if (handlers_.on_refused) {
+                    handlers_.on_refused(
+                        boost::system::error_code(ECONNREFUSED, boost::system::system_category()));
+                }
+                return !closed_; // the owner closes the link
             }
-            if (handlers_.on_refused) {
-                handlers_.on_refused(
-                    boost::system::error_code(ECONNREFUSED, boost::system::system_category()));
-            }
-            return !closed_; // the owner closes the link
-        }
-        if (read.error != 0) {
             return true; // another error of the socket (none expected): wait again
         }
-        arrival_ = read.arrival;
-        on_datagram(read.bytes);
-        if (closed_) {
-            return false;
+        for (std::size_t k = 0; k < got; ++k) {
+            arrival_ = reads_[k].arrival;
+            on_datagram(std::span<const std::uint8_t>(buffers_[k].data(), reads_[k].bytes));
+            if (closed_) {
+                return false;
+            }
+        }
+        if (got < kReadBatch) {
+            // None was left when they were read; one that came since wakes the next wait
+            // (asio re-arms the edge-triggered registration, which reports data waiting).
+            return true;
         }
     }
 }
 
-void UdpLink::on_datagram(std::size_t bytes) {
+void UdpLink::on_datagram(std::span<const std::uint8_t> datagram) {
     if (handlers_.on_bytes_down) {
-        handlers_.on_bytes_down(bytes);
+        handlers_.on_bytes_down(datagram.size());
     }
-    const std::span<const std::uint8_t> datagram(buffer_.data(), bytes);
     if (happens(faults_.loss)) {
         ++emulated_losses_;
         return;

@@ -7,7 +7,9 @@
 #include <array>
 #include <cerrno>
 #include <chrono>
+#include <span>
 #include <thread>
+#include <vector>
 
 namespace dsoc::simclient {
 namespace {
@@ -39,25 +41,30 @@ struct Loopback {
         }
         return {};
     }
+    /// Turns timestamps on and waits until they come. The kernel turns them on a moment
+    /// after the first socket asks (deferred work); until then a datagram carries none and
+    /// reads as now. Probes until one comes back stamped before its read.
+    bool stamps_on() {
+        if (!enable_receive_times(receiver.native_handle())) {
+            return false;
+        }
+        for (int i = 0; i < 200; ++i) {
+            send();
+            std::this_thread::sleep_for(5ms);
+            const StampedRead r = read();
+            if (r.bytes == payload.size() && ms(Clock::now() - r.arrival) >= 4.0) {
+                return true;
+            }
+        }
+        return false;
+    }
 };
 
 // A datagram read well after it arrived is stamped with its arrival, not its reading: the
 // difference a busy load generator's own delay makes to its figures.
 TEST(ReceiveTime, IsWhenTheDatagramArrivedNotWhenItWasRead) {
     Loopback link;
-    ASSERT_TRUE(enable_receive_times(link.receiver.native_handle()));
-    // The kernel turns its receive timestamps on a moment after the first socket asks
-    // (deferred work); until then a datagram carries none and reads as now. Probe until
-    // one comes back stamped before its read.
-    bool stamped = false;
-    for (int i = 0; i < 200 && !stamped; ++i) {
-        link.send();
-        std::this_thread::sleep_for(5ms);
-        const StampedRead r = link.read();
-        ASSERT_EQ(r.bytes, link.payload.size());
-        stamped = ms(Clock::now() - r.arrival) >= 4.0;
-    }
-    ASSERT_TRUE(stamped) << "no datagram came with a receive timestamp";
+    ASSERT_TRUE(link.stamps_on()) << "no datagram came with a receive timestamp";
 
     const auto sent_at = Clock::now();
     link.send();
@@ -99,6 +106,41 @@ TEST(ReceiveTime, WithoutTimestampsIsWhenRead) {
     ASSERT_EQ(r.bytes, link.payload.size());
     EXPECT_GE(r.arrival, before);
     EXPECT_LE(ms(r.arrival - before), 1000.0);
+}
+
+// Many datagrams to a system call: each into its own buffer with its own size and
+// arrival, in the order sent; fewer than asked when no more wait; none, and EAGAIN, after.
+TEST(ReceiveTime, ManyToACallEachWithItsOwnBytesAndArrival) {
+    Loopback link;
+    ASSERT_TRUE(link.stamps_on()) << "no datagram came with a receive timestamp";
+    constexpr std::size_t kSent = 5;
+    for (std::size_t i = 0; i < kSent; ++i) { // sizes 1..5, each byte its datagram's number
+        const std::vector<std::uint8_t> bytes(i + 1, static_cast<std::uint8_t>(i));
+        link.sender.send_to(asio::buffer(bytes), link.receiver.local_endpoint());
+        std::this_thread::sleep_for(5ms);
+    }
+    std::this_thread::sleep_for(20ms);
+    std::array<std::array<std::uint8_t, 16>, 3> buffers{};
+    std::array<std::span<std::uint8_t>, 3> views{buffers[0], buffers[1], buffers[2]};
+    std::array<StampedRead, 3> reads{};
+    std::vector<StampedRead> all;
+    std::vector<std::size_t> per_call;
+    for (int call = 0; call < 3; ++call) {
+        const std::size_t got = receive_stamped(link.receiver.native_handle(), views, reads);
+        per_call.push_back(got);
+        for (std::size_t k = 0; k < got; ++k) {
+            ASSERT_EQ(reads[k].bytes, all.size() + 1) << "datagram " << all.size();
+            EXPECT_EQ(buffers[k][0], all.size()) << "datagram " << all.size();
+            EXPECT_EQ(reads[k].error, 0);
+            all.push_back(reads[k]);
+        }
+    }
+    EXPECT_EQ(per_call, (std::vector<std::size_t>{3, 2, 0}));
+    EXPECT_EQ(reads[0].error, EAGAIN);
+    ASSERT_EQ(all.size(), kSent);
+    for (std::size_t i = 1; i < kSent; ++i) { // sent 5 ms apart: each its own arrival
+        EXPECT_GT(all[i].arrival, all[i - 1].arrival) << i;
+    }
 }
 
 } // namespace

@@ -36,4 +36,15 @@ struct StampedRead {
 /// Reads the next datagram of `fd` into `buffer` without waiting (MSG_DONTWAIT).
 [[nodiscard]] StampedRead receive_stamped(int fd, std::span<std::uint8_t> buffer);
 
+/// The most datagrams one receive_stamped() of many reads.
+inline constexpr std::size_t kMaxStampedReads = 16;
+
+/// Reads up to min(buffers.size(), reads.size(), kMaxStampedReads) datagrams of `fd` in
+/// one system call (recvmmsg) without waiting, the k-th into buffers[k] and described by
+/// reads[k], each with its own arrival. Returns how many it read; 0 when none, with
+/// reads[0].error saying why (EAGAIN: none waiting). Fewer than asked means none was left
+/// to read at that moment.
+[[nodiscard]] std::size_t receive_stamped(int fd, std::span<const std::span<std::uint8_t>> buffers,
+                                          std::span<StampedRead> reads);
+
 } // namespace dsoc::simclient

@@ -14,6 +14,7 @@
 
 #include "dsoc/protocol/datagram.hpp"
 #include "dsoc/protocol/messages.hpp"
+#include "dsoc/simclient/receive_time.hpp"
 #include "dsoc/simclient/scenario.hpp"
 
 #include <boost/asio/io_context.hpp>
@@ -89,7 +90,7 @@ private:
     /// Reads every datagram waiting on the socket. False when the link no longer reads this
     /// socket (closed, or moved to the next address).
     bool drain();
-    void on_datagram(std::size_t bytes);
+    void on_datagram(std::span<const std::uint8_t> datagram);
     void process(std::span<const std::uint8_t> datagram);
     void retry_handshake();
     void send(std::span<const std::uint8_t> datagram);
@@ -105,7 +106,11 @@ private:
     std::size_t next_server_ = 0; ///< the address to try when this one refuses
     boost::asio::ip::udp::endpoint server_;
     boost::asio::ip::udp::endpoint sender_;
-    std::array<std::uint8_t, protocol::kMaxDatagramBytes + 1> buffer_{};
+    /// drain()'s buffers: up to kReadBatch datagrams a system call, each one byte over the
+    /// largest datagram, so that an oversized one is seen as such.
+    static constexpr std::size_t kReadBatch = 8;
+    std::array<std::array<std::uint8_t, protocol::kMaxDatagramBytes + 1>, kReadBatch> buffers_{};
+    std::array<StampedRead, kReadBatch> reads_{};
     std::vector<std::uint8_t> datagram_;
     std::vector<std::uint8_t> request_;
     std::vector<std::uint8_t> response_;
