@@ -63,14 +63,16 @@ std::size_t receive_stamped(int fd, std::span<const std::span<std::uint8_t>> buf
     if (n == 0) {
         return 0;
     }
-    std::array<mmsghdr, kMaxStampedReads> messages{};
-    std::array<iovec, kMaxStampedReads> parts{};
+    // Only the first n entries are set (and read): no call pays for all of them.
+    std::array<mmsghdr, kMaxStampedReads> messages;
+    std::array<iovec, kMaxStampedReads> parts;
     struct alignas(cmsghdr) Control {
         char bytes[CMSG_SPACE(sizeof(timespec))];
     };
-    std::array<Control, kMaxStampedReads> controls{};
+    std::array<Control, kMaxStampedReads> controls;
     for (std::size_t k = 0; k < n; ++k) {
         parts[k] = {buffers[k].data(), buffers[k].size()};
+        messages[k] = {};
         msghdr& h = messages[k].msg_hdr;
         h.msg_iov = &parts[k];
         h.msg_iovlen = 1;

@@ -208,8 +208,9 @@ bool UdpLink::drain() {
             }
         }
         if (got < kReadBatch) {
-            // None was left when they were read; one that came since wakes the next wait
-            // (asio re-arms the edge-triggered registration, which reports data waiting).
+            // None was left when they were read, or an error followed them; a datagram
+            // that came since, or the error, wakes the next wait (asio re-arms the
+            // edge-triggered registration, which reports what is waiting).
             return true;
         }
     }

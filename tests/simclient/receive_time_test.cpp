@@ -52,7 +52,10 @@ struct Loopback {
             send();
             std::this_thread::sleep_for(5ms);
             const StampedRead r = read();
-            if (r.bytes == payload.size() && ms(Clock::now() - r.arrival) >= 4.0) {
+            if (r.bytes != payload.size()) {
+                return false; // the probe itself was lost
+            }
+            if (ms(Clock::now() - r.arrival) >= 4.0) {
                 return true;
             }
         }
@@ -119,27 +122,40 @@ TEST(ReceiveTime, ManyToACallEachWithItsOwnBytesAndArrival) {
         link.sender.send_to(asio::buffer(bytes), link.receiver.local_endpoint());
         std::this_thread::sleep_for(5ms);
     }
-    std::this_thread::sleep_for(20ms);
     std::array<std::array<std::uint8_t, 16>, 3> buffers{};
+    for (auto& b : buffers) {
+        b.fill(0xff); // so that a datagram not written into its buffer shows
+    }
     std::array<std::span<std::uint8_t>, 3> views{buffers[0], buffers[1], buffers[2]};
     std::array<StampedRead, 3> reads{};
     std::vector<StampedRead> all;
     std::vector<std::size_t> per_call;
-    for (int call = 0; call < 3; ++call) {
+    // Until all five are read (a loaded machine may queue one a moment late), then once
+    // more: that read finds none.
+    for (int call = 0; call < 1000 && all.size() < kSent; ++call) {
         const std::size_t got = receive_stamped(link.receiver.native_handle(), views, reads);
+        if (got == 0) {
+            std::this_thread::sleep_for(1ms);
+            continue;
+        }
         per_call.push_back(got);
         for (std::size_t k = 0; k < got; ++k) {
-            ASSERT_EQ(reads[k].bytes, all.size() + 1) << "datagram " << all.size();
-            EXPECT_EQ(buffers[k][0], all.size()) << "datagram " << all.size();
+            const std::size_t number = all.size();
+            ASSERT_EQ(reads[k].bytes, number + 1) << "datagram " << number;
+            for (std::size_t b = 0; b < reads[k].bytes; ++b) {
+                EXPECT_EQ(buffers[k][b], number) << "datagram " << number << " byte " << b;
+            }
             EXPECT_EQ(reads[k].error, 0);
             all.push_back(reads[k]);
         }
     }
-    EXPECT_EQ(per_call, (std::vector<std::size_t>{3, 2, 0}));
+    ASSERT_FALSE(per_call.empty());
+    EXPECT_EQ(per_call.front(), 3u); // as many as it asked for: three had waited 10 ms
+    EXPECT_EQ(receive_stamped(link.receiver.native_handle(), views, reads), 0u);
     EXPECT_EQ(reads[0].error, EAGAIN);
     ASSERT_EQ(all.size(), kSent);
     for (std::size_t i = 1; i < kSent; ++i) { // sent 5 ms apart: each its own arrival
-        EXPECT_GT(all[i].arrival, all[i - 1].arrival) << i;
+        EXPECT_GE(ms(all[i].arrival - all[i - 1].arrival), 2.0) << i;
     }
 }
 

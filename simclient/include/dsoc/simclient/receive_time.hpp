@@ -43,7 +43,8 @@ inline constexpr std::size_t kMaxStampedReads = 16;
 /// one system call (recvmmsg) without waiting, the k-th into buffers[k] and described by
 /// reads[k], each with its own arrival. Returns how many it read; 0 when none, with
 /// reads[0].error saying why (EAGAIN: none waiting). Fewer than asked means none was left
-/// to read at that moment.
+/// to read at that moment, or an error came after the last one read (the next call
+/// reports it).
 [[nodiscard]] std::size_t receive_stamped(int fd, std::span<const std::span<std::uint8_t>> buffers,
                                           std::span<StampedRead> reads);
 
