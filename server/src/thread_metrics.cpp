@@ -1,5 +1,6 @@
 #include "dsoc/server/thread_metrics.hpp"
 
+#include "dsoc/common/read_file.hpp"
 #include "dsoc/server/worker_pool.hpp"
 
 #include <dirent.h>
@@ -8,8 +9,6 @@
 
 #include <atomic>
 #include <charconv>
-#include <fstream>
-#include <iterator>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -44,9 +43,11 @@ std::atomic<pid_t> io_thread{0}; // mark_io_thread()'s; 0: none marked
 
 enum class Role : std::uint8_t { io, worker, other };
 
-std::string read_file(const std::string& path) {
-    std::ifstream in(path);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+/// The file's text; "" when it cannot be read (a thread that ended meanwhile).
+std::string text_of(const std::string& path) {
+    std::string text;
+    (void)common::read_file(path, text);
+    return text;
 }
 
 void add(SchedStat& to, const SchedStat& s) {
@@ -96,11 +97,11 @@ ThreadRoleSample read_thread_roles() {
             continue;
         }
         const std::string task = "/proc/self/task/" + name;
-        const auto stat = parse_schedstat(read_file(task + "/schedstat"));
+        const auto stat = parse_schedstat(text_of(task + "/schedstat"));
         if (!stat) {
             continue; // ended meanwhile, or a kernel without schedstat
         }
-        std::string comm = read_file(task + "/comm");
+        std::string comm = text_of(task + "/comm");
         if (!comm.empty() && comm.back() == '\n') {
             comm.pop_back();
         }

@@ -18,6 +18,7 @@
 // bytes are a checksum of the run).
 
 #include "dsoc/cli/program.hpp"
+#include "dsoc/common/percentiles.hpp"
 #include "dsoc/interest/game_world.hpp"
 #include "dsoc/interest/interest_policy.hpp"
 #include "dsoc/maps/map_source.hpp"
@@ -316,8 +317,7 @@ int main(int argc, char** argv) {
     // it, so it bounds the work's own spread from above).
     std::sort(server_ms_of_tick.begin(), server_ms_of_tick.end());
     const auto at_quantile = [&](double q) {
-        return server_ms_of_tick[static_cast<std::size_t>(
-            q * static_cast<double>(server_ms_of_tick.size() - 1))];
+        return common::percentile_sorted(server_ms_of_tick, q);
     };
     fmt::print("  a tick's spread      p50 {:.2f} / p90 {:.2f} / p99 {:.2f} / max {:.2f} ms\n",
                at_quantile(0.5), at_quantile(0.9), at_quantile(0.99), server_ms_of_tick.back());
