@@ -156,9 +156,13 @@ void UdpLink::receive_next() {
     // each wait. The reactor wakes on new data only (edge-triggered), so the socket is
     // drained before waiting again: until a read finds it empty or returns fewer than it
     // asked for (asio's wait re-arms the registration, which reports data that came since).
+    // The wait holds the owner weakly (no cycle through the socket): a link closed, or
+    // destroyed with its owner, still completes it (aborted), and its handler must then
+    // not touch `this`, which may be gone.
     socket_.async_wait(asio::socket_base::wait_read,
-                       [this, keep = owner_](const boost::system::error_code& ec) {
-                           if (closed_ || ec == asio::error::operation_aborted) {
+                       [this, owner = owner_](const boost::system::error_code& ec) {
+                           const auto keep = owner.lock();
+                           if (!keep || ec == asio::error::operation_aborted || closed_) {
                                return;
                            }
                            if (!ec && !drain()) {

@@ -60,7 +60,8 @@ public:
     /// likewise, until the accepted datagram arrives); where the host answers that
     /// nothing listens, the next address. Returns false (with `error`) when there is no
     /// address, the socket cannot be opened or the hello does not fit.
-    /// `owner` is kept alive by every pending handler (the SimClient that owns this link).
+    /// `owner` is the SimClient that owns this link: kept alive by the handshake's pending
+    /// retries; a receive wait that completes after it is gone does nothing.
     bool connect(std::vector<boost::asio::ip::udp::endpoint> servers,
                  const protocol::pb::Envelope& hello, std::shared_ptr<void> owner,
                  std::string& error);
@@ -98,7 +99,9 @@ private:
     [[nodiscard]] bool happens(double probability);
 
     Handlers handlers_;
-    /// The owner: each pending handler holds it alive, the link itself does not (no cycle).
+    /// The owner. The handshake's retry timer holds it alive while it waits (the wait ends
+    /// on its own); the receive wait, which lasts until the socket closes, holds it weakly
+    /// (a strong hold would be a cycle through the socket) and does nothing once it is gone.
     std::weak_ptr<void> owner_;
     boost::asio::ip::udp::socket socket_;
     boost::asio::steady_timer retry_timer_;
