@@ -235,9 +235,6 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     }
     const glm::vec3 from = region.center();
     const glm::vec3 to = box.center();
-    // Only an occluder that blocks the centre-to-centre segment can pass the first
-    // check below, and such an occluder lies in a cell that segment crosses.
-    grid_->query_segment(from, to, scratch.grid);
     int full_tests = 0;
     scratch.planes.clear();
     scratch.plane_sources.clear();
@@ -254,27 +251,33 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
             scratch.plane_sources.push_back(id);
         }
     };
-    for (const OccluderId id : scratch.grid.found) {
+    // Only an occluder that blocks the centre-to-centre segment can pass the first
+    // check below, and such an occluder lies in a cell that segment crosses. They are
+    // taken as the walk along it finds them, nearest cells first, and the walk ends at
+    // the first that hides the box (or at kMaxFullTests): the rest of a long segment
+    // (across a city, say) is not walked for nothing.
+    bool one_hides = false;
+    grid_->any_along_segment(from, to, scratch.grid, [&](OccluderId id) {
         const Aabb& ob = world_->occluder(id).bounds();
         if (!segment_hits_box(from, centre.inv, ob)) {
-            continue; // misses the occluder's bounds, so it cannot block the segment
+            return false; // misses the occluder's bounds, so it cannot block the segment
         }
-        const auto planes = world_->solid_planes(id);
-        const Aabb& solid = world_->solid_box(id); // non-empty: an axis box (fast path)
+        if (full_tests >= kMaxFullTests) {
+            return true; // no further single occluder is tried
+        }
         // Necessary condition, one segment: the occluder must block centre to centre
         // (also for fusion: some occluder's interior holds the centre's crossing).
-        if (full_tests >= kMaxFullTests) {
-            break;
-        }
-        if (!(solid.is_empty() ? segment_blocked_by(from, to, planes)
+        const Aabb& solid = world_->solid_box(id); // non-empty: an axis box (fast path)
+        if (!(solid.is_empty() ? segment_blocked_by(from, to, world_->solid_planes(id))
                                : segment_through_box(centre, solid))) {
-            continue;
+            return false;
         }
         if (!cheap_done && id != tried && blocks_shaft(id)) {
             if (hint != nullptr) {
                 *hint = id + 1;
             }
-            return Visibility::occluded;
+            one_hides = true;
+            return true;
         }
         ++full_tests;
         if (fusion_) {
@@ -284,6 +287,10 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
                 add_plane(id, axis);
             }
         }
+        return false;
+    });
+    if (one_hides) {
+        return Visibility::occluded;
     }
     if (!scratch.planes.empty()) {
         const CutPlaneFusion fusion(*world_, *grid_);
