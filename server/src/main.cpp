@@ -90,7 +90,8 @@ void add_options(CLI::App& app, ServerConfig& config, ProgramOptions& options) {
     dsoc::server::add_world_options(app, config);
     dsoc::server::add_policy_options(app, config);
     dsoc::cli::add_setting(app, "--tbv-strategy", config.tbv_strategy,
-                           "dsoc TBVs: adaptive | explicit | fuzzy");
+                           "dsoc TBVs, when on ([dsoc] tbvs_enabled = true; off by default): "
+                           "adaptive | explicit | fuzzy");
     dsoc::cli::add_choice_option(app, "--culler", config.culler,
                                  "Occlusion culler stages: shaft | pyramid | both");
     dsoc::cli::add_setting(

@@ -108,6 +108,7 @@ class DsocStateMachine : public ::testing::TestWithParam<bool> {
 protected:
     DSOCConfig config() const {
         DSOCConfig c;
+        c.tbvs_enabled = true; // the state machine under test (off by default)
         c.strategy = TbvStrategy::explicit_duration;
         c.default_tbv_duration = 10;
         c.tbv_merge_distance = 0.0f;
@@ -617,6 +618,7 @@ void move_walkers(InterestManager& m, std::uint64_t tick) {
 
 TEST(InterestManagerShortcuts, ACullerWhoseTestsAreBitTestsGetsNoTbvsOrClustersAndTheSameSets) {
     DSOCConfig c;
+    c.tbvs_enabled = true; // asked for, and still none behind a bit-test culler
     c.entity_cluster_size = 64.0f;
     c.validate_state = true;
     int builds = 0;
@@ -694,6 +696,7 @@ bool sent(const InterestManager& m, EntityId id) {
 
 TEST(FuzzyTbvs, AnEntityOutsideItsPredictedTbvIsCaughtCountedAndTestedThatTick) {
     DSOCConfig c;
+    c.tbvs_enabled = true;
     c.strategy = TbvStrategy::fuzzy;
     c.tbv_merge_distance = 0.0f;
     c.validate_state = true; // update() throws if an invariant still fails after it
@@ -736,6 +739,7 @@ TEST(OscillatingEntity, IsSentExactlyWhileVisibleAndItsFailedTbvsBackOff) {
     // TBV would be visible at once; after a rejected TBV the manager only box-tests it
     // for a while, so the failed TBV tests stay few.
     DSOCConfig c;
+    c.tbvs_enabled = true;
     c.validate_state = true;
     int builds = 0;
     InterestManager m(c, Aabb{glm::vec3(-4096.0f), glm::vec3(4096.0f)},

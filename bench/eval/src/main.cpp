@@ -45,7 +45,8 @@ int main(int argc, char** argv) {
     app.add_option("--map", map, "override the scenario's map (name, path, gen:city, gen:rooms)");
     app.add_option("--policy", policy_list,
                    "comma-separated policies (default: the scenario's list, else all): broadcast, "
-                   "distance, occlusion, dsoc, dsoc-explicit, dsoc-fuzzy, raycast; over the map's "
+                   "distance, occlusion, dsoc, dsoc-tbvs (with TBVs), dsoc-explicit, dsoc-fuzzy, "
+                   "raycast; over the map's "
                    "baked table (--bake-cell-size; baked on first use): dsoc-baked, dsoc-table; "
                    "diagnostic: occlusion-k0");
     app.add_option("--duration", duration, "override the simulated time [s]");

@@ -203,9 +203,9 @@ const std::vector<std::string>& baked_policy_names() {
 }
 
 const std::vector<std::string>& all_policy_names() {
-    static const std::vector<std::string> names = {"broadcast",  "distance", "pvs",
-                                                   "occlusion",  "dsoc",     "dsoc-explicit",
-                                                   "dsoc-fuzzy", "raycast"};
+    static const std::vector<std::string> names = {"broadcast",     "distance",   "pvs",
+                                                   "occlusion",     "dsoc",       "dsoc-tbvs",
+                                                   "dsoc-explicit", "dsoc-fuzzy", "raycast"};
     return names;
 }
 
@@ -234,10 +234,15 @@ std::unique_ptr<EvalPolicy> make_policy(std::string_view name, const PolicyEnv& 
         }
     } else if (name == "dsoc" || name == "dsoc-baked" || name == "dsoc-table") {
         config.strategy = visibility::TbvStrategy::adaptive;
+    } else if (name == "dsoc-tbvs") { // the defaults with the paper's TBVs on
+        config.strategy = visibility::TbvStrategy::adaptive;
+        config.tbvs_enabled = true;
     } else if (name == "dsoc-explicit") {
         config.strategy = visibility::TbvStrategy::explicit_duration;
+        config.tbvs_enabled = true;
     } else if (name == "dsoc-fuzzy") {
         config.strategy = visibility::TbvStrategy::fuzzy;
+        config.tbvs_enabled = true;
     } else {
         return nullptr;
     }

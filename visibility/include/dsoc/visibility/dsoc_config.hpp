@@ -79,10 +79,14 @@ struct DSOCConfig {
     /// baked table first). [Units: world units] [Limit: 0 or >= 16]
     float entity_cluster_size = 512.0f;
 
-    /// false: no TBVs at all - every hidden entity is re-tested every tick (the plain
-    /// "occlusion" policy, for comparison). Also none when the culler says they do not
-    /// pay (RegionVisibility::pair_shortcuts_pay(): a baked table first). [Units: flag]
-    bool tbvs_enabled = true;
+    /// true: a hidden entity gets a Temporal Bounding Volume (the box it can reach in
+    /// the next ticks, `strategy`) proven hidden and is not tested again until it
+    /// expires or turns visible. false (the default): every hidden entity is tested
+    /// every tick, which costs less with today's culler on every map measured, for
+    /// the same sets (docs/dsoc.md, "When TBVs pay"). Never any when the culler says
+    /// they do not pay (RegionVisibility::pair_shortcuts_pay(): a baked table first).
+    /// [Units: flag]
+    bool tbvs_enabled = false;
     /// false: rebuild every client's culler every tick (no region reuse). [Units: flag]
     bool reuse_buffers = true;
     /// true: entities' current boxes are tested against a culler built every tick for

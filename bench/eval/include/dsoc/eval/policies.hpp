@@ -7,9 +7,10 @@
 //   distance       entities whose box comes within a radius of the eye (ring culling)
 //   occlusion      the from-region z-pyramid rebuilt every tick, every box tested
 //                  every tick (InterestManager with no TBVs and no buffer reuse)
-//   dsoc           InterestManager, adaptive TBVs (the default strategy)
-//   dsoc-explicit  InterestManager, fixed-duration TBVs
-//   dsoc-fuzzy     InterestManager, predicted (NOT conservative) TBVs
+//   dsoc           InterestManager with its defaults (no TBVs: they do not pay)
+//   dsoc-tbvs      the same with TBVs, adaptive (the default strategy)
+//   dsoc-explicit  the same with fixed-duration TBVs
+//   dsoc-fuzzy     the same with predicted (NOT conservative) TBVs
 //   raycast        per-pair Embree rays from the eye and from the eye extrapolated by
 //                  its velocity x latency (SMAC-style) to the target box's 8 corners
 //                  and centre; not conservative (docs/evaluation.md)
