@@ -83,7 +83,7 @@ struct DSOCConfig {
     /// the next ticks, `strategy`) proven hidden and is not tested again until it
     /// expires or turns visible. false (the default): every hidden entity is tested
     /// every tick, which costs less with today's culler on every map measured, for
-    /// the same sets (docs/dsoc.md, "When TBVs pay"). Never any when the culler says
+    /// sets within 0.2% of the pairs (docs/dsoc.md, "When TBVs pay"). Never any when the culler says
     /// they do not pay (RegionVisibility::pair_shortcuts_pay(): a baked table first).
     /// [Units: flag]
     bool tbvs_enabled = false;
