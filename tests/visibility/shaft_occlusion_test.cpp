@@ -108,6 +108,60 @@ TEST(ShaftOcclusion, TheBoxFastPathNeverClaimsMoreThanThePlanes) {
     EXPECT_GT(agreed, 19900); // it differs only within the 1/64-unit shrink
 }
 
+TEST(ShaftOcclusion, TheShaftBoxTestAnswersAsItsSixtyFourSegments) {
+    // shaft_blocked_by_box() works each axis's values out once per pair of sides; its
+    // slow twin is the corner argument itself: segment_through_box() for each of the 64
+    // segments between the two boxes' corners. Coordinates on a coarse lattice make many
+    // flat axes (a segment parallel to a face), shared planes and flat boxes.
+    std::mt19937 rng(43);
+    std::uniform_int_distribution<int> lattice(-12, 12);
+    std::uniform_int_distribution<int> extent(0, 6);
+    std::uniform_real_distribution<float> jitter(-0.02f, 0.02f);
+    const auto random_box = [&](float unit, bool jittered) {
+        glm::vec3 lo(0.0f);
+        glm::vec3 hi(0.0f);
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = unit * static_cast<float>(lattice(rng)) + (jittered ? jitter(rng) : 0.0f);
+            hi[a] = lo[a] + unit * static_cast<float>(extent(rng));
+        }
+        return Aabb{lo, hi};
+    };
+    int blocked = 0;
+    int open = 0;
+    for (int i = 0; i < 200000; ++i) {
+        const bool jittered = i % 4 == 3;
+        const float unit = i % 2 == 0 ? 16.0f : 1.0f / 64.0f; // the shrink's own scale too
+        const Aabb region = random_box(unit, jittered);
+        const Aabb box = random_box(unit, jittered);
+        Aabb solid = random_box(unit, false);
+        solid.max += glm::vec3(unit * 4.0f);
+        if (i % 3 == 0) { // a wall across one axis, mostly between them: many blocks
+            const int k = i % 9 == 0 ? 0 : (i % 9 == 3 ? 1 : 2);
+            for (int a = 0; a < 3; ++a) {
+                solid.min[a] = a == k ? unit * static_cast<float>(lattice(rng) / 4) : -20.0f * unit;
+                solid.max[a] = a == k ? solid.min[a] + unit * static_cast<float>(1 + extent(rng))
+                                      : 20.0f * unit;
+            }
+        }
+        bool twin = true;
+        for (int a = 0; a < 8 && twin; ++a) {
+            for (int b = 0; b < 8 && twin; ++b) {
+                const glm::vec3 p((a & 1) ? region.max.x : region.min.x,
+                                  (a & 2) ? region.max.y : region.min.y,
+                                  (a & 4) ? region.max.z : region.min.z);
+                const glm::vec3 q((b & 1) ? box.max.x : box.min.x, (b & 2) ? box.max.y : box.min.y,
+                                  (b & 4) ? box.max.z : box.min.z);
+                twin = segment_through_box(p, q, solid);
+            }
+        }
+        const bool fast = shaft_blocked_by_box(region, box, solid);
+        ASSERT_EQ(fast, twin) << "case " << i;
+        (fast ? blocked : open) += 1;
+    }
+    EXPECT_GT(blocked, 20000); // both answers are common (31,087 and 168,913 blocked and open)
+    EXPECT_GT(open, 20000);
+}
+
 TEST(ShaftOcclusion, AHintNamesTheBlockerAndIsTriedFirst) {
     OccluderWorld world;
     world.add(ConvexPolyhedron::from_aabb({{-8, -500, -500}, {8, 500, 500}})); // wall
