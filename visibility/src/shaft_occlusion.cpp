@@ -34,53 +34,58 @@ bool shaft_blocked_by_box(const Aabb& region, const Aabb& box, const Aabb& solid
     if (region.is_empty() || box.is_empty() || solid.is_empty()) {
         return false;
     }
-    // segment_through_box() for the 64 segments from a corner of the region to a corner
-    // of the box, with the same floats: on each axis a segment's start is the region's
-    // min or max and its end the box's min or max, so the four pairs of sides give every
-    // value that axis contributes (b - a, its inverse, the slab's entry and exit), worked
-    // out once here instead of per segment (12 divisions instead of 192). Each segment
-    // then takes the max of its entries and the min of its exits axis by axis, as
-    // segment_through_box() does, so every answer is the same.
+    // The answer of segment_through_box() for all 64 segments from a corner of the region
+    // to a corner of the box, with the same floats, without walking them:
+    // - On each axis a segment starts on the region's min or max side and ends on the
+    //   box's min or max side; the four pairs of sides give every value that axis
+    //   contributes (b - a, its inverse, the slab's entry and exit times), and the 64
+    //   segments are every choice of one pair per axis.
+    // - A segment passes when no flat axis (b - a = 0) starts outside the slab and
+    //   fl(t1 - t0) > 1e-6 for t0 the max of 0 and its entries, t1 the min of 1 and its
+    //   exits (segment_through_box() checks after each axis; t1 - t0 only shrinks).
+    // - fl(u - v) is monotone in u and v, so that holds iff fl(u - v) > 1e-6 for every
+    //   exit u and entry v of the segment: on one axis that is one pair of sides' own exit
+    //   and entry, and across two axes any exit of one with any entry of the other. Hence
+    //   the per-pair check below and, per two axes, the least exit against the largest
+    //   entry. Entries are taken as max(0, entry) and exits as min(1, exit) (what t0 and
+    //   t1 start from), which also drops a NaN as std::max and std::min do there.
+    constexpr float kMinOverlap = 1.0e-6f; // segment_through_box()'s
     const glm::vec3 lo = solid.min + glm::vec3(kBoxShrink);
     const glm::vec3 hi = solid.max - glm::vec3(kBoxShrink);
-    float entry[3][4];
-    float exit[3][4];
-    bool flat[3][4];    // b - a is 0: the axis leaves the interval as it is
-    bool outside[3][4]; // ...and the start is not strictly inside the slab: a miss
+    float largest_entry[3];
+    float least_exit[3];
     for (int axis = 0; axis < 3; ++axis) {
+        largest_entry[axis] = 0.0f;
+        least_exit[axis] = 1.0f;
         for (int sides = 0; sides < 4; ++sides) {
             const float from = (sides & 1) != 0 ? region.max[axis] : region.min[axis];
             const float to = (sides & 2) != 0 ? box.max[axis] : box.min[axis];
             const float d = to - from;
-            flat[axis][sides] = d == 0.0f;
-            outside[axis][sides] = d == 0.0f && !(from > lo[axis] && from < hi[axis]);
+            if (d == 0.0f) {
+                if (!(from > lo[axis] && from < hi[axis])) {
+                    return false; // these segments run outside the slab
+                }
+                continue; // the axis leaves their interval as it is
+            }
             const float inv = 1.0f / d;
             float ta = (lo[axis] - from) * inv;
             float tb = (hi[axis] - from) * inv;
             if (ta > tb) {
                 std::swap(ta, tb);
             }
-            entry[axis][sides] = ta;
-            exit[axis][sides] = tb;
+            const float entry = std::max(0.0f, ta);
+            const float exit = std::min(1.0f, tb);
+            if (exit - entry <= kMinOverlap) {
+                return false;
+            }
+            largest_entry[axis] = std::max(largest_entry[axis], entry);
+            least_exit[axis] = std::min(least_exit[axis], exit);
         }
     }
-    for (int a = 0; a < 8; ++a) { // corners() order: bit k of the index, the max side on axis k
-        for (int b = 0; b < 8; ++b) {
-            float t0 = 0.0f;
-            float t1 = 1.0f;
-            for (int axis = 0; axis < 3; ++axis) {
-                const int sides = ((a >> axis) & 1) | ((b >> axis) & 1) << 1;
-                if (flat[axis][sides]) {
-                    if (outside[axis][sides]) {
-                        return false;
-                    }
-                    continue;
-                }
-                t0 = std::max(t0, entry[axis][sides]);
-                t1 = std::min(t1, exit[axis][sides]);
-                if (t1 - t0 <= 1.0e-6f) {
-                    return false;
-                }
+    for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+            if (a != b && least_exit[a] - largest_entry[b] <= kMinOverlap) {
+                return false;
             }
         }
     }
