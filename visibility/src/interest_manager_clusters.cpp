@@ -80,10 +80,14 @@ void InterestManager::test_clusters(ClientSlot& c, const RegionVisibility& now,
         if (cluster.members.size() < kMinClusterMembers) {
             continue;
         }
+        // Two members due a full test make the test worth it: the count stops there.
+        // (The entity's view, not its slot, for whether its preparation is current: one
+        // small array for every member.)
         int due = 0;
-        for (const std::uint32_t slot : cluster.members) {
+        for (std::size_t m = 0; m < cluster.members.size() && due < 2; ++m) {
+            const std::uint32_t slot = cluster.members[m];
             const bool decided = c.states[slot] == PairState::hidden_with_tbv || slot == viewer ||
-                                 !entities_[slot].prepared_is_current();
+                                 !views_[slot].prepared_current;
             due += decided || takes_quick_test(c, slot) ? 0 : 1;
         }
         if (due < 2) {
@@ -128,9 +132,9 @@ void InterestManager::hide_cluster(ClientSlot& c, std::uint32_t cluster,
     auto& members = c.cluster_members;
     members.clear();
     for (const std::uint32_t slot : clusters_[cluster].members) {
-        const EntitySlot& e = entities_[slot];
+        const EntityView& e = views_[slot];
         if (e.alive && slot != viewer_slot && c.states[slot] != PairState::hidden_with_tbv &&
-            e.prepared_is_current()) {
+            e.prepared_current) {
             members.push_back(slot);
         }
     }
