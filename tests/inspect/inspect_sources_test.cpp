@@ -24,6 +24,7 @@ TEST(LiveSource, RoomsMapStatesAreConsistentAndDrawnInTheirColours) {
     LiveOptions options;
     options.bots = 60;
     options.viewer_entity = 3;
+    options.tbvs = true; // every state is drawn, TBVs included
     LiveSimulation sim(map, options);
     for (int t = 0; t < 45; ++t) {
         sim.advance();
@@ -36,9 +37,11 @@ TEST(LiveSource, RoomsMapStatesAreConsistentAndDrawnInTheirColours) {
     std::size_t replicated = 0;
     std::size_t hidden = 0;
     std::size_t heard = 0;
+    std::size_t with_tbv = 0;
     for (const EntityView& e : view.entities) {
         EXPECT_NE(e.id, options.viewer_entity);
         if (e.state == EntityState::hidden_tbv) {
+            ++with_tbv;
             EXPECT_TRUE(e.tbv.contains(e.box)) << "entity " << e.id << " outside its TBV";
         } else {
             EXPECT_TRUE(e.tbv.is_empty());
@@ -52,6 +55,7 @@ TEST(LiveSource, RoomsMapStatesAreConsistentAndDrawnInTheirColours) {
     // Walls between rooms: some bots are hidden, some (at least in the own room) not,
     // and some hidden ones are heard running (the world's sounds are on by default).
     EXPECT_GT(hidden, 0u);
+    EXPECT_GT(with_tbv, 0u);
     EXPECT_GT(replicated, 0u);
     EXPECT_GT(heard, 0u);
 

@@ -53,7 +53,7 @@ TEST(GatewaySameAnswers, EveryClientGetsTheSingleProcessServersSetEveryTick) {
     config.bots = 8;
     config.bot_shots_per_second = 2.0; // shots heard, deaths and respawns
     // The exact stages (as testing::RunningServer runs them; a baked table of this map takes
-    // a minute to bake), with their TBVs, hints and temporal coherence: answers that depend
+    // a minute to bake), with their hints and temporal coherence: answers that depend
     // on the ticks before.
     config.baked_stage = false;
     config.insecure = true;      // no connect tokens (as testing::RunningServer)

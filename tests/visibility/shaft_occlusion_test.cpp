@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 namespace dsoc::visibility {
@@ -108,6 +109,24 @@ TEST(ShaftOcclusion, TheBoxFastPathNeverClaimsMoreThanThePlanes) {
     EXPECT_GT(agreed, 19900); // it differs only within the 1/64-unit shrink
 }
 
+/// The corner argument itself, the slow twin of shaft_blocked_by_box(): each of the 64
+/// segments between a corner of `region` and a corner of `box` through `solid`.
+bool every_corner_segment_through(const Aabb& region, const Aabb& box, const Aabb& solid) {
+    for (int a = 0; a < 8; ++a) {
+        for (int b = 0; b < 8; ++b) {
+            const glm::vec3 p((a & 1) ? region.max.x : region.min.x,
+                              (a & 2) ? region.max.y : region.min.y,
+                              (a & 4) ? region.max.z : region.min.z);
+            const glm::vec3 q((b & 1) ? box.max.x : box.min.x, (b & 2) ? box.max.y : box.min.y,
+                              (b & 4) ? box.max.z : box.min.z);
+            if (!segment_through_box(p, q, solid)) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
 TEST(ShaftOcclusion, TheShaftBoxTestAnswersAsItsSixtyFourSegments) {
     // shaft_blocked_by_box() works each axis's values out once per pair of sides; its
     // slow twin is the corner argument itself: segment_through_box() for each of the 64
@@ -143,20 +162,34 @@ TEST(ShaftOcclusion, TheShaftBoxTestAnswersAsItsSixtyFourSegments) {
                                       : 20.0f * unit;
             }
         }
-        bool twin = true;
-        for (int a = 0; a < 8 && twin; ++a) {
-            for (int b = 0; b < 8 && twin; ++b) {
-                const glm::vec3 p((a & 1) ? region.max.x : region.min.x,
-                                  (a & 2) ? region.max.y : region.min.y,
-                                  (a & 4) ? region.max.z : region.min.z);
-                const glm::vec3 q((b & 1) ? box.max.x : box.min.x, (b & 2) ? box.max.y : box.min.y,
-                                  (b & 4) ? box.max.z : box.min.z);
-                twin = segment_through_box(p, q, solid);
-            }
-        }
+        const bool twin = every_corner_segment_through(region, box, solid);
         const bool fast = shaft_blocked_by_box(region, box, solid);
         ASSERT_EQ(fast, twin) << "case " << i;
         (fast ? blocked : open) += 1;
+    }
+    // Off the lattice: arbitrary floats up to 2^15 units, where rounding decides, and
+    // corners nudged by one ulp onto either side of the solid's shrunk faces.
+    std::uniform_real_distribution<float> coordinate(-32768.0f, 32768.0f);
+    std::uniform_real_distribution<float> span(0.0f, 2048.0f);
+    for (int i = 0; i < 100000; ++i) {
+        const auto any_box = [&] {
+            const glm::vec3 lo(coordinate(rng), coordinate(rng), coordinate(rng));
+            return Aabb{lo, lo + glm::vec3(span(rng), span(rng), span(rng))};
+        };
+        Aabb solid = any_box();
+        Aabb region = any_box();
+        Aabb box = any_box();
+        if (i % 2 == 0) { // a side of each box on a shrunk face of the solid, within an ulp
+            const int a = i % 3;
+            const auto nudge = [&](float v) {
+                const int k = static_cast<int>(rng() % 3);
+                return k == 0 ? v : std::nextafter(v, k == 1 ? 1.0e9f : -1.0e9f);
+            };
+            region.max[a] = std::max(region.min[a], nudge(solid.min[a] + kBoxShrink));
+            box.min[a] = std::min(box.max[a], nudge(solid.max[a] - kBoxShrink));
+        }
+        const bool twin = every_corner_segment_through(region, box, solid);
+        ASSERT_EQ(shaft_blocked_by_box(region, box, solid), twin) << "off-lattice case " << i;
     }
     EXPECT_GT(blocked, 20000); // both answers are common (31,087 and 168,913 blocked and open)
     EXPECT_GT(open, 20000);

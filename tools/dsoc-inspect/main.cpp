@@ -377,6 +377,8 @@ int main(int argc, char** argv) {
     cli::add_setting(app, "--sheet-columns", o.sheet_columns, "frames per row of frames/sheet.png")
         ->check(CLI::Range(1, 100));
     cli::add_choice_option(app, "--policy", o.live.policy, "live: dsoc or occlusion");
+    app.add_flag("--tbvs", o.live.tbvs,
+                 "live: dsoc with the paper's TBVs (off by default), drawn around what they hide");
     cli::add_setting(app, "--bots", o.live.bots, "live: wandering entities (arena-64: 576)");
     cli::add_setting(app, "--tick-rate", o.live.tick_rate, "live: [Hz]");
     cli::add_setting(app, "--latency-ms", o.live.latency_allowance_ms,

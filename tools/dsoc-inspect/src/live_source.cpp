@@ -23,10 +23,11 @@ interest::PolicySettings policy_settings(const LiveOptions& o) {
     s.policy = o.policy;
     s.dsoc.tick_rate = o.tick_rate;
     interest::apply_policy_presets(o.policy, s.dsoc);
+    s.dsoc.tbvs_enabled = o.tbvs && o.policy == interest::PolicyKind::dsoc;
     s.culler = o.culler;
     s.lookahead_ticks = interest::lookahead_ticks(o.latency_allowance_ms, o.tick_rate);
-    // The exact stages, as the classifier below: the pictures show TBVs and what the
-    // PVS and shaft stages decide (behind the baked table there are no TBVs).
+    // The exact stages, as the classifier below: the pictures show what the PVS and
+    // shaft stages decide, and the TBVs with --tbvs (behind the baked table there are none).
     s.baked_stage = false;
     return s;
 }

@@ -1,11 +1,11 @@
 #pragma once
-// The occlusion-aware policies: "dsoc" (TBVs, region reuse, latency-safe) and
-// "occlusion" (the same culler, every entity's current box tested every tick, no
-// TBVs). Both wrap dsoc::visibility::InterestManager: begin_tick() is its serial
-// begin_update(); select() runs the viewer's update_client() and reads its decisions,
-// so the per-client culling of a tick runs wherever select() is called (in parallel
-// on the server's worker pool). The manager's network level-of-detail hint
-// (update_interval 1/2/4) becomes Interest::tier 0/1/2.
+// The occlusion-aware policies: "dsoc" (temporal coherence, latency-safe; TBVs when
+// DSOCConfig::tbvs_enabled) and "occlusion" (the same culler, every entity's current
+// box fully tested every tick). Both wrap dsoc::visibility::InterestManager: begin_tick() is its
+// serial begin_update(); select() runs the viewer's update_client() and reads its decisions, so the
+// per-client culling of a tick runs wherever select() is called (in parallel on the server's worker
+// pool). The manager's network level-of-detail hint (update_interval 1/2/4) becomes Interest::tier
+// 0/1/2.
 //
 // A viewer whose respawn is pending (EntityView::arrival_eye) is also given a
 // spectator client of the manager at its arrival eye, whose reachable region covers

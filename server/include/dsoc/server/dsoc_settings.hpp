@@ -5,7 +5,7 @@
 //
 //   [dsoc]
 //   full_test_interval = 2
-//   tbv_merge_distance = 96.0
+//   tbvs_enabled = true
 //   strategy = "explicit"
 //
 // Which wins: a [dsoc] entry overrides everything else that sets the same field - the

@@ -94,14 +94,15 @@ struct ServerConfig {
     /// Map: a name looked up in OpenArena's .pk3 archives (and $DSOC_MAP_PATH), a path
     /// to a .bsp or text map, or "gen:city[:seed]" / "gen:rooms[:seed]".
     std::string map = "oa_dm4";
-    /// Interest policy: "dsoc" (occlusion culling with TBVs, latency-safe),
-    /// "occlusion" (the same culler, every entity tested every tick, no TBVs),
+    /// Interest policy: "dsoc" (occlusion culling with temporal coherence, latency-safe;
+    /// TBVs when [dsoc] tbvs_enabled), "occlusion" (the same culler, every entity tested
+    /// every tick),
     /// "pvs" (the map's PVS from the eye's cluster, as the Quake 3 server does),
     /// "distance" (radius) or "broadcast" (everything). Read and printed by these names
     /// (interest::kPolicyNames).
     interest::PolicyKind policy = interest::PolicySettings{}.policy;
-    /// TBV strategy of the dsoc policy: "adaptive", "explicit" or "fuzzy" (not
-    /// conservative: for evaluation only).
+    /// TBV strategy of the dsoc policy when its TBVs are on ([dsoc] tbvs_enabled = true):
+    /// "adaptive", "explicit" or "fuzzy" (not conservative: for evaluation only).
     std::string tbv_strategy = visibility::to_string(visibility::DSOCConfig{}.strategy);
     /// Stages of the occlusion culler: "shaft" (exact single-occluder test, no
     /// per-region build), "pyramid" (extended-projection z-pyramid) or "both"

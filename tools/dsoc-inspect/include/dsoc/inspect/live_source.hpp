@@ -27,8 +27,11 @@ class CullingPolicy;
 namespace dsoc::inspect {
 
 struct LiveOptions {
-    /// dsoc (TBVs) or occlusion (every box every tick, no TBVs).
+    /// dsoc (the server's defaults) or occlusion (every box fully tested every tick).
     interest::PolicyKind policy = interest::PolicyKind::dsoc;
+    /// dsoc with the paper's TBVs (DSOCConfig::tbvs_enabled; off by default), drawn as
+    /// outlines around the entities they hide.
+    bool tbvs = false;
     /// Wandering entities (arena-64 has 64 viewers + 512 bots = 576). [Limit: 1..100000]
     int bots = 576;
     /// [Units: Hz] [Limit: 1..240]
