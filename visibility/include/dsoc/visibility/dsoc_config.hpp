@@ -83,9 +83,9 @@ struct DSOCConfig {
     /// the next ticks, `strategy`) proven hidden and is not tested again until it
     /// expires or turns visible. false (the default): every hidden entity is tested
     /// every tick, which costs less with today's culler on every map measured, for
-    /// sets within 0.2% of the pairs (docs/dsoc.md, "When TBVs pay"). Never any when the culler says
-    /// they do not pay (RegionVisibility::pair_shortcuts_pay(): a baked table first).
-    /// [Units: flag]
+    /// sets within 0.2% of the pairs (docs/dsoc.md, "When TBVs pay"). Never any when
+    /// the culler says they do not pay (RegionVisibility::pair_shortcuts_pay(): a
+    /// baked table first). [Units: flag]
     bool tbvs_enabled = false;
     /// false: rebuild every client's culler every tick (no region reuse). [Units: flag]
     bool reuse_buffers = true;
