@@ -195,6 +195,32 @@ TEST(ShaftOcclusion, TheShaftBoxTestAnswersAsItsSixtyFourSegments) {
     EXPECT_GT(open, 20000);
 }
 
+TEST(ShaftOcclusion, APaperThinWallIsLeftToThePlanes) {
+    // A wall 1/128 unit thick: shrunk by kBoxShrink it would turn inside out, a slab
+    // 3/128 wide around it, and "block" segments that run beside it in the open. The
+    // world leaves it to the planes, which see that these segments never touch it.
+    OccluderWorld world;
+    world.add(ConvexPolyhedron::from_aabb({{0, -100, -100}, {1.0f / 128.0f, 100, 100}}));
+    world.add(ConvexPolyhedron::from_aabb({{0, -100, -100}, {1.0f / 16.0f, 100, 100}}));
+    EXPECT_TRUE(world.solid_box(0).is_empty());
+    EXPECT_FALSE(world.solid_box(1).is_empty()); // thick enough for the fast path
+    const OccluderGrid grid(world, 128.0f);
+    const ShaftOcclusion shaft(world, grid, true, 0);
+    ShaftOcclusion::Scratch scratch;
+    // Region and box in the open just beside the thin wall (x 0.009 .. 0.015), across it
+    // (y -50 to 50): every segment between them runs outside it.
+    const Aabb region{{0.009f, -51, -1}, {0.012f, -49, 1}};
+    const Aabb box{{0.0125f, 49, -1}, {0.015f, 51, 1}};
+    std::uint32_t hint = 1; // the thin wall named as last time's blocker
+    EXPECT_EQ(shaft.test(region, box, scratch, &hint), Visibility::visible);
+    // Through both walls, the thin one proves it by its planes.
+    const Aabb behind{{50, -1, -1}, {52, 1, 1}};
+    hint = 1;
+    EXPECT_EQ(shaft.test(Aabb{{-52, -1, -1}, {-50, 1, 1}}, behind, scratch, &hint),
+              Visibility::occluded);
+    EXPECT_EQ(hint, 1u);
+}
+
 TEST(ShaftOcclusion, AHintNamesTheBlockerAndIsTriedFirst) {
     OccluderWorld world;
     world.add(ConvexPolyhedron::from_aabb({{-8, -500, -500}, {8, 500, 500}})); // wall

@@ -63,7 +63,10 @@ OccluderId OccluderWorld::add(ConvexPolyhedron polyhedron) {
             }
         }
     }
-    const bool box = solid_planes_.size() - solid_begin == 6 && sides == 0b111111;
+    // A box the fast paths' shrink would turn inside out is left to the planes.
+    const glm::vec3 thickness = solid.max - solid.min;
+    const bool box = solid_planes_.size() - solid_begin == 6 && sides == 0b111111 &&
+                     std::min({thickness.x, thickness.y, thickness.z}) > 2.0f * kBoxShrink;
     solid_box_.push_back(box ? solid : Aabb{});
 
     // Edges: each directed edge (a->b) of a face loop meets its twin (b->a) in the

@@ -11,6 +11,10 @@
 
 namespace dsoc::visibility {
 
+/// How far the box fast paths shrink a solid box (OccluderWorld::solid_box()): float
+/// rounding at world coordinates up to 2^15 units stays below it. [Units: world units]
+inline constexpr float kBoxShrink = 1.0f / 64.0f;
+
 /// Index of an occluder in an OccluderWorld, in insertion order. Stable for the
 /// world's lifetime (occluders are never removed).
 using OccluderId = std::uint32_t;
@@ -56,9 +60,10 @@ public:
     /// the brush itself). Only such occluders make occlusion beams: a missing edge
     /// would leave a hole in the silhouette, a missing plane a too-large solid.
     [[nodiscard]] bool is_closed(OccluderId id) const { return closed_[id] != 0; }
-    /// When the solid is an axis-aligned box (its solid_planes() are six axis planes),
-    /// that box, exactly as the planes bound it; else an empty box. Tests may use it
-    /// instead of the planes.
+    /// When the solid is an axis-aligned box (its solid_planes() are six axis planes)
+    /// thicker than 2 kBoxShrink on every axis, that box, exactly as the planes bound
+    /// it; else an empty box. Tests may use it instead of the planes (the float fast
+    /// paths of shaft_occlusion.hpp, which shrink it by kBoxShrink).
     [[nodiscard]] const Aabb& solid_box(OccluderId id) const { return solid_box_[id]; }
     /// Union of all occluder bounds (empty when the world is).
     [[nodiscard]] const Aabb& bounds() const { return bounds_; }

@@ -33,11 +33,9 @@ namespace dsoc::visibility {
 /// The same for an axis-aligned solid box, in float: every segment passes through the
 /// interior of `solid` shrunk by kBoxShrink on every side (the shrink absorbs float
 /// rounding, so `true` also holds for the exact box). About 5x cheaper than the planes.
+/// `solid` must be thicker than 2 kBoxShrink on every axis (OccluderWorld::solid_box()
+/// gives no other): a thinner one, shrunk, would turn inside out and block more than it.
 [[nodiscard]] bool shaft_blocked_by_box(const Aabb& region, const Aabb& box, const Aabb& solid);
-
-/// How far the box fast path shrinks a solid box: float rounding at world coordinates
-/// up to 2^15 units stays below it. [Units: world units]
-inline constexpr float kBoxShrink = 1.0f / 64.0f;
 
 /// A segment a-b as the box tests read it: its start, b - a, and 1 / (b - a) per axis
 /// (infinite where b - a is 0, and then unused), worked out once for the many boxes one
@@ -54,7 +52,7 @@ struct SegmentRay {
 
 /// True when the open segment `s` passes through the interior of `solid` shrunk by
 /// kBoxShrink (positive length inside; float). `true` implies segment_blocked_by() for
-/// the box's six planes.
+/// the box's six planes. `solid` as for shaft_blocked_by_box().
 [[nodiscard]] inline bool segment_through_box(const SegmentRay& s, const Aabb& solid) {
     const glm::vec3 lo = solid.min + glm::vec3(kBoxShrink);
     const glm::vec3 hi = solid.max - glm::vec3(kBoxShrink);
