@@ -57,7 +57,10 @@ TEST(HeapStats, FreedPagesLeaveTheProcessOnJemalloc) {
     blocks.clear();
     const auto freed = read_heap_sample(false);
     ASSERT_TRUE(freed.has_value());
-    ASSERT_GE(freed->free_bytes, 48 * kMiB) << "the freed blocks are held at first";
+    // Held at first: most of the 64 MiB (jemalloc may have begun to purge while the
+    // blocks were being freed on a loaded machine: 44.7 MiB were left once in a parallel
+    // ctest run), and well above what must remain below.
+    ASSERT_GE(freed->free_bytes, 32 * kMiB) << "the freed blocks are held at first";
     // jemalloc purges them gradually over dirty_decay_ms (10 s): wait for most of them.
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
     double held = freed->free_bytes;
