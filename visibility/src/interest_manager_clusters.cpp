@@ -94,33 +94,30 @@ void InterestManager::test_clusters(ClientSlot& c, const RegionVisibility& now,
             continue;
         }
         ++c.stats.cluster_tests;
-        if (!config_.blocker_hints) {
-            if (now.test_prepared(cluster.prepared) == Visibility::occluded) {
-                c.cluster_hidden[k] = 1;
-                ++c.stats.cluster_hits;
-            }
-            continue;
-        }
         // Temporal coherence for a cluster, whose members change from tick to tick: what
         // hid it last time was lent to its members (below), so the hint of a member hidden
         // last tick (what proved it, by itself or with its cluster) is tried first. Not a
         // visible member's: its hint may say that its own last test failed. Any hint is
         // safe (RegionVisibility::test_box_hinted()): it only orders the proofs.
         std::uint32_t hint = 0;
-        for (const std::uint32_t slot : cluster.members) {
+        for (std::size_t m = 0; config_.blocker_hints && m < cluster.members.size(); ++m) {
+            const std::uint32_t slot = cluster.members[m];
             const PairState state = c.states[slot];
             if (state == PairState::hidden_expired || state == PairState::hidden_with_tbv) {
                 hint = c.pairs[slot].hint;
                 break;
             }
         }
-        if (now.test_prepared_hinted(cluster.prepared, hint) == Visibility::occluded) {
+        const Visibility seen = config_.blocker_hints
+                                    ? now.test_prepared_hinted(cluster.prepared, hint)
+                                    : now.test_prepared(cluster.prepared);
+        if (seen == Visibility::occluded) {
             c.cluster_hidden[k] = 1;
             ++c.stats.cluster_hits;
-            for (const std::uint32_t slot : cluster.members) {
+            for (std::size_t m = 0; config_.blocker_hints && m < cluster.members.size(); ++m) {
                 // What hides the cluster's box hides each member's (inside it): the
                 // member's own next test tries it first as well.
-                c.pairs[slot].hint = hint;
+                c.pairs[cluster.members[m]].hint = hint;
             }
         }
     }
