@@ -99,6 +99,16 @@ TEST(LiveSource, RefusesOptionsItCannotRun) {
     EXPECT_NE(problems[0].find("policy"), std::string::npos);
     EXPECT_NE(problems[1].find("client 0"), std::string::npos);
     EXPECT_THROW(LiveSimulation(dsoc::testing::rooms_map(), bad), std::invalid_argument);
+
+    // TBVs are dsoc's alone: asked of the occlusion policy, refused, not ignored.
+    LiveOptions tbvs_without_dsoc;
+    tbvs_without_dsoc.policy = interest::PolicyKind::occlusion;
+    tbvs_without_dsoc.tbvs = true;
+    const auto tbv_problems = validate(tbvs_without_dsoc);
+    ASSERT_EQ(tbv_problems.size(), 1u);
+    EXPECT_NE(tbv_problems[0].find("only dsoc has TBVs"), std::string::npos);
+    tbvs_without_dsoc.policy = interest::PolicyKind::dsoc;
+    EXPECT_TRUE(validate(tbvs_without_dsoc).empty());
 }
 
 TEST(TraceSource, SplitsReplicatedByWhatTheEyeSees) {

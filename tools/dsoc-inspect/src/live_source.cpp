@@ -23,7 +23,7 @@ interest::PolicySettings policy_settings(const LiveOptions& o) {
     s.policy = o.policy;
     s.dsoc.tick_rate = o.tick_rate;
     interest::apply_policy_presets(o.policy, s.dsoc);
-    s.dsoc.tbvs_enabled = o.tbvs && o.policy == interest::PolicyKind::dsoc;
+    s.dsoc.tbvs_enabled = o.tbvs; // validate(): only with dsoc
     s.culler = o.culler;
     s.lookahead_ticks = interest::lookahead_ticks(o.latency_allowance_ms, o.tick_rate);
     // The exact stages, as the classifier below: the pictures show what the PVS and
@@ -45,6 +45,10 @@ std::vector<std::string> validate(const LiveOptions& o) {
     if (o.policy != interest::PolicyKind::dsoc && o.policy != interest::PolicyKind::occlusion) {
         problems.push_back("policy '" + std::string(interest::name_of(o.policy)) +
                            "': the inspector shows the culling policies, dsoc or occlusion");
+    }
+    if (o.tbvs && o.policy != interest::PolicyKind::dsoc) {
+        problems.push_back("tbvs with policy '" + std::string(interest::name_of(o.policy)) +
+                           "': only dsoc has TBVs");
     }
     // The settings interest::make_policy and GameWorld read, with the server's limits
     // (ServerConfig's validate()).

@@ -29,7 +29,7 @@ namespace dsoc::inspect {
 struct LiveOptions {
     /// dsoc (the server's defaults) or occlusion (every box fully tested every tick).
     interest::PolicyKind policy = interest::PolicyKind::dsoc;
-    /// dsoc with the paper's TBVs (DSOCConfig::tbvs_enabled; off by default), drawn as
+    /// dsoc with the paper's TBVs (DSOCConfig::tbvs_enabled; off by default; dsoc only), drawn as
     /// outlines around the entities they hide.
     bool tbvs = false;
     /// Wandering entities (arena-64 has 64 viewers + 512 bots = 576). [Limit: 1..100000]
