@@ -75,6 +75,7 @@ void InterestManager::test_clusters(ClientSlot& c, const RegionVisibility& now,
     // 5a. Clusters with at least two members due a full test: one test of the union
     //     of their boxes may hide them all.
     c.cluster_hidden.assign(cluster_count_, 0);
+    c.cluster_hint.resize(cluster_count_); // read only where cluster_hidden is set
     for (std::uint32_t k = 0; k < (cheapest ? 0 : cluster_count_); ++k) {
         const EntityCluster& cluster = clusters_[k];
         if (cluster.members.size() < kMinClusterMembers) {
@@ -113,12 +114,11 @@ void InterestManager::test_clusters(ClientSlot& c, const RegionVisibility& now,
                                     : now.test_prepared(cluster.prepared);
         if (seen == Visibility::occluded) {
             c.cluster_hidden[k] = 1;
+            // What hides the cluster's box hides each member's (inside it): the member's
+            // own next test tries it first as well. Lent in test_entities()'s pass over
+            // the slots, in slot order, not here member by member across the pairs.
+            c.cluster_hint[k] = hint;
             ++c.stats.cluster_hits;
-            for (std::size_t m = 0; config_.blocker_hints && m < cluster.members.size(); ++m) {
-                // What hides the cluster's box hides each member's (inside it): the
-                // member's own next test tries it first as well.
-                c.pairs[cluster.members[m]].hint = hint;
-            }
         }
     }
 }

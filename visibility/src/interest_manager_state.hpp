@@ -169,6 +169,9 @@ struct InterestManager::ClientSlot {
     PreparedBox candidate; // hide()'s TBV candidate, reused
     /// By cluster, this tick: 0 not proven hidden, 1 proven hidden, 2 members decided.
     std::vector<std::uint8_t> cluster_hidden;
+    /// By cluster proven hidden this tick: the hint that proved it, lent to each member
+    /// as test_entities() passes it (DSOCConfig::blocker_hints).
+    std::vector<std::uint32_t> cluster_hint;
     std::vector<std::uint32_t> cluster_members; // hide_cluster()'s scratch
     std::vector<std::uint8_t> bulk_hidden;      // by slot
     std::vector<EntityId> previous;             // replicated ids of the last update, increasing

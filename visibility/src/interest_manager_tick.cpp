@@ -354,10 +354,21 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
     // costs more than the bit test that follows).
     const auto interval = static_cast<std::uint32_t>(config_.full_test_interval);
     std::uint32_t phase = full_test_phase(0);
+    // Members of the clusters begin_update() made: slots below cluster_of_.size().
+    const std::size_t clustered = cluster_of_.size();
+    const bool lend_hints = config_.blocker_hints && clusters_enabled_;
     for (std::uint32_t slot = 0; slot < entities_.size();
          ++slot, phase = phase + 1 == interval ? 0 : phase + 1) {
         const EntityView& view = views_[slot];
         PairState& state = c.states[slot];
+        if (lend_hints && slot < clustered) {
+            // Every member of a cluster proven hidden this tick takes its hint, whatever
+            // is decided for it below (a member tested on its own tries it first).
+            const std::uint32_t member_of = cluster_of_[slot];
+            if (member_of != kNoCluster && c.cluster_hidden[member_of] != 0) {
+                c.pairs[slot].hint = c.cluster_hint[member_of];
+            }
+        }
         if (!view.alive || state == PairState::hidden_with_tbv) {
             continue;
         }
@@ -370,8 +381,9 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
         const bool fresh = view.prepared_current;
         const std::uint32_t cluster = fresh ? cluster_of_[slot] : kNoCluster;
         if (fresh && cluster != kNoCluster && c.cluster_hidden[cluster] != 0) {
-            // Hidden with its cluster (whose box holds this one's current box).
-            if (c.cluster_hidden[cluster] == 1) {
+            // Hidden with its cluster (whose box holds this one's current box). Without
+            // TBVs hide_cluster() would only mark each member as the line below does.
+            if (tbvs_enabled_ && c.cluster_hidden[cluster] == 1) {
                 c.cluster_hidden[cluster] = 2;
                 hide_cluster(c, cluster, viewer);
             }
