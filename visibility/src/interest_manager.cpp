@@ -64,6 +64,7 @@ bool InterestManager::add_entity(EntityId id, const EntityDesc& desc, const Aabb
         counts.emplace_back(0);
         for (auto& c : clients_) {
             c->pairs.resize(entities_.size());
+            c->hints.resize(entities_.size(), 0);
             c->states.resize(entities_.size(), PairState::unknown);
             c->rules.resize(entities_.size(), 0);
         }
@@ -98,6 +99,7 @@ bool InterestManager::remove_entity(EntityId id) {
             release_group_member(*c, slot);
         }
         c->pairs[slot] = {};
+        c->hints[slot] = 0;
         c->states[slot] = PairState::unknown;
         c->rules[slot] = 0;
     }
@@ -132,6 +134,7 @@ bool InterestManager::add_client(ClientId id, const ClientDesc& desc) {
     tree_config.max_items = static_cast<std::uint32_t>(config_.max_tbvs_per_client);
     auto slot = std::make_unique<ClientSlot>(id, desc, tree_config, make_visibility_());
     slot->pairs.resize(entities_.size());
+    slot->hints.resize(entities_.size(), 0);
     slot->states.resize(entities_.size(), PairState::unknown);
     slot->rules.resize(entities_.size(), 0);
     slot->groups.reserve(static_cast<std::size_t>(std::min(config_.max_tbvs_per_client, 1024)));

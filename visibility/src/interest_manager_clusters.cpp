@@ -105,7 +105,7 @@ void InterestManager::test_clusters(ClientSlot& c, const RegionVisibility& now,
             const std::uint32_t slot = cluster.members[m];
             const PairState state = c.states[slot];
             if (state == PairState::hidden_expired || state == PairState::hidden_with_tbv) {
-                hint = c.pairs[slot].hint;
+                hint = c.hints[slot];
                 break;
             }
         }

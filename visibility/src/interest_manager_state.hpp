@@ -123,12 +123,10 @@ struct InterestManager::EntityCluster {
 };
 
 struct InterestManager::ClientSlot {
-    /// A pair's TBV bookkeeping; its state is in `states` (scanned every tick, so
-    /// one byte per entity slot, apart from these).
+    /// A pair's TBV bookkeeping; its state is in `states` and its hint in `hints`
+    /// (scanned every tick, so apart from these, which only TBVs use).
     struct Pair {
         std::uint32_t group = detail::kNoGroup;
-        /// The culler's hint for this box (test_prepared_hinted): e.g. its last blocker.
-        std::uint32_t hint = 0;
         /// No TBV is tried before this tick (back-off after a rejected TBV).
         std::uint64_t next_tbv_tick = 0;
     };
@@ -156,7 +154,10 @@ struct InterestManager::ClientSlot {
     Aabb region;
     std::vector<PairState> states; // by entity slot
     std::vector<Pair> pairs;       // by entity slot
-    TeamId team = kNoTeam;         // set_client_team()
+    /// By entity slot: the culler's hint for the pair's box (test_prepared_hinted), e.g.
+    /// its last blocker; 0 for none.
+    std::vector<std::uint32_t> hints;
+    TeamId team = kNoTeam; // set_client_team()
     /// By entity slot: 0 for the team rule, else 1 + the pair's own Relevance.
     std::vector<std::uint8_t> rules;
     LooseOctree tree; // item id = group index

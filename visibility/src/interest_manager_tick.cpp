@@ -365,8 +365,9 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
             // Every member of a cluster proven hidden this tick takes its hint, whatever
             // is decided for it below (a member tested on its own tries it first).
             const std::uint32_t member_of = cluster_of_[slot];
-            if (member_of != kNoCluster && c.cluster_hidden[member_of] != 0) {
-                c.pairs[slot].hint = c.cluster_hint[member_of];
+            if (member_of != kNoCluster && c.cluster_hidden[member_of] != 0 &&
+                c.hints[slot] != c.cluster_hint[member_of]) {
+                c.hints[slot] = c.cluster_hint[member_of]; // mostly the same: not written
             }
         }
         if (!view.alive || state == PairState::hidden_with_tbv) {
@@ -404,7 +405,7 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
         const bool quick = state == PairState::visible && phase != 0; // takes_quick_test()
         const BoxTest kind = box_test_for(quick, config_.blocker_hints);
         const bool visible = test_current_box(now, kind, e.prepared, view.box, fresh,
-                                              c.pairs[slot].hint) == Visibility::visible;
+                                              c.hints[slot]) == Visibility::visible;
         if (!tbvs_enabled_) { // hide() would only mark it: no branch on the answer
             state = visible ? PairState::visible : PairState::hidden_expired;
         } else if (visible) {
