@@ -772,6 +772,9 @@ TEST(Relevance, ASetIsSightUnderTheTeamAndPairRulesAndEnterAndLeaveFollowRuleCha
     // Two managers see the same world; one also has teams and pair rules, changed at
     // random ticks. Its set must be, every tick, the rules (the test's own model)
     // applied to the other's sight set; its enter and leave the change of that set.
+    // 31 entities fill one run of sixteen slots that decide() takes together and the
+    // slots after it, one at a time; entity 9 (slot 8) is gone for a while (a dead slot
+    // among the sixteen) and comes back without its rules.
     DSOCConfig c;
     c.validate_state = true;
     int builds = 0;
@@ -788,11 +791,26 @@ TEST(Relevance, ASetIsSightUnderTheTeamAndPairRulesAndEnterAndLeaveFollowRuleCha
     std::vector<EntityId> previous;
     std::size_t sent_unseen = 0;
     std::size_t withheld_seen = 0;
+    constexpr EntityId kGone = 9;
+    const auto gone = [](std::uint64_t tick) { return tick >= 20 && tick < 40; };
     for (std::uint64_t tick = 1; tick <= 60; ++tick) {
+        if (tick == 20) {
+            ASSERT_TRUE(ruled.remove_entity(kGone));
+            ASSERT_TRUE(plain.remove_entity(kGone));
+        } else if (tick == 40) {
+            for (InterestManager* m : {&ruled, &plain}) {
+                ASSERT_TRUE(m->add_entity(kGone, EntityDesc{kHalf, {}}, box_at({-300, 140, 0})));
+            }
+            team[kGone] = kNoTeam;
+            own_rule[kGone] = -1;
+        }
         if (tick % 7 == 3) { // new rules
             client_team = static_cast<TeamId>(rng() % 3);
             ASSERT_TRUE(ruled.set_client_team(100, client_team));
             for (EntityId id = 2; id < 32; ++id) {
+                if (id == kGone && gone(tick)) {
+                    continue;
+                }
                 team[id] = static_cast<TeamId>(rng() % 3);
                 ASSERT_TRUE(ruled.set_entity_team(id, team[id]));
                 own_rule[id] = static_cast<int>(rng() % 5) - 1; // 2 in 5: the team rule
@@ -813,6 +831,9 @@ TEST(Relevance, ASetIsSightUnderTheTeamAndPairRulesAndEnterAndLeaveFollowRuleCha
         const std::vector<EntityId> seen = replicated_ids(plain, 100);
         std::vector<EntityId> expected{1}; // the viewer's own entity
         for (EntityId id = 2; id < 32; ++id) {
+            if (id == kGone && gone(tick)) {
+                continue;
+            }
             const Relevance rule = own_rule[id] < 0 ? team_relevance(client_team, team[id])
                                                     : static_cast<Relevance>(own_rule[id]);
             ASSERT_EQ(ruled.relevance(100, id), rule) << "entity " << id;

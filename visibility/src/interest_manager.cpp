@@ -61,6 +61,8 @@ bool InterestManager::add_entity(EntityId id, const EntityDesc& desc, const Aabb
         slot = static_cast<std::uint32_t>(entities_.size());
         entities_.emplace_back();
         views_.emplace_back();
+        view_alive_.emplace_back(0);
+        view_team_.emplace_back(kNoTeam);
         counts.emplace_back(0);
         for (auto& c : clients_) {
             c->pairs.resize(entities_.size());
@@ -82,7 +84,9 @@ bool InterestManager::add_entity(EntityId id, const EntityDesc& desc, const Aabb
     e.desc = desc;
     e.box = box;
     e.box_at_last_update = box;
-    views_[slot] = {box, id, true, e.prepared_is_current()};
+    views_[slot] = {box, id, e.prepared_is_current()};
+    view_alive_[slot] = 1;
+    view_team_[slot] = kNoTeam;
     counts[slot].store(0);
     entity_slot_[id] = slot;
     return true;
@@ -104,7 +108,7 @@ bool InterestManager::remove_entity(EntityId id) {
         c->rules[slot] = 0;
     }
     entities_[slot].alive = false;
-    views_[slot].alive = false;
+    view_alive_[slot] = 0;
     entity_slot_.erase(it);
     free_entity_slots_.push_back(slot);
     return true;
@@ -181,7 +185,7 @@ bool InterestManager::set_entity_team(EntityId id, TeamId team) {
     if (it == entity_slot_.end()) {
         return false;
     }
-    views_[it->second].team = team;
+    view_team_[it->second] = team;
     return true;
 }
 

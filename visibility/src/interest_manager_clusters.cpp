@@ -130,8 +130,8 @@ void InterestManager::hide_cluster(ClientSlot& c, std::uint32_t cluster,
     members.clear();
     for (const std::uint32_t slot : clusters_[cluster].members) {
         const EntityView& e = views_[slot];
-        if (e.alive && slot != viewer_slot && c.states[slot] != PairState::hidden_with_tbv &&
-            e.prepared_current) {
+        if (view_alive_[slot] != 0 && slot != viewer_slot &&
+            c.states[slot] != PairState::hidden_with_tbv && e.prepared_current) {
             members.push_back(slot);
         }
     }

@@ -8,6 +8,10 @@
 #include <bit>
 #include <cmath>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace dsoc::visibility {
 
 namespace {
@@ -77,7 +81,52 @@ void diff_sets(const std::vector<EntityId>& previous, const std::vector<Replicat
 
 Relevance InterestManager::rule_of(const ClientSlot& c, std::uint32_t slot) const {
     const std::uint8_t own = c.rules[slot];
-    return own != 0 ? static_cast<Relevance>(own - 1) : team_relevance(c.team, views_[slot].team);
+    return own != 0 ? static_cast<Relevance>(own - 1) : team_relevance(c.team, view_team_[slot]);
+}
+
+std::size_t InterestManager::kept_by_sixteen(const ClientSlot& c, std::uint32_t* kept,
+                                             std::uint32_t& slot) const {
+    std::size_t count = 0;
+#if defined(__SSE2__)
+    // decide()'s rule, sixteen slots to an instruction: kept when alive and
+    // replicated_under(rule_of()): the pair's own rule (c.rules: 1 + a Relevance), or
+    // with none the team rule (team_relevance(): always for a teammate, else sight).
+    // Tests: Relevance.* hold it to the model of the rules, slots on either side of 16.
+    const std::size_t n = entities_.size();
+    const __m128i zero = _mm_setzero_si128();
+    const __m128i seen_state = _mm_set1_epi8(static_cast<char>(PairState::visible));
+    const __m128i own_sight =
+        _mm_set1_epi8(static_cast<char>(1 + static_cast<int>(Relevance::sight)));
+    const __m128i own_always =
+        _mm_set1_epi8(static_cast<char>(1 + static_cast<int>(Relevance::always)));
+    const __m128i team = _mm_set1_epi16(static_cast<short>(c.team));
+    const bool has_team = c.team != kNoTeam;
+    const auto load = [](const void* p) { return _mm_loadu_si128(static_cast<const __m128i*>(p)); };
+    for (; slot + 16 <= n; slot += 16) {
+        const __m128i seen = _mm_cmpeq_epi8(load(c.states.data() + slot), seen_state);
+        const __m128i own = load(c.rules.data() + slot);
+        const __m128i alive = _mm_cmpgt_epi8(load(view_alive_.data() + slot), zero);
+        const __m128i mate =
+            has_team ? _mm_packs_epi16(_mm_cmpeq_epi16(load(view_team_.data() + slot), team),
+                                       _mm_cmpeq_epi16(load(view_team_.data() + slot + 8), team))
+                     : zero;
+        const __m128i by_team = _mm_cmpeq_epi8(own, zero);
+        const __m128i always =
+            _mm_or_si128(_mm_cmpeq_epi8(own, own_always), _mm_and_si128(by_team, mate));
+        const __m128i sight =
+            _mm_or_si128(_mm_cmpeq_epi8(own, own_sight), _mm_andnot_si128(mate, by_team));
+        const __m128i keep = _mm_and_si128(alive, _mm_or_si128(always, _mm_and_si128(sight, seen)));
+        for (auto mask = static_cast<unsigned>(_mm_movemask_epi8(keep)); mask != 0;
+             mask &= mask - 1) {
+            kept[count++] = slot + static_cast<std::uint32_t>(std::countr_zero(mask));
+        }
+    }
+#else
+    (void)c;
+    (void)kept;
+    (void)slot;
+#endif
+    return count;
 }
 
 void InterestManager::decide(ClientSlot& c) {
@@ -85,14 +134,17 @@ void InterestManager::decide(ClientSlot& c) {
     const float near_squared = config_.lod_near_distance * config_.lod_near_distance;
     const float far_squared = config_.lod_far_distance * config_.lod_far_distance;
     const Aabb region = c.region; // a local: the writes below cannot alias it
-    // First the kept slots, branch-free (whether a slot is kept is a coin toss for the
-    // branch predictor): each slot is written at the end and the end moves when kept.
+    // First the kept slots: alive, and replicated under the pair's rule given what the
+    // culler decided. Sixteen at a time where there is SSE2 (kept_by_sixteen(), the same
+    // rule), then one at a time, branch-free (whether a slot is kept is a coin toss for
+    // the branch predictor): each slot is written at the end and the end moves when kept.
     std::vector<std::uint32_t>& kept = c.kept_slots;
     kept.resize(entities_.size());
-    std::size_t count = 0;
-    for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
+    std::uint32_t slot = 0;
+    std::size_t count = kept_by_sixteen(c, kept.data(), slot);
+    for (; slot < entities_.size(); ++slot) {
         kept[count] = slot;
-        count += static_cast<std::size_t>(views_[slot].alive) *
+        count += static_cast<std::size_t>(view_alive_[slot]) *
                  static_cast<std::size_t>(
                      replicated_under(rule_of(c, slot), c.states[slot] == PairState::visible));
     }

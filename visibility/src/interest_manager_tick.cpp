@@ -324,7 +324,7 @@ void InterestManager::test_entities_in_bulk(ClientSlot& c, const RegionVisibilit
                           std::span<std::uint8_t>(c.bulk_hidden).first(packed_boxes_.size()));
     for (std::uint32_t slot = 0; slot < n; ++slot) {
         const EntityView& view = views_[slot];
-        if (!view.alive) {
+        if (view_alive_[slot] == 0) {
             continue;
         }
         PairState& state = c.states[slot];
@@ -370,7 +370,7 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
                 c.hints[slot] = c.cluster_hint[member_of]; // mostly the same: not written
             }
         }
-        if (!view.alive || state == PairState::hidden_with_tbv) {
+        if (view_alive_[slot] == 0 || state == PairState::hidden_with_tbv) {
             continue;
         }
         if (slot == viewer) {

@@ -19,7 +19,7 @@ std::vector<std::string> InterestManager::validate_state() const {
     for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
         const EntitySlot& e = entities_[slot];
         const EntityView& v = views_[slot];
-        if (v.alive != e.alive ||
+        if ((view_alive_[slot] != 0) != e.alive ||
             (e.alive && (v.id != e.id || v.box.min != e.box.min || v.box.max != e.box.max ||
                          v.prepared_current != e.prepared_is_current()))) {
             problems.push_back("entity slot " + std::to_string(slot) +

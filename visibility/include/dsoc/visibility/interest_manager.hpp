@@ -271,6 +271,11 @@ private:
                        bool cheapest);
     /// Step 6: the replication set, its level of detail, enter and leave.
     void decide(ClientSlot& c);
+    /// decide()'s kept slots from `slot` on, sixteen at a time while sixteen are left
+    /// (SSE2; none without it): writes them to `kept`, returns how many, and leaves
+    /// `slot` at the first slot not looked at.
+    std::size_t kept_by_sixteen(const ClientSlot& c, std::uint32_t* kept,
+                                std::uint32_t& slot) const;
     /// The rule of the pair (client, entity slot): its own, else the team rule.
     [[nodiscard]] Relevance rule_of(const ClientSlot& c, std::uint32_t slot) const;
     /// The entity slot of the client's viewer; 0xffffffff for none (a spectator, or a
@@ -327,6 +332,10 @@ private:
     /// By slot, beside entities_: what every client's steps read of each entity,
     /// packed (see EntityView).
     std::vector<EntityView> views_;
+    /// By slot, beside views_: 1 when the slot holds an entity (EntitySlot::alive), and
+    /// the entity's team (set_entity_team()).
+    std::vector<std::uint8_t> view_alive_;
+    std::vector<TeamId> view_team_;
     /// By entity slot, at begin_update(): the boxes prepared that tick (null when not
     /// alive), for test_entities_in_bulk(); empty when TBVs or clusters are on.
     PackedPreparedBoxes packed_boxes_;
