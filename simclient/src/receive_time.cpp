@@ -1,5 +1,6 @@
 #include "dsoc/simclient/receive_time.hpp"
 
+#include <poll.h>
 #include <sys/socket.h>
 #include <sys/uio.h>
 
@@ -14,6 +15,11 @@ namespace dsoc::simclient {
 bool enable_receive_times(int fd) {
     const int on = 1;
     return ::setsockopt(fd, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on) == 0;
+}
+
+bool shut_down_for_reading(int fd) {
+    pollfd p{fd, static_cast<short>(POLLIN | POLLRDHUP), 0};
+    return ::poll(&p, 1, 0) == 1 && (p.revents & POLLRDHUP) != 0;
 }
 
 namespace {

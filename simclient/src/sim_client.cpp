@@ -165,6 +165,12 @@ void SimClient::connect_udp(const asio::ip::tcp::resolver::results_type& endpoin
             self->error(kind);
         }
     };
+    handlers.on_socket_error = [weak](const std::string& why) {
+        if (auto self = weak.lock(); self && self->state_ != State::closed) {
+            self->fail(failure::connection_lost, why);
+            self->close();
+        }
+    };
     handlers.on_refused = [weak](const boost::system::error_code& ec) {
         if (auto self = weak.lock(); self && self->state_ != State::closed) {
             self->stats_.connect_failed = true;

@@ -165,8 +165,12 @@ void UdpLink::receive_next() {
                            if (!keep || ec == asio::error::operation_aborted || closed_) {
                                return;
                            }
-                           if (!ec && !drain()) {
-                               return; // the link moved to another address or was closed
+                           if (ec) { // waiting again would fail again, at once
+                               stop_reading("its wait failed: " + ec.message());
+                               return;
+                           }
+                           if (!drain()) {
+                               return; // moved to another address, closed or given up
                            }
                            if (!closed_) {
                                receive_next();
@@ -179,11 +183,18 @@ bool UdpLink::drain() {
     for (std::size_t k = 0; k < kReadBatch; ++k) {
         buffers[k] = buffers_[k];
     }
+    bool read_any = false;
     for (;;) {
         const std::size_t got = receive_stamped(socket_.native_handle(), buffers, reads_);
         if (got == 0) {
             const int error = reads_[0].error;
             if (error == EAGAIN || error == EWOULDBLOCK) {
+                // Woken with nothing to read: a socket shut down for reading is always
+                // "readable" and never has anything, so waiting again would spin.
+                if (!read_any && shut_down_for_reading(socket_.native_handle())) {
+                    stop_reading("it is shut down for reading");
+                    return false;
+                }
                 return true;
             }
             if (error == ECONNREFUSED) {
@@ -204,6 +215,7 @@ bool UdpLink::drain() {
             }
             return true; // another error of the socket (none expected): wait again
         }
+        read_any = true;
         for (std::size_t k = 0; k < got; ++k) {
             arrival_ = reads_[k].arrival;
             on_datagram(std::span<const std::uint8_t>(buffers_[k].data(), reads_[k].bytes));
@@ -217,6 +229,14 @@ bool UdpLink::drain() {
             // edge-triggered registration, which reports what is waiting).
             return true;
         }
+    }
+}
+
+void UdpLink::stop_reading(const std::string& why) {
+    if (handlers_.on_socket_error) {
+        handlers_.on_socket_error("UDP socket towards " + server_.address().to_string() + ":" +
+                                  std::to_string(server_.port()) +
+                                  " can no longer be read: " + why);
     }
 }
 

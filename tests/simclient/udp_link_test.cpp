@@ -2,10 +2,14 @@
 
 #include "dsoc/simclient/scenario.hpp"
 
+#include <arpa/inet.h>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/udp.hpp>
 #include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <time.h>
 
+#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
@@ -49,6 +53,59 @@ TEST(UdpLink, AWaitCompletedAfterItsOwnerIsFreedTouchesNothing) {
     const std::size_t n = server.receive_from(asio::buffer(got), from, 0, ec);
     EXPECT_FALSE(ec) << ec.message();
     EXPECT_GT(n, 0u);
+}
+
+/// The descriptor of the socket connected to `server` (the link's): the test reaches
+/// under the link to break its socket as the kernel might. -1 when none.
+int socket_towards(const asio::ip::udp::endpoint& server) {
+    for (int fd = 3; fd < 4096; ++fd) {
+        sockaddr_in peer{};
+        socklen_t size = sizeof peer;
+        if (::getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &size) == 0 &&
+            peer.sin_family == AF_INET && ntohs(peer.sin_port) == server.port()) {
+            return fd;
+        }
+    }
+    return -1;
+}
+
+/// CPU time this thread has used.
+std::chrono::nanoseconds thread_cpu() {
+    timespec t{};
+    ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return std::chrono::seconds(t.tv_sec) + std::chrono::nanoseconds(t.tv_nsec);
+}
+
+// A socket the kernel will never give another datagram (here shut down for reading: a
+// read returns at once with nothing) must end the link's reading, reported once to its
+// owner, not be read again and again: a spinning link would take a core from the
+// load generator and the server it measures.
+TEST(UdpLink, ASocketThatCanNoLongerBeReadIsGivenUpNotPolled) {
+    asio::io_context io;
+    asio::ip::udp::socket server(io, {asio::ip::address_v4::loopback(), 0});
+    auto owner = std::make_shared<Owner>();
+    int failures = 0;
+    std::string failure;
+    UdpLink::Handlers handlers;
+    handlers.on_socket_error = [&](const std::string& why) {
+        ++failures;
+        failure = why;
+    };
+    owner->link = std::make_unique<UdpLink>(io, std::move(handlers), DatagramFaults{}, 1);
+    protocol::pb::Envelope hello;
+    hello.mutable_client_hello()->set_protocol_version(1);
+    std::string error;
+    ASSERT_TRUE(owner->link->connect({server.local_endpoint()}, hello, owner, error)) << error;
+    const int fd = socket_towards(server.local_endpoint());
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::shutdown(fd, SHUT_RD), 0);
+    const auto cpu_before = thread_cpu();
+    io.run_for(std::chrono::milliseconds(300));
+    const auto cpu = thread_cpu() - cpu_before;
+    EXPECT_LT(cpu, std::chrono::milliseconds(100)) << "the link kept reading a dead socket";
+    EXPECT_EQ(failures, 1);
+    EXPECT_NE(failure.find("can no longer be read"), std::string::npos) << failure;
+    owner->link->close();
 }
 
 } // namespace

@@ -17,6 +17,11 @@ namespace dsoc::simclient {
 /// read. False when the socket refuses (every datagram then reads as arriving when read).
 bool enable_receive_times(int fd);
 
+/// True when the datagram socket `fd` is shut down for reading (poll()'s POLLRDHUP): it
+/// then reads as ready forever and never has anything, so a reader woken with nothing to
+/// read asks this before waiting again.
+[[nodiscard]] bool shut_down_for_reading(int fd);
+
 /// One receive_stamped().
 struct StampedRead {
     /// Bytes of the datagram read (a longer one is cut to the buffer's size); 0 with an

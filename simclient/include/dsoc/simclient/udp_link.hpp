@@ -49,6 +49,11 @@ public:
         /// The link stays open; the owner decides. Later ones are ignored (a lost server
         /// shows as silence).
         std::function<void(const boost::system::error_code&)> on_refused;
+        /// The socket can no longer be read: its wait failed, or a read returned an
+        /// empty datagram (what the kernel returns for a socket shut down for reading; no
+        /// server sends one). The link has stopped reading; the owner decides (`why` says
+        /// what happened).
+        std::function<void(const std::string&)> on_socket_error;
     };
     /// `faults`: emulated on each datagram either way (dropped, delivered twice, or held
     /// back and delivered right after the next one).
@@ -89,8 +94,10 @@ private:
     bool open_next(std::string& error);
     void receive_next();
     /// Reads every datagram waiting on the socket. False when the link no longer reads this
-    /// socket (closed, or moved to the next address).
+    /// socket (closed, moved to the next address, or given up: stop_reading()).
     bool drain();
+    /// Tells the owner that the socket can no longer be read (Handlers::on_socket_error).
+    void stop_reading(const std::string& why);
     void on_datagram(std::span<const std::uint8_t> datagram);
     void process(std::span<const std::uint8_t> datagram);
     void retry_handshake();
