@@ -189,8 +189,9 @@ bool UdpLink::drain() {
         if (got == 0) {
             const int error = reads_[0].error;
             if (error == EAGAIN || error == EWOULDBLOCK) {
-                // Woken with nothing to read: a socket shut down for reading is always
-                // "readable" and never has anything, so waiting again would spin.
+                // Woken with nothing to read: a socket shut down for reading is reported
+                // readable for ever, with nothing after what was queued, so waiting again
+                // would spin.
                 if (!read_any && shut_down_for_reading(socket_.native_handle())) {
                     stop_reading("it is shut down for reading");
                     return false;

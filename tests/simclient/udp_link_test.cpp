@@ -55,14 +55,16 @@ TEST(UdpLink, AWaitCompletedAfterItsOwnerIsFreedTouchesNothing) {
     EXPECT_GT(n, 0u);
 }
 
-/// The descriptor of the socket connected to `server` (the link's): the test reaches
-/// under the link to break its socket as the kernel might. -1 when none.
+/// The descriptor of the socket connected to `server` (the link's; the test's server
+/// socket is bound, not connected): the test reaches under the link to break its socket
+/// as the kernel might. -1 when none.
 int socket_towards(const asio::ip::udp::endpoint& server) {
     for (int fd = 3; fd < 4096; ++fd) {
         sockaddr_in peer{};
         socklen_t size = sizeof peer;
         if (::getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &size) == 0 &&
-            peer.sin_family == AF_INET && ntohs(peer.sin_port) == server.port()) {
+            peer.sin_family == AF_INET && ntohs(peer.sin_port) == server.port() &&
+            ntohl(peer.sin_addr.s_addr) == server.address().to_v4().to_uint()) {
             return fd;
         }
     }

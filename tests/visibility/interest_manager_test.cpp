@@ -773,8 +773,10 @@ TEST(Relevance, ASetIsSightUnderTheTeamAndPairRulesAndEnterAndLeaveFollowRuleCha
     // random ticks. Its set must be, every tick, the rules (the test's own model)
     // applied to the other's sight set; its enter and leave the change of that set.
     // 31 entities fill one run of sixteen slots that decide() takes together and the
-    // slots after it, one at a time; entity 9 (slot 8) is gone for a while (a dead slot
-    // among the sixteen) and comes back without its rules.
+    // slots after it, one at a time. Entities 9 and 25 (slots 8 and 24, one on each
+    // side) are gone for a while and come back without their rules; while they are gone
+    // their slots keep the team they had, the client's, so that only the slot's
+    // liveness keeps them out (the team rule would send them).
     DSOCConfig c;
     c.validate_state = true;
     int builds = 0;
@@ -791,24 +793,42 @@ TEST(Relevance, ASetIsSightUnderTheTeamAndPairRulesAndEnterAndLeaveFollowRuleCha
     std::vector<EntityId> previous;
     std::size_t sent_unseen = 0;
     std::size_t withheld_seen = 0;
-    constexpr EntityId kGone = 9;
-    const auto gone = [](std::uint64_t tick) { return tick >= 20 && tick < 40; };
+    constexpr std::array<EntityId, 2> kGone{9, 25};
+    constexpr TeamId kGoneTeam = 1;
+    const auto gone = [&](EntityId id, std::uint64_t tick) {
+        return std::find(kGone.begin(), kGone.end(), id) != kGone.end() && tick >= 20 && tick < 40;
+    };
+    int dead_teammate_ticks = 0;
     for (std::uint64_t tick = 1; tick <= 60; ++tick) {
-        if (tick == 20) {
-            ASSERT_TRUE(ruled.remove_entity(kGone));
-            ASSERT_TRUE(plain.remove_entity(kGone));
-        } else if (tick == 40) {
-            for (InterestManager* m : {&ruled, &plain}) {
-                ASSERT_TRUE(m->add_entity(kGone, EntityDesc{kHalf, {}}, box_at({-300, 140, 0})));
+        if (tick == 19) { // the client and the two to go on one team
+            client_team = kGoneTeam;
+            ASSERT_TRUE(ruled.set_client_team(100, client_team));
+            for (const EntityId id : kGone) {
+                team[id] = kGoneTeam;
+                ASSERT_TRUE(ruled.set_entity_team(id, kGoneTeam));
             }
-            team[kGone] = kNoTeam;
-            own_rule[kGone] = -1;
+        } else if (tick == 20) {
+            for (const EntityId id : kGone) {
+                ASSERT_TRUE(ruled.remove_entity(id));
+                ASSERT_TRUE(plain.remove_entity(id));
+            }
+        } else if (tick == 40) {
+            for (const EntityId id : kGone) {
+                for (InterestManager* m : {&ruled, &plain}) {
+                    ASSERT_TRUE(m->add_entity(id, EntityDesc{kHalf, {}}, box_at({-300, 140, 0})));
+                }
+                team[id] = kNoTeam;
+                own_rule[id] = -1;
+            }
         }
         if (tick % 7 == 3) { // new rules
             client_team = static_cast<TeamId>(rng() % 3);
+            if (tick >= 20 && tick < 40) {
+                client_team = kGoneTeam; // drawn all the same, so the other draws stay
+            }
             ASSERT_TRUE(ruled.set_client_team(100, client_team));
             for (EntityId id = 2; id < 32; ++id) {
-                if (id == kGone && gone(tick)) {
+                if (gone(id, tick)) {
                     continue;
                 }
                 team[id] = static_cast<TeamId>(rng() % 3);
@@ -831,7 +851,8 @@ TEST(Relevance, ASetIsSightUnderTheTeamAndPairRulesAndEnterAndLeaveFollowRuleCha
         const std::vector<EntityId> seen = replicated_ids(plain, 100);
         std::vector<EntityId> expected{1}; // the viewer's own entity
         for (EntityId id = 2; id < 32; ++id) {
-            if (id == kGone && gone(tick)) {
+            if (gone(id, tick)) {
+                dead_teammate_ticks += client_team == kGoneTeam ? 1 : 0;
                 continue;
             }
             const Relevance rule = own_rule[id] < 0 ? team_relevance(client_team, team[id])
@@ -856,7 +877,9 @@ TEST(Relevance, ASetIsSightUnderTheTeamAndPairRulesAndEnterAndLeaveFollowRuleCha
         ASSERT_EQ(ruled.decisions(100)->leave, leave) << "tick " << tick;
         previous = expected;
     }
-    // The rules did something both ways: unseen entities sent, seen ones withheld.
+    // The rules did something both ways: unseen entities sent, seen ones withheld; and
+    // a dead slot kept its team while its team was the client's.
+    EXPECT_EQ(dead_teammate_ticks, 2 * 20);
     EXPECT_GT(sent_unseen, 0u);
     EXPECT_GT(withheld_seen, 0u);
     // The client's own entity takes no pair rule; unknown ids none either.

@@ -1,11 +1,12 @@
 // InterestManager: entity clusters. Entities whose box centres share a cell of
 // DSOCConfig::entity_cluster_size are grouped once per tick (begin_update()); one
 // test of a cluster's box may then hide all its members from a client (step 5a of
-// update_client()), and they are hidden together (hide_cluster()).
+// update_client()), and with TBVs they are hidden together (hide_cluster()).
 
 #include "interest_manager_state.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cstdint>
 #include <limits>
 
@@ -96,8 +97,9 @@ void InterestManager::test_clusters(ClientSlot& c, const RegionVisibility& now,
         }
         ++c.stats.cluster_tests;
         // Temporal coherence for a cluster, whose members change from tick to tick: what
-        // hid it last time was lent to its members (below), so the hint of a member hidden
-        // last tick (what proved it, by itself or with its cluster) is tried first. Not a
+        // hid it last time was lent to its members (test_entities()), so the hint of a
+        // member hidden last tick (what proved it, by itself or with its cluster) is tried
+        // first. Not a
         // visible member's: its hint may say that its own last test failed. Any hint is
         // safe (RegionVisibility::test_box_hinted()): it only orders the proofs.
         std::uint32_t hint = 0;
@@ -136,7 +138,9 @@ void InterestManager::hide_cluster(ClientSlot& c, std::uint32_t cluster,
         }
     }
     // With a prepared stage each member's own TBV costs a few bit tests: no group.
-    if (coarse_tbvs_ || !tbvs_enabled_) {
+    // (Called with TBVs on only: without them test_entities() marks each member.)
+    assert(tbvs_enabled_);
+    if (coarse_tbvs_) {
         for (const std::uint32_t slot : members) {
             hide(c, slot);
         }

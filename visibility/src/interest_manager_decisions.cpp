@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -79,6 +81,11 @@ void diff_sets(const std::vector<EntityId>& previous, const std::vector<Replicat
 
 } // namespace
 
+bool InterestManager::keeps(const ClientSlot& c, std::uint32_t slot) const {
+    return view_alive_[slot] != 0 &&
+           replicated_under(rule_of(c, slot), c.states[slot] == PairState::visible);
+}
+
 Relevance InterestManager::rule_of(const ClientSlot& c, std::uint32_t slot) const {
     const std::uint8_t own = c.rules[slot];
     return own != 0 ? static_cast<Relevance>(own - 1) : team_relevance(c.team, view_team_[slot]);
@@ -144,11 +151,25 @@ void InterestManager::decide(ClientSlot& c) {
     std::size_t count = kept_by_sixteen(c, kept.data(), slot);
     for (; slot < entities_.size(); ++slot) {
         kept[count] = slot;
-        count += static_cast<std::size_t>(view_alive_[slot]) *
-                 static_cast<std::size_t>(
-                     replicated_under(rule_of(c, slot), c.states[slot] == PairState::visible));
+        count += static_cast<std::size_t>(keeps(c, slot));
     }
     kept.resize(count);
+    if (config_.validate_state) {
+        // The slow twin of kept_by_sixteen(): the rule slot by slot, every slot.
+        std::size_t k = 0;
+        bool same = true;
+        for (std::uint32_t s = 0; s < entities_.size(); ++s) {
+            if (keeps(c, s)) {
+                same = same && k < count && kept[k] == s;
+                ++k;
+            }
+        }
+        if (!same || k != count) {
+            throw std::logic_error("invalid DSOC state in decide(): client " +
+                                   std::to_string(c.id) +
+                                   ": the slots kept sixteen at a time are not the rule's");
+        }
+    }
     d.replicated.resize(count);
     bool increasing = true; // slots are reused, so ids need not follow slot order
     EntityId last = 0;

@@ -168,7 +168,8 @@ struct InterestManager::ClientSlot {
     std::vector<std::uint32_t> new_groups;
     std::vector<std::uint32_t> scratch;
     PreparedBox candidate; // hide()'s TBV candidate, reused
-    /// By cluster, this tick: 0 not proven hidden, 1 proven hidden, 2 members decided.
+    /// By cluster, this tick: 0 not proven hidden, 1 proven hidden, 2 members decided
+    /// (hide_cluster(), with TBVs only).
     std::vector<std::uint8_t> cluster_hidden;
     /// By cluster proven hidden this tick: the hint that proved it, lent to each member
     /// as test_entities() passes it (DSOCConfig::blocker_hints).

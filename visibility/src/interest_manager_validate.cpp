@@ -16,6 +16,19 @@ std::vector<std::string> InterestManager::validate_state() const {
         problems.push_back("client " + std::to_string(c) + ", entity " + std::to_string(e) + ": " +
                            what);
     };
+    const std::size_t n = entities_.size();
+    if (views_.size() != n || view_alive_.size() != n || view_team_.size() != n) {
+        problems.push_back("the packed views do not cover every entity slot");
+        return problems; // the checks below index them by slot
+    }
+    for (const auto& cp : clients_) {
+        if (cp->states.size() != n || cp->rules.size() != n || cp->hints.size() != n ||
+            cp->pairs.size() != n) {
+            problems.push_back("client " + std::to_string(cp->id) +
+                               ": its per-entity arrays do not cover every entity slot");
+            return problems;
+        }
+    }
     for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
         const EntitySlot& e = entities_[slot];
         const EntityView& v = views_[slot];

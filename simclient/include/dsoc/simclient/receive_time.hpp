@@ -18,8 +18,8 @@ namespace dsoc::simclient {
 bool enable_receive_times(int fd);
 
 /// True when the datagram socket `fd` is shut down for reading (poll()'s POLLRDHUP): it
-/// then reads as ready forever and never has anything, so a reader woken with nothing to
-/// read asks this before waiting again.
+/// is then reported readable for ever, with nothing to read after what was queued, so a
+/// reader woken with nothing to read asks this before waiting again.
 [[nodiscard]] bool shut_down_for_reading(int fd);
 
 /// One receive_stamped().

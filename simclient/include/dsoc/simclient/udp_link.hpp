@@ -49,10 +49,10 @@ public:
         /// The link stays open; the owner decides. Later ones are ignored (a lost server
         /// shows as silence).
         std::function<void(const boost::system::error_code&)> on_refused;
-        /// The socket can no longer be read: its wait failed, or a read returned an
-        /// empty datagram (what the kernel returns for a socket shut down for reading; no
-        /// server sends one). The link has stopped reading; the owner decides (`why` says
-        /// what happened).
+        /// The socket can no longer be read: woken with nothing to read on a socket shut
+        /// down for reading (POLLRDHUP), or its wait failed. The link has stopped reading;
+        /// the owner decides (`why` says what happened). An empty or malformed datagram
+        /// is never a reason (anyone may send one): it is dropped and counted.
         std::function<void(const std::string&)> on_socket_error;
     };
     /// `faults`: emulated on each datagram either way (dropped, delivered twice, or held

@@ -271,13 +271,17 @@ private:
                        bool cheapest);
     /// Step 6: the replication set, its level of detail, enter and leave.
     void decide(ClientSlot& c);
-    /// decide()'s kept slots from `slot` on, sixteen at a time while sixteen are left
-    /// (SSE2; none without it): writes them to `kept`, returns how many, and leaves
-    /// `slot` at the first slot not looked at.
+    /// decide()'s kept slots (keeps()) from `slot` on, sixteen at a time while sixteen
+    /// are left (SSE2; none without it): writes them to `kept`, returns how many, and
+    /// leaves `slot` at the first slot not looked at. With validate_state, decide()
+    /// checks it against keeps() slot by slot.
     std::size_t kept_by_sixteen(const ClientSlot& c, std::uint32_t* kept,
                                 std::uint32_t& slot) const;
     /// The rule of the pair (client, entity slot): its own, else the team rule.
     [[nodiscard]] Relevance rule_of(const ClientSlot& c, std::uint32_t slot) const;
+    /// Whether decide() keeps the slot: alive, and replicated under rule_of() given
+    /// whether the culler found it visible (the rule kept_by_sixteen() restates).
+    [[nodiscard]] bool keeps(const ClientSlot& c, std::uint32_t slot) const;
     /// The entity slot of the client's viewer; 0xffffffff for none (a spectator, or a
     /// viewer entity not added).
     [[nodiscard]] std::uint32_t viewer_slot_of(const ClientSlot& c) const;
@@ -291,9 +295,9 @@ private:
     [[nodiscard]] Aabb tbv_box(const EntitySlot& e, int duration) const;
     /// Hides `slot` from `c`: with a TBV when one is allowed and proven, else expired.
     void hide(ClientSlot& c, std::uint32_t slot);
-    /// Hides every member of a cluster proven hidden that still needs a decision this
-    /// tick: one TBV group for all of them when the union of their TBVs is hidden,
-    /// else each on its own (hide()).
+    /// With TBVs: hides every member of a cluster proven hidden that still needs a
+    /// decision this tick: one TBV group for all of them when the union of their TBVs is
+    /// hidden, else each on its own (hide()).
     void hide_cluster(ClientSlot& c, std::uint32_t cluster, std::uint32_t viewer_slot);
 
     // The TBV group pool.
