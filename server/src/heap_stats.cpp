@@ -61,6 +61,11 @@ std::string_view allocator_name(HeapAllocator allocator) {
 }
 
 HeapAllocator running_heap_allocator() {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+    // AddressSanitizer and ThreadSanitizer bring their own allocator, behind glibc's
+    // names: mallinfo2() answers zeros there, which are no figures at all.
+    return HeapAllocator::unknown;
+#else
     if (find_mallctl() != nullptr) {
         return HeapAllocator::jemalloc;
     }
@@ -68,6 +73,7 @@ HeapAllocator running_heap_allocator() {
     return HeapAllocator::glibc;
 #else
     return HeapAllocator::unknown; // or a glibc without mallinfo2()
+#endif
 #endif
 }
 
