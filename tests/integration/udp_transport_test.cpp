@@ -449,13 +449,13 @@ TEST(UdpTransport, AClientThatFallsBehindGetsFewerSnapshotsUntilItAcknowledges) 
         consecutive += acking[i] == acking[i - 1] + 1 ? 1 : 0;
     }
     EXPECT_GT(consecutive, acking.size() / 2);
+    server.stop(); // render_metrics() reads the I/O thread's state: after stop()
     // The metrics say why: the pace of a client behind.
     const std::string metrics = server.render_metrics();
     const std::string behind = "dsoc_udp_snapshots_paced_total{pace=\"behind\"} ";
     const auto at = metrics.find(behind);
     ASSERT_NE(at, std::string::npos) << metrics;
     EXPECT_GT(std::stod(metrics.substr(at + behind.size())), 20.0);
-    server.stop();
     EXPECT_GT(server.stats().snapshots_dropped, 20u);
     EXPECT_GT(server.stats().snapshots_paced.behind, 20u);
 }

@@ -156,14 +156,17 @@ TEST_F(NatsLinkTest, ASlowSubscriberDropsPastItsPendingLimit) {
         ASSERT_TRUE(publisher.publish("dsoc.test.burst", payload));
     }
     ASSERT_TRUE(publisher.flush(2000ms));
-    ASSERT_TRUE(eventually([&] { return subscription->dropped() > 0; }));
+    // The whole burst reaches the client while the handler is blocked: one message in the
+    // handler, at most the limit queued, the rest dropped. (Unlocking at the first drop
+    // let the messages the client had not read yet through: 25-29 handled when the
+    // client's reader lagged, under sanitizers or on one CPU.)
+    ASSERT_TRUE(eventually([&] { return subscription->dropped() >= 50 - 1 - 4; }))
+        << subscription->dropped();
     gate.unlock();
     ASSERT_TRUE(eventually([&] {
         return static_cast<std::uint64_t>(handled.load()) + subscription->dropped() == 50;
     }));
-    // About the limit (the client may hold a few more between its socket and the
-    // subscription's queue), far fewer than were sent.
-    EXPECT_LT(handled.load(), 25);
+    EXPECT_LE(handled.load(), 1 + 4); // the one in the handler and the limit
 }
 
 } // namespace

@@ -132,8 +132,10 @@ TEST(GatewayForgotten, ItsClientIsToldToTryAgainAndComesBackAsANewPlayer) {
     again = connect(gateway.port());
     ASSERT_TRUE(again.client);
     EXPECT_TRUE(eventually([&] { return world.stats().joins == 2; }));
-    EXPECT_GT(again.client->hello().entity_id(), first.client->hello().entity_id());
     gateway.stop(); // the connection closes: its reader returns
+    // Its hello is read once the reader has returned (the reader's thread writes it).
+    ASSERT_EQ(again.closed.wait_for(15s), std::future_status::ready);
+    EXPECT_GT(again.client->hello().entity_id(), first.client->hello().entity_id());
     const std::string metrics = gateway.render_metrics();
     EXPECT_EQ(sample(metrics, "dsoc_gateway_joins_abandoned_total"), 1.0) << metrics;
     // The rest of its first block (the hellos refused before it came asked for a few more).

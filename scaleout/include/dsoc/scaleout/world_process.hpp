@@ -109,7 +109,12 @@ public:
     [[nodiscard]] std::uint64_t instance() const { return instance_; }
     /// Messages of any kind received so far (tests wait on it).
     [[nodiscard]] std::uint64_t messages_received() const { return received_.load(); }
-    [[nodiscard]] const interest::GameWorld& world() const { return world_; }
+    /// A copy of the world, taken under the lock: the NATS callbacks change it between
+    /// ticks (a reserve request takes ids from it), so no reference is handed out.
+    [[nodiscard]] interest::GameWorld world() const {
+        const std::lock_guard lock(mutex_);
+        return world_;
+    }
 
 private:
     void on_reserve(const NatsMessage& message);
