@@ -26,7 +26,9 @@ void put_le(std::vector<std::uint8_t>& out, std::uint64_t v, int bytes) {
 
 std::array<std::uint8_t, 32> cookie_mac(const TokenKey& key, const SourceAddress& from,
                                         std::uint64_t nonce, std::uint64_t issued_ms) {
-    std::vector<std::uint8_t> data(kCookieLabel.begin(), kCookieLabel.end());
+    std::vector<std::uint8_t> data;
+    data.reserve(kCookieLabel.size() + from.address.size() + 2 + 8 + 8);
+    data.insert(data.end(), kCookieLabel.begin(), kCookieLabel.end());
     data.insert(data.end(), from.address.begin(), from.address.end());
     put_le(data, from.port, 2);
     put_le(data, nonce, 8);
