@@ -29,6 +29,7 @@ WalkingInterest::WalkingInterest(const visibility::DSOCConfig& config, const map
     walker_.motion = sim::walking_limits(move, 1.0f / static_cast<float>(config.tick_rate));
     viewer_.eye_motion = walker_.motion;
     viewer_.lookahead_ticks = lookahead_ticks;
+    viewer_.enter_leave = false; // the policies answer with the set; replication diffs it
     // The manager's eye is the box centre plus this offset (= origin + eye_height).
     viewer_.eye_offset =
         glm::vec3(0.0f, 0.0f, move.eye_height - (move.mins.z + move.maxs.z) * 0.5f);

@@ -616,6 +616,40 @@ void move_walkers(InterestManager& m, std::uint64_t tick) {
     }
 }
 
+TEST(InterestManagerDecisions, AClientWithoutEnterAndLeaveGetsTheSameSetAndNoDiff) {
+    // Client 100 has the diff (the default), client 101 views from the same entity
+    // without it: the same set every tick, and its enter and leave stay empty while
+    // client 100's say what changed (everything at the first update, a removed walker).
+    DSOCConfig c;
+    c.validate_state = true;
+    int builds = 0;
+    const Aabb world{glm::vec3(-4096.0f), glm::vec3(4096.0f)};
+    InterestManager m(c, world, [&] { return std::make_unique<WallVisibility>(&builds); });
+    add_walkers(m);
+    ClientDesc no_diff;
+    no_diff.viewer = 1;
+    no_diff.lookahead_ticks = 2;
+    no_diff.enter_leave = false;
+    ASSERT_TRUE(m.add_client(101, no_diff));
+    std::size_t entered = 0;
+    std::size_t left = 0;
+    for (std::uint64_t tick = 1; tick <= 12; ++tick) {
+        if (tick == 6) {
+            ASSERT_TRUE(m.remove_entity(3)); // a walker on the viewer's side: it leaves
+        }
+        move_walkers(m, tick);
+        m.update(tick);
+        ASSERT_EQ(replicated_ids(m, 101), replicated_ids(m, 100)) << "tick " << tick;
+        EXPECT_TRUE(m.decisions(101)->enter.empty()) << "tick " << tick;
+        EXPECT_TRUE(m.decisions(101)->leave.empty()) << "tick " << tick;
+        entered += m.decisions(100)->enter.size();
+        left += m.decisions(100)->leave.size();
+    }
+    EXPECT_EQ(replicated_ids(m, 100).size(), 10u); // something is culled: 20 behind the wall
+    EXPECT_EQ(entered, 11u);                       // the viewer and ten walkers, at tick 1
+    EXPECT_EQ(left, 1u);                           // walker 3
+}
+
 TEST(InterestManagerShortcuts, ACullerWhoseTestsAreBitTestsGetsNoTbvsOrClustersAndTheSameSets) {
     DSOCConfig c;
     c.tbvs_enabled = true; // asked for, and still none behind a bit-test culler

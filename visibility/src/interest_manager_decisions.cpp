@@ -184,6 +184,9 @@ void InterestManager::decide(ClientSlot& c) {
         std::sort(d.replicated.begin(), d.replicated.end(),
                   [](const Replicated& a, const Replicated& b) { return a.id < b.id; });
     }
+    if (!c.desc.enter_leave) {
+        return; // enter and leave stay empty, and `previous` unused
+    }
     diff_sets(c.previous, d.replicated, d.enter, d.leave);
     c.previous.clear();
     for (const auto& r : d.replicated) {

@@ -177,6 +177,7 @@ struct InterestManager::ClientSlot {
     std::vector<std::uint32_t> cluster_members; // hide_cluster()'s scratch
     std::vector<std::uint8_t> bulk_hidden;      // by slot
     std::vector<EntityId> previous;             // replicated ids of the last update, increasing
+                                                // (kept only with desc.enter_leave)
     std::vector<std::uint32_t> kept_slots;      // decide()'s scratch
     ClientDecisions decisions;
     ClientStats stats;

@@ -88,6 +88,10 @@ struct ClientDesc {
     int lookahead_ticks = 5;
     /// How fast the eye can move (the viewer's limits). [Units: world units / s]
     MotionLimits eye_motion;
+    /// Fill ClientDecisions::enter and leave at each update: a diff of the set against
+    /// the last one, a pass over both. false leaves them empty, for a caller that keeps
+    /// what it sent itself and reads only `replicated` (the server's replication does).
+    bool enter_leave = true;
 };
 
 /// One replicated entity with its network level-of-detail hint.
@@ -97,7 +101,8 @@ struct Replicated {
     std::uint8_t update_interval = 1;
 };
 
-/// What changed for one client in the last update. Ids in increasing order.
+/// What changed for one client in the last update. Ids in increasing order. enter and
+/// leave only with ClientDesc::enter_leave (else empty).
 struct ClientDecisions {
     std::vector<EntityId> enter;        ///< newly replicated
     std::vector<Replicated> replicated; ///< the whole set after the update (enter included)
