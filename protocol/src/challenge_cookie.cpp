@@ -26,13 +26,16 @@ void put_le(std::vector<std::uint8_t>& out, std::uint64_t v, int bytes) {
 
 std::array<std::uint8_t, 32> cookie_mac(const TokenKey& key, const SourceAddress& from,
                                         std::uint64_t nonce, std::uint64_t issued_ms) {
+    // The label, the address, its port, the nonce and the time, little-endian.
+    constexpr int kPortBytes = 2;
+    constexpr int kNonceBytes = 8;
     std::vector<std::uint8_t> data;
-    data.reserve(kCookieLabel.size() + from.address.size() + 2 + 8 + 8);
+    data.reserve(kCookieLabel.size() + from.address.size() + kPortBytes + kNonceBytes + kTimeBytes);
     data.insert(data.end(), kCookieLabel.begin(), kCookieLabel.end());
     data.insert(data.end(), from.address.begin(), from.address.end());
-    put_le(data, from.port, 2);
-    put_le(data, nonce, 8);
-    put_le(data, issued_ms, 8);
+    put_le(data, from.port, kPortBytes);
+    put_le(data, nonce, kNonceBytes);
+    put_le(data, issued_ms, static_cast<int>(kTimeBytes));
     std::array<std::uint8_t, 32> mac{};
     unsigned int length = 0;
     if (HMAC(EVP_sha256(), key.bytes.data(), static_cast<int>(key.bytes.size()), data.data(),

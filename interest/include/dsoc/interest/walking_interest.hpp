@@ -31,7 +31,8 @@ public:
 
     /// A walking player (or bot) with id `id` whose box is `box` now.
     bool add_walker(visibility::EntityId id, const visibility::Aabb& box);
-    /// A client viewing from walker `entity`.
+    /// A client viewing from walker `entity`. Its decisions hold `replicated` only
+    /// (ClientDesc::enter_leave off: the policies answer with the whole set).
     bool add_viewer(visibility::ClientId client, visibility::EntityId entity);
     /// Begins tick `tick`, in this order: checks the manager's invariants of the last
     /// tick (ValidateDSOCState) when DSOCConfig::validate_state is on, before anything

@@ -1,6 +1,6 @@
 #pragma once
-// DSOC interest management for a game server: for every client, every tick, which
-// entities enter, stay in and leave its replication set. An entity hidden from a
+// DSOC interest management for a game server: for every client, every tick, its
+// replication set (and, unless the client opts out, which entities entered and left it). An entity hidden from a
 // client gets a Temporal Bounding Volume (where it can be until the TBV expires);
 // nothing about it is tested or sent while the TBV stays hidden from the client's
 // whole reachable eye region. See docs/dsoc.md.
@@ -90,7 +90,7 @@ struct ClientDesc {
     MotionLimits eye_motion;
     /// Fill ClientDecisions::enter and leave at each update: a diff of the set against
     /// the last one, a pass over both. false leaves them empty, for a caller that keeps
-    /// what it sent itself and reads only `replicated` (the server's replication does).
+    /// what it sent itself and reads only `replicated`.
     bool enter_leave = true;
 };
 
