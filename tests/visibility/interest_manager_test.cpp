@@ -616,15 +616,23 @@ void move_walkers(InterestManager& m, std::uint64_t tick) {
     }
 }
 
+/// A manager of the walkers' world (+-4096 units) behind the wall, its invariants checked
+/// after every update; `builds` counts its culler builds.
+std::unique_ptr<InterestManager> checked_wall_manager(int& builds) {
+    DSOCConfig c;
+    c.validate_state = true;
+    const Aabb world{glm::vec3(-4096.0f), glm::vec3(4096.0f)};
+    return std::make_unique<InterestManager>(
+        c, world, [&builds] { return std::make_unique<WallVisibility>(&builds); });
+}
+
 TEST(InterestManagerDecisions, AClientWithoutEnterAndLeaveGetsTheSameSetAndNoDiff) {
     // Client 100 has the diff (the default), client 101 views from the same entity
     // without it: the same set every tick, and its enter and leave stay empty while
     // client 100's say what changed (everything at the first update, a removed walker).
-    DSOCConfig c;
-    c.validate_state = true;
     int builds = 0;
-    const Aabb world{glm::vec3(-4096.0f), glm::vec3(4096.0f)};
-    InterestManager m(c, world, [&] { return std::make_unique<WallVisibility>(&builds); });
+    const auto manager = checked_wall_manager(builds);
+    InterestManager& m = *manager;
     add_walkers(m);
     ClientDesc no_diff;
     no_diff.viewer = 1;
@@ -811,12 +819,11 @@ TEST(Relevance, ASetIsSightUnderTheTeamAndPairRulesAndEnterAndLeaveFollowRuleCha
     // side) are gone for a while and come back without their rules; while they are gone
     // their slots keep the team they had, the client's, so that only the slot's
     // liveness keeps them out (the team rule would send them).
-    DSOCConfig c;
-    c.validate_state = true;
     int builds = 0;
-    const Aabb world{glm::vec3(-4096.0f), glm::vec3(4096.0f)};
-    InterestManager ruled(c, world, [&] { return std::make_unique<WallVisibility>(&builds); });
-    InterestManager plain(c, world, [&] { return std::make_unique<WallVisibility>(&builds); });
+    const auto ruled_manager = checked_wall_manager(builds);
+    const auto plain_manager = checked_wall_manager(builds);
+    InterestManager& ruled = *ruled_manager;
+    InterestManager& plain = *plain_manager;
     add_walkers(ruled);
     add_walkers(plain);
     std::mt19937 rng(11);
