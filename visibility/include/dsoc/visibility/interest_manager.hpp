@@ -1,9 +1,9 @@
 #pragma once
 // DSOC interest management for a game server: for every client, every tick, its
-// replication set (and, unless the client opts out, which entities entered and left it). An entity hidden from a
-// client gets a Temporal Bounding Volume (where it can be until the TBV expires);
-// nothing about it is tested or sent while the TBV stays hidden from the client's
-// whole reachable eye region. See docs/dsoc.md.
+// replication set (and, unless the client opts out, which entities entered and left
+// it). An entity hidden from a client gets a Temporal Bounding Volume (where it can be
+// until the TBV expires); nothing about it is tested or sent while the TBV stays hidden
+// from the client's whole reachable eye region. See docs/dsoc.md.
 //
 // Guarantee (conservative): if an entity's box is visible from any point of a
 // client's reachable eye region at tick t (eye +- the client's motion limits over
