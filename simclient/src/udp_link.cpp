@@ -40,7 +40,7 @@ bool UdpLink::connect(std::vector<asio::ip::udp::endpoint> servers, const pb::En
         return false;
     }
     response_.clear(); // written for real once the cookie arrives
-    if (!open_next(error)) {
+    if (!open_next_that_opens(error)) {
         return false;
     }
     retry_handshake();
@@ -64,6 +64,18 @@ bool UdpLink::open_next(std::string& error) {
     receive_next();
     send(request_);
     return true;
+}
+
+bool UdpLink::open_next_that_opens(std::string& error) {
+    error.clear();
+    while (next_server_ < servers_.size()) {
+        std::string why;
+        if (open_next(why)) {
+            return true;
+        }
+        error += (error.empty() ? "" : "; ") + why;
+    }
+    return false;
 }
 
 void UdpLink::retry_handshake() {
@@ -205,7 +217,7 @@ bool UdpLink::drain() {
                 // Nothing listens at this address: the next one the name resolved to, as
                 // a TCP connect tries each, or the owner's to decide.
                 std::string why;
-                if (next_server_ < servers_.size() && open_next(why)) {
+                if (open_next_that_opens(why)) {
                     return false; // receiving on the new socket
                 }
                 if (handlers_.on_refused) {

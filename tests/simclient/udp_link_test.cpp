@@ -9,6 +9,7 @@
 #include <sys/socket.h>
 #include <time.h>
 
+#include <array>
 #include <chrono>
 #include <memory>
 #include <string>
@@ -53,6 +54,38 @@ TEST(UdpLink, AWaitCompletedAfterItsOwnerIsFreedTouchesNothing) {
     const std::size_t n = server.receive_from(asio::buffer(got), from, 0, ec);
     EXPECT_FALSE(ec) << ec.message();
     EXPECT_GT(n, 0u);
+}
+
+// A name may resolve to addresses this host cannot send to (an IPv6 address without
+// IPv6, say): connect() goes on to the next, as a TCP connect does, and only when none
+// opens does it fail, naming each. Here the broadcast address, which a socket without
+// SO_BROADCAST may not connect to (EACCES), stands before the server's.
+TEST(UdpLink, AnAddressThatCannotBeOpenedIsPassedOverForTheNext) {
+    asio::io_context io;
+    asio::ip::udp::socket server(io, {asio::ip::address_v4::loopback(), 0});
+    const asio::ip::udp::endpoint unusable(asio::ip::address_v4::broadcast(), 9);
+    protocol::pb::Envelope hello;
+    hello.mutable_client_hello()->set_protocol_version(1);
+    std::string error;
+    auto owner = std::make_shared<Owner>();
+    owner->link = std::make_unique<UdpLink>(io, UdpLink::Handlers{}, DatagramFaults{}, 1);
+    ASSERT_TRUE(owner->link->connect({unusable, server.local_endpoint()}, hello, owner, error))
+        << error;
+    io.run_for(std::chrono::milliseconds(50));
+    std::array<std::uint8_t, 2048> got{};
+    asio::ip::udp::endpoint from;
+    server.non_blocking(true);
+    boost::system::error_code ec;
+    EXPECT_GT(server.receive_from(asio::buffer(got), from, 0, ec), 0u) << ec.message();
+    owner->link->close();
+
+    auto alone = std::make_shared<Owner>();
+    alone->link = std::make_unique<UdpLink>(io, UdpLink::Handlers{}, DatagramFaults{}, 2);
+    const asio::ip::udp::endpoint also_unusable(asio::ip::address_v4::broadcast(), 10);
+    EXPECT_FALSE(alone->link->connect({unusable, also_unusable}, hello, alone, error));
+    EXPECT_NE(error.find("255.255.255.255"), std::string::npos) << error;
+    EXPECT_NE(error.find("; "), std::string::npos) << "both addresses named: " << error;
+    alone->link->close();
 }
 
 /// The descriptor of the socket connected to `server` (the link's; the test's server

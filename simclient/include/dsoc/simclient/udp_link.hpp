@@ -92,6 +92,10 @@ private:
     /// Opens the socket towards servers_[next_server_] (closing the one before), starts
     /// receiving and sends the request.
     bool open_next(std::string& error);
+    /// open_next() on each address left in turn until one opens, as a TCP connect tries
+    /// each (an IPv6 address first on a host without IPv6, say). False when none did:
+    /// `error` then names each address tried and why it failed, joined by "; ".
+    bool open_next_that_opens(std::string& error);
     void receive_next();
     /// Reads every datagram waiting on the socket. False when the link no longer reads this
     /// socket (closed, moved to the next address, or given up: stop_reading()).
