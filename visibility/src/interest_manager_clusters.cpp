@@ -99,9 +99,9 @@ void InterestManager::test_clusters(ClientSlot& c, const RegionVisibility& now,
         // Temporal coherence for a cluster, whose members change from tick to tick: what
         // hid it last time was lent to its members (test_entities()), so the hint of a
         // member hidden last tick (what proved it, by itself or with its cluster) is tried
-        // first. Not a
-        // visible member's: its hint may say that its own last test failed. Any hint is
-        // safe (RegionVisibility::test_box_hinted()): it only orders the proofs.
+        // first. Not a visible member's: its hint may say that its own last test failed.
+        // Any hint is safe (RegionVisibility::test_box_hinted()): it only orders the
+        // proofs.
         std::uint32_t hint = 0;
         for (std::size_t m = 0; config_.blocker_hints && m < cluster.members.size(); ++m) {
             const std::uint32_t slot = cluster.members[m];
