@@ -37,7 +37,7 @@ InterestManager::InterestManager(const DSOCConfig& config, const Aabb& world_bou
     }
     if (make_visibility_) {
         preparer_ = make_visibility_();
-        coarse_tbvs_ = preparer_ != nullptr && preparer_->has_prepared_stage();
+        prepared_stage_ = preparer_ != nullptr && preparer_->has_prepared_stage();
     }
     const bool shortcuts_pay = preparer_ == nullptr || preparer_->pair_shortcuts_pay();
     tbvs_enabled_ = config_.tbvs_enabled && shortcuts_pay;

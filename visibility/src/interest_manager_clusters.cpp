@@ -140,7 +140,7 @@ void InterestManager::hide_cluster(ClientSlot& c, std::uint32_t cluster,
     // With a prepared stage each member's own TBV costs a few bit tests: no group.
     // (Called with TBVs on only: without them test_entities() marks each member.)
     assert(tbvs_enabled_);
-    if (coarse_tbvs_) {
+    if (prepared_stage_) {
         for (const std::uint32_t slot : members) {
             hide(c, slot);
         }

@@ -49,7 +49,7 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
     const PreparedBox* found = nullptr;
     int duration = 0;
     std::uint64_t expiry = 0;
-    if (coarse_tbvs_) {
+    if (prepared_stage_) {
         for (std::size_t k = 0; k < e.tbv_candidates.size() && e.tbv_durations[k] >= 1; ++k) {
             const std::uint64_t last =
                 e.candidates_tick + static_cast<std::uint64_t>(e.tbv_durations[k]);
@@ -103,12 +103,12 @@ void InterestManager::hide(ClientSlot& c, std::uint32_t slot) {
             TbvGroup& g = c.groups[c.new_groups[i]];
             const glm::vec3 d = g.box.center() - box.center();
             if (g.expiry > expiry || g.expiry + kMergeExpirySlack < expiry || glm::dot(d, d) > r2 ||
-                (coarse_tbvs_ && (!candidate.prepared || !g.prepared.prepared))) {
+                (prepared_stage_ && (!candidate.prepared || !g.prepared.prepared))) {
                 continue;
             }
             Aabb merged = g.box;
             merged.extend(box);
-            if (coarse_tbvs_) {
+            if (prepared_stage_) {
                 // The group is hidden exactly while every member TBV is: its keys are
                 // the union of theirs, no test needed.
                 preparer_->merge_prepared(g.prepared, candidate);

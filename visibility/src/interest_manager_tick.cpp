@@ -31,18 +31,19 @@ BoxTest box_test_for(bool quick, bool blocker_hints) {
 }
 
 /// Runs test `kind` on an entity's current box: on its preparation of this tick when
-/// `fresh`, else on the box itself (set after begin_update(), so not prepared).
+/// `use_preparation` (which then holds `box`), else on the box itself (a box set after
+/// begin_update() has none).
 Visibility test_current_box(const RegionVisibility& culler, BoxTest kind,
-                            const PreparedBox& prepared, const Aabb& box, bool fresh,
+                            const PreparedBox& prepared, const Aabb& box, bool use_preparation,
                             std::uint32_t& hint) {
     switch (kind) {
     case BoxTest::quick:
-        return fresh ? culler.test_prepared_quick(prepared) : culler.test_box_quick(box);
+        return use_preparation ? culler.test_prepared_quick(prepared) : culler.test_box_quick(box);
     case BoxTest::full:
-        return fresh ? culler.test_prepared(prepared) : culler.test_box(box);
+        return use_preparation ? culler.test_prepared(prepared) : culler.test_box(box);
     case BoxTest::hinted:
-        return fresh ? culler.test_prepared_hinted(prepared, hint)
-                     : culler.test_box_hinted(box, hint);
+        return use_preparation ? culler.test_prepared_hinted(prepared, hint)
+                               : culler.test_box_hinted(box, hint);
     }
     return culler.test_box(box);
 }
@@ -114,7 +115,7 @@ void InterestManager::refresh_tbv_candidates(EntitySlot& e) {
     const bool due =
         !e.has_candidates || e.teleported_at == tick_ ||
         tick_ >= e.candidates_tick + static_cast<std::uint64_t>(e.tbv_durations[0] / 2);
-    if (!coarse_tbvs_ || !tbvs_enabled_ || !due) {
+    if (!prepared_stage_ || !tbvs_enabled_ || !due) {
         return;
     }
     e.has_candidates = true;
@@ -273,7 +274,7 @@ void InterestManager::reprove_tbvs(ClientSlot& c) {
         return;
     }
     c.scratch.clear();
-    if (coarse_tbvs_) {
+    if (prepared_stage_) {
         // Each group carries its keys: re-proving it costs a few bit tests, cheaper
         // than any octree traversal.
         for (std::uint32_t g = 0; g < c.groups.size(); ++g) {
@@ -404,8 +405,12 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
         }
         const bool quick = state == PairState::visible && phase != 0; // takes_quick_test()
         const BoxTest kind = box_test_for(quick, config_.blocker_hints);
-        const bool visible = test_current_box(now, kind, e.prepared, view.box, fresh,
-                                              c.hints[slot]) == Visibility::visible;
+        // Without a prepared stage a preparation is the box alone (prepare()), which
+        // view.box holds: the same answers, and the slot, hundreds of bytes from the
+        // next, is left unread.
+        const bool visible =
+            test_current_box(now, kind, e.prepared, view.box, fresh && prepared_stage_,
+                             c.hints[slot]) == Visibility::visible;
         if (!tbvs_enabled_) { // hide() would only mark it: no branch on the answer
             state = visible ? PairState::visible : PairState::hidden_expired;
         } else if (visible) {
