@@ -171,11 +171,11 @@ void SimClient::connect_udp(const asio::ip::tcp::resolver::results_type& endpoin
             self->close();
         }
     };
-    handlers.on_refused = [weak](const boost::system::error_code& ec) {
+    handlers.on_refused = [weak](const std::string& why) {
         if (auto self = weak.lock(); self && self->state_ != State::closed) {
             self->stats_.connect_failed = true;
-            self->fail(failure::refused, fmt::format("UDP to {}:{}: {}", self->setup_.host,
-                                                     self->setup_.port, ec.message()));
+            self->fail(failure::refused,
+                       fmt::format("UDP to {}:{}: {}", self->setup_.host, self->setup_.port, why));
             self->close();
         }
     };

@@ -29,6 +29,7 @@ bool UdpLink::connect(std::vector<asio::ip::udp::endpoint> servers, const pb::En
     owner_ = owner;
     servers_ = std::move(servers);
     next_server_ = 0;
+    tried_.clear();
     nonce_ = protocol::random_nonzero_u64();
     if (servers_.empty()) {
         error = "no address to send to";
@@ -56,7 +57,7 @@ bool UdpLink::open_next(std::string& error) {
         socket_.connect(server_, ec); // the kernel then drops datagrams from anywhere else
     }
     if (ec) {
-        error = "UDP socket towards " + server_.address().to_string() + ": " + ec.message();
+        error = "UDP socket towards " + server_name() + ": " + ec.message();
         return false;
     }
     socket_.non_blocking(true, ec);
@@ -74,8 +75,15 @@ bool UdpLink::open_next_that_opens(std::string& error) {
             return true;
         }
         error += (error.empty() ? "" : "; ") + why;
+        tried_.push_back(std::move(why));
     }
     return false;
+}
+
+std::string UdpLink::server_name() const {
+    const std::string host = server_.address().to_string();
+    const std::string port = std::to_string(server_.port());
+    return server_.address().is_v6() ? "[" + host + "]:" + port : host + ":" + port;
 }
 
 void UdpLink::retry_handshake() {
@@ -216,13 +224,20 @@ bool UdpLink::drain() {
                 }
                 // Nothing listens at this address: the next one the name resolved to, as
                 // a TCP connect tries each, or the owner's to decide.
+                tried_.push_back(
+                    server_name() + ": " +
+                    boost::system::error_code(ECONNREFUSED, boost::system::system_category())
+                        .message());
                 std::string why;
                 if (open_next_that_opens(why)) {
                     return false; // receiving on the new socket
                 }
                 if (handlers_.on_refused) {
-                    handlers_.on_refused(
-                        boost::system::error_code(ECONNREFUSED, boost::system::system_category()));
+                    std::string all;
+                    for (const std::string& t : tried_) {
+                        all += (all.empty() ? "" : "; ") + t;
+                    }
+                    handlers_.on_refused(all);
                 }
                 return !closed_; // the owner closes the link
             }
@@ -247,8 +262,7 @@ bool UdpLink::drain() {
 
 void UdpLink::stop_reading(const std::string& why) {
     if (handlers_.on_socket_error) {
-        handlers_.on_socket_error("UDP socket towards " + server_.address().to_string() + ":" +
-                                  std::to_string(server_.port()) +
+        handlers_.on_socket_error("UDP socket towards " + server_name() +
                                   " can no longer be read: " + why);
     }
 }

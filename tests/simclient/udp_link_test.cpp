@@ -88,6 +88,49 @@ TEST(UdpLink, AnAddressThatCannotBeOpenedIsPassedOverForTheNext) {
     alone->link->close();
 }
 
+/// A loopback UDP port nothing listens on (bound, then closed): a datagram sent there
+/// comes back as ICMP port unreachable.
+asio::ip::udp::endpoint closed_port(asio::io_context& io) {
+    asio::ip::udp::socket probe(io, {asio::ip::address_v4::loopback(), 0});
+    return probe.local_endpoint(); // closed when `probe` goes
+}
+
+// When the host says nothing listens at any address, the owner hears what became of
+// each one tried, in order: two refused, and one that could not be opened.
+TEST(UdpLink, ARefusalNamesEveryAddressTriedAndWhatBecameOfIt) {
+    asio::io_context io;
+    const asio::ip::udp::endpoint first = closed_port(io);
+    const asio::ip::udp::endpoint second = closed_port(io);
+    const asio::ip::udp::endpoint unusable(asio::ip::address_v4::broadcast(), 9);
+    int refusals = 0;
+    std::string why;
+    UdpLink::Handlers handlers;
+    handlers.on_refused = [&](const std::string& w) {
+        ++refusals;
+        why = w;
+    };
+    auto owner = std::make_shared<Owner>();
+    owner->link = std::make_unique<UdpLink>(io, std::move(handlers), DatagramFaults{}, 1);
+    protocol::pb::Envelope hello;
+    hello.mutable_client_hello()->set_protocol_version(1);
+    std::string error;
+    ASSERT_TRUE(owner->link->connect({first, second, unusable}, hello, owner, error)) << error;
+    io.run_for(std::chrono::milliseconds(300));
+    owner->link->close();
+    ASSERT_EQ(refusals, 1);
+    const std::string first_name = "127.0.0.1:" + std::to_string(first.port()) + ": ";
+    const std::string second_name = "127.0.0.1:" + std::to_string(second.port()) + ": ";
+    const auto at_first = why.find(first_name);
+    const auto at_second = why.find(second_name);
+    const auto at_unusable = why.find("255.255.255.255:9: ");
+    ASSERT_NE(at_first, std::string::npos) << why;
+    ASSERT_NE(at_second, std::string::npos) << why;
+    ASSERT_NE(at_unusable, std::string::npos) << why;
+    EXPECT_LT(at_first, at_second) << why;
+    EXPECT_LT(at_second, at_unusable) << why;
+    EXPECT_NE(why.find("refused", at_first), std::string::npos) << why;
+}
+
 /// The descriptor of the socket connected to `server` (the link's; the test's server
 /// socket is bound, not connected): the test reaches under the link to break its socket
 /// as the kernel might. -1 when none.

@@ -46,9 +46,10 @@ public:
         std::function<void(const std::string&)> on_error;
         /// Before the session is accepted: at the last of the addresses the host said
         /// nothing listens on the port (ICMP port unreachable, read as a receive error).
-        /// The link stays open; the owner decides. Later ones are ignored (a lost server
+        /// `why` names each address tried and what became of it, joined by "; ". The
+        /// link stays open; the owner decides. Later refusals are ignored (a lost server
         /// shows as silence).
-        std::function<void(const boost::system::error_code&)> on_refused;
+        std::function<void(const std::string& why)> on_refused;
         /// The socket can no longer be read: woken with nothing to read on a socket shut
         /// down for reading (POLLRDHUP), or its wait failed. The link has stopped reading;
         /// the owner decides (`why` says what happened). An empty or malformed datagram
@@ -94,8 +95,11 @@ private:
     bool open_next(std::string& error);
     /// open_next() on each address left in turn until one opens, as a TCP connect tries
     /// each (an IPv6 address first on a host without IPv6, say). False when none did:
-    /// `error` then names each address tried and why it failed, joined by "; ".
+    /// `error` then names each address tried and why it failed, joined by "; ". Each
+    /// failure is also kept in tried_.
     bool open_next_that_opens(std::string& error);
+    /// The link's address as "host:port" ("[host]:port" for IPv6).
+    [[nodiscard]] std::string server_name() const;
     void receive_next();
     /// Reads every datagram waiting on the socket. False when the link no longer reads this
     /// socket (closed, moved to the next address, or given up: stop_reading()).
@@ -118,6 +122,9 @@ private:
     boost::asio::steady_timer retry_timer_;
     std::vector<boost::asio::ip::udp::endpoint> servers_;
     std::size_t next_server_ = 0; ///< the address to try when this one refuses
+    /// What became of each address given up so far (refused, or could not be opened),
+    /// for Handlers::on_refused.
+    std::vector<std::string> tried_;
     boost::asio::ip::udp::endpoint server_;
     boost::asio::ip::udp::endpoint sender_;
     /// drain()'s buffers: up to kReadBatch datagrams a system call, each one byte over the
