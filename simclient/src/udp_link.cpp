@@ -57,7 +57,7 @@ bool UdpLink::open_next(std::string& error) {
         socket_.connect(server_, ec); // the kernel then drops datagrams from anywhere else
     }
     if (ec) {
-        error = "UDP socket towards " + server_name() + ": " + ec.message();
+        error = server_name() + ": cannot open a UDP socket towards it: " + ec.message();
         return false;
     }
     socket_.non_blocking(true, ec);
@@ -219,8 +219,8 @@ bool UdpLink::drain() {
                 return true;
             }
             if (error == ECONNREFUSED) {
-                if (session_ != 0) {
-                    continue; // a lost server shows as silence
+                if (session_ != 0 || refusal_reported_) {
+                    continue; // a lost server shows as silence; the owner knows already
                 }
                 // Nothing listens at this address: the next one the name resolved to, as
                 // a TCP connect tries each, or the owner's to decide.
@@ -232,6 +232,7 @@ bool UdpLink::drain() {
                 if (open_next_that_opens(why)) {
                     return false; // receiving on the new socket
                 }
+                refusal_reported_ = true;
                 if (handlers_.on_refused) {
                     std::string all;
                     for (const std::string& t : tried_) {

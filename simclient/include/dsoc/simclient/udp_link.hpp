@@ -46,9 +46,9 @@ public:
         std::function<void(const std::string&)> on_error;
         /// Before the session is accepted: at the last of the addresses the host said
         /// nothing listens on the port (ICMP port unreachable, read as a receive error).
-        /// `why` names each address tried and what became of it, joined by "; ". The
-        /// link stays open; the owner decides. Later refusals are ignored (a lost server
-        /// shows as silence).
+        /// `why` names each address tried and what became of it, joined by "; ". Called
+        /// once: the link stays open and the owner decides; later refusals, and any after
+        /// the session is accepted (a lost server shows as silence), are ignored.
         std::function<void(const std::string& why)> on_refused;
         /// The socket can no longer be read: woken with nothing to read on a socket shut
         /// down for reading (POLLRDHUP), or its wait failed. The link has stopped reading;
@@ -125,6 +125,7 @@ private:
     /// What became of each address given up so far (refused, or could not be opened),
     /// for Handlers::on_refused.
     std::vector<std::string> tried_;
+    bool refusal_reported_ = false; ///< on_refused was called: later refusals are ignored
     boost::asio::ip::udp::endpoint server_;
     boost::asio::ip::udp::endpoint sender_;
     /// drain()'s buffers: up to kReadBatch datagrams a system call, each one byte over the

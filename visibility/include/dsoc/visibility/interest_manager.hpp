@@ -331,7 +331,8 @@ private:
     std::unique_ptr<RegionVisibility> preparer_;
     /// The culler has a cheap prepared stage (RegionVisibility::has_prepared_stage()):
     /// TBVs are proven and re-proven by it alone, and a box test reads the entity's
-    /// preparation. Without one a preparation is the box alone, and tests take the box.
+    /// preparation. Without one a preparation is the box alone, and an entity's own
+    /// test takes its box (test_entities()).
     bool prepared_stage_ = false;
     /// TBVs and entity clusters are used: the config asks for them and the culler's
     /// tests are dear enough for them to pay (RegionVisibility::pair_shortcuts_pay()).
