@@ -715,6 +715,55 @@ TEST(InterestManagerEffort, TheCheapestEffortIsThePreparedStageAloneAndStaysCons
     EXPECT_EQ(m.stats(100)->cheapest_updates, 10u);
 }
 
+/// The wall world without a prepared stage, counting its box tests (`tests`).
+class CountingWallVisibility final : public RegionVisibility {
+public:
+    CountingWallVisibility(int* builds, int* tests) : wall_(builds), tests_(tests) {}
+    void build(const Aabb& region) override { wall_.build(region); }
+    [[nodiscard]] Visibility test_box(const Aabb& box) const override {
+        ++*tests_;
+        return wall_.test_box(box);
+    }
+
+private:
+    WallVisibility wall_;
+    int* tests_;
+};
+
+TEST(InterestManagerEffort, WithoutAPreparedStageTheCheapestEffortIsTheFullOne) {
+    // The cheapest effort is the prepared stage alone. A culler without one has nothing
+    // cheaper than its full path (clusters, hints, quick tests): a tick over budget runs
+    // that path, the same sets for the same tests, not every box through the full test.
+    DSOCConfig c;
+    c.validate_state = true;
+    int builds = 0;
+    int tests_full = 0;
+    int tests_over = 0;
+    const Aabb world{glm::vec3(-4096.0f), glm::vec3(4096.0f)};
+    InterestManager full(
+        c, world, [&] { return std::make_unique<CountingWallVisibility>(&builds, &tests_full); });
+    InterestManager over(
+        c, world, [&] { return std::make_unique<CountingWallVisibility>(&builds, &tests_over); });
+    add_walkers(full);
+    add_walkers(over);
+    for (std::uint64_t tick = 1; tick <= 30; ++tick) {
+        move_walkers(full, tick);
+        move_walkers(over, tick);
+        full.begin_update(tick);
+        over.begin_update(tick);
+        full.update_client(0, UpdateEffort::full);
+        // Ticks 11-20 are over budget.
+        over.update_client(0,
+                           tick > 10 && tick <= 20 ? UpdateEffort::cheapest : UpdateEffort::full);
+        ASSERT_EQ(replicated_ids(over, 100), replicated_ids(full, 100)) << "tick " << tick;
+        ASSERT_EQ(tests_over, tests_full) << "tick " << tick;
+        // Something is culled: the 20 walkers behind the wall.
+        ASSERT_EQ(replicated_ids(full, 100).size(), 11u) << "tick " << tick;
+    }
+    EXPECT_GT(full.stats(100)->cluster_tests, 0u); // the full path has shortcuts to keep
+    EXPECT_EQ(over.stats(100)->cheapest_updates, 10u);
+}
+
 /// The client (100) looks from x = -500 with no lookahead: a box is visible exactly when
 /// it reaches the viewer's side of the wall (min.x < 8).
 bool visible_from_the_left(const Aabb& box) {

@@ -172,8 +172,10 @@ Aabb InterestManager::clip(const Aabb& box) const {
 
 void InterestManager::update_client(std::size_t index, UpdateEffort effort) {
     ClientSlot& c = *clients_[index];
-    const bool cheapest = effort == UpdateEffort::cheapest;
-    c.stats.cheapest_updates += cheapest ? 1 : 0;
+    c.stats.cheapest_updates += effort == UpdateEffort::cheapest ? 1 : 0;
+    // The cheapest effort is the prepared stage alone. Without one nothing is cheaper
+    // than the full path (clusters, hints, quick tests), which then runs.
+    const bool cheapest = effort == UpdateEffort::cheapest && prepared_stage_;
     c.region = eye_region_for(c, c.eye);
     if (c.region.is_empty()) {
         forget_visible(c);

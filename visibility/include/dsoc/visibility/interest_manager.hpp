@@ -115,7 +115,7 @@ enum class UpdateEffort : std::uint8_t {
     /// The culler's cheap prepared stage alone (a baked table, else the map's PVS) for
     /// every box, and no new TBVs or clusters: still conservative (a box is hidden only
     /// when that stage proves it), looser, and cheap; for a tick over its CPU budget.
-    /// Without a prepared stage it is the full test.
+    /// Without a prepared stage it is `full` (nothing is cheaper than its shortcuts).
     cheapest,
 };
 
@@ -136,7 +136,7 @@ struct ClientStats {
     std::uint64_t fuzzy_escapes = 0;
     std::uint64_t cluster_tests = 0; ///< entity clusters tested (DSOCConfig::entity_cluster_size)
     std::uint64_t cluster_hits = 0;  ///< clusters proven hidden: their entities need no own test
-    std::uint64_t cheapest_updates = 0; ///< updates run with UpdateEffort::cheapest
+    std::uint64_t cheapest_updates = 0; ///< updates asked for UpdateEffort::cheapest
 };
 
 class InterestManager {
