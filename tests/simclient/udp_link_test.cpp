@@ -25,6 +25,13 @@ struct Owner {
     std::unique_ptr<UdpLink> link;
 };
 
+/// The hello a link sends (its content is not what these tests look at).
+protocol::pb::Envelope a_hello() {
+    protocol::pb::Envelope hello;
+    hello.mutable_client_hello()->set_protocol_version(1);
+    return hello;
+}
+
 // The link's receive wait lasts until its socket closes, so it holds its owner weakly.
 // Closing queues that wait's completion (aborted); when the owner is freed before the
 // io_context runs it (its last strong hold was elsewhere), the completion must not read
@@ -37,8 +44,7 @@ TEST(UdpLink, AWaitCompletedAfterItsOwnerIsFreedTouchesNothing) {
     auto owner = std::make_shared<Owner>();
     std::weak_ptr<Owner> watch = owner;
     owner->link = std::make_unique<UdpLink>(io, UdpLink::Handlers{}, DatagramFaults{}, 1);
-    protocol::pb::Envelope hello;
-    hello.mutable_client_hello()->set_protocol_version(1);
+    const protocol::pb::Envelope hello = a_hello();
     std::string error;
     ASSERT_TRUE(owner->link->connect({server.local_endpoint()}, hello, owner, error)) << error;
     owner->link->close();
@@ -64,8 +70,7 @@ TEST(UdpLink, AnAddressThatCannotBeOpenedIsPassedOverForTheNext) {
     asio::io_context io;
     asio::ip::udp::socket server(io, {asio::ip::address_v4::loopback(), 0});
     const asio::ip::udp::endpoint unusable(asio::ip::address_v4::broadcast(), 9);
-    protocol::pb::Envelope hello;
-    hello.mutable_client_hello()->set_protocol_version(1);
+    const protocol::pb::Envelope hello = a_hello();
     std::string error;
     auto owner = std::make_shared<Owner>();
     owner->link = std::make_unique<UdpLink>(io, UdpLink::Handlers{}, DatagramFaults{}, 1);
@@ -113,8 +118,7 @@ TEST(UdpLink, ARefusalNamesEveryAddressTriedOnce) {
     };
     auto owner = std::make_shared<Owner>();
     owner->link = std::make_unique<UdpLink>(io, std::move(handlers), DatagramFaults{}, 1);
-    protocol::pb::Envelope hello;
-    hello.mutable_client_hello()->set_protocol_version(1);
+    const protocol::pb::Envelope hello = a_hello();
     std::string error;
     ASSERT_TRUE(owner->link->connect({first, unusable, last}, hello, owner, error)) << error;
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
@@ -175,8 +179,7 @@ TEST(UdpLink, ASocketThatCanNoLongerBeReadIsGivenUpNotPolled) {
         failure = why;
     };
     owner->link = std::make_unique<UdpLink>(io, std::move(handlers), DatagramFaults{}, 1);
-    protocol::pb::Envelope hello;
-    hello.mutable_client_hello()->set_protocol_version(1);
+    const protocol::pb::Envelope hello = a_hello();
     std::string error;
     ASSERT_TRUE(owner->link->connect({server.local_endpoint()}, hello, owner, error)) << error;
     const int fd = socket_towards(server.local_endpoint());
