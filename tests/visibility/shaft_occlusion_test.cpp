@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 namespace dsoc::visibility {
@@ -128,10 +129,16 @@ bool every_corner_segment_through(const Aabb& region, const Aabb& box, const Aab
 }
 
 TEST(ShaftOcclusion, TheShaftBoxTestAnswersAsItsSixtyFourSegments) {
-    // shaft_blocked_by_box() works each axis's values out once per pair of sides; its
-    // slow twin is the corner argument itself: segment_through_box() for each of the 64
-    // segments between the two boxes' corners. Coordinates on a coarse lattice make many
-    // flat axes (a segment parallel to a face), shared planes and flat boxes.
+    // shaft_blocked_by_box() works each axis's values out once per pair of sides (four
+    // at a time with SSE2; shaft_blocked_by_box_scalar() one at a time); their slow twin
+    // is the corner argument itself: segment_through_box() for each of the 64 segments
+    // between the two boxes' corners. Coordinates on a coarse lattice make many flat
+    // axes (a segment parallel to a face), shared planes and flat boxes.
+    const auto both = [](const Aabb& region, const Aabb& box, const Aabb& solid) {
+        const bool scalar = shaft_blocked_by_box_scalar(region, box, solid);
+        EXPECT_EQ(shaft_blocked_by_box(region, box, solid), scalar);
+        return scalar;
+    };
     std::mt19937 rng(43);
     std::uniform_int_distribution<int> lattice(-12, 12);
     std::uniform_int_distribution<int> extent(0, 6);
@@ -147,6 +154,8 @@ TEST(ShaftOcclusion, TheShaftBoxTestAnswersAsItsSixtyFourSegments) {
     };
     int blocked = 0;
     int open = 0;
+    int subnormal_blocked = 0;
+    int subnormal_open = 0;
     for (int i = 0; i < 200000; ++i) {
         const bool jittered = i % 4 == 3;
         const float unit = i % 2 == 0 ? 16.0f : 1.0f / 64.0f; // the shrink's own scale too
@@ -163,7 +172,7 @@ TEST(ShaftOcclusion, TheShaftBoxTestAnswersAsItsSixtyFourSegments) {
             }
         }
         const bool twin = every_corner_segment_through(region, box, solid);
-        const bool fast = shaft_blocked_by_box(region, box, solid);
+        const bool fast = both(region, box, solid);
         ASSERT_EQ(fast, twin) << "case " << i;
         (fast ? blocked : open) += 1;
     }
@@ -189,8 +198,41 @@ TEST(ShaftOcclusion, TheShaftBoxTestAnswersAsItsSixtyFourSegments) {
             box.min[a] = std::min(box.max[a], nudge(solid.max[a] - kBoxShrink));
         }
         const bool twin = every_corner_segment_through(region, box, solid);
-        ASSERT_EQ(shaft_blocked_by_box(region, box, solid), twin) << "off-lattice case " << i;
+        ASSERT_EQ(both(region, box, solid), twin) << "off-lattice case " << i;
     }
+    // Sides a subnormal apart at 0, where a shrunk face of the solid may lie too:
+    // 1 / (b - a) overflows to infinity there, and 0 times it is NaN.
+    for (int i = 0; i < 20000; ++i) {
+        const int a = i % 3;
+        const int face = (i / 3) % 3; // the shrunk face at 0: the min side, the max, neither
+        Aabb solid{{-8.0f, -8.0f, -8.0f}, {8.0f, 8.0f, 8.0f}};
+        solid.min[a] = face == 0 ? -kBoxShrink : -16.0f;
+        solid.max[a] = face == 1 ? kBoxShrink : 16.0f;
+        // Inside the solid on the other axes (mostly), so that this axis decides.
+        const float reach = i % 4 < 3 ? 7.0f : 30.0f;
+        std::uniform_real_distribution<float> within(-reach, reach);
+        const auto inner_box = [&] {
+            const glm::vec3 p(within(rng), within(rng), within(rng));
+            const glm::vec3 q(within(rng), within(rng), within(rng));
+            return Aabb{glm::min(p, q), glm::max(p, q)};
+        };
+        Aabb region = inner_box();
+        Aabb box = inner_box();
+        const float tiny = std::numeric_limits<float>::denorm_min() * static_cast<float>(1 + i % 5);
+        const float step = (i / 9) % 2 == 0 ? tiny : -tiny;
+        region.min[a] = region.max[a] = 0.0f;
+        box.min[a] = box.max[a] = step;
+        if ((i / 18) % 2 == 0) {
+            std::swap(region, box);
+        }
+        const bool twin = every_corner_segment_through(region, box, solid);
+        const bool fast = both(region, box, solid);
+        ASSERT_EQ(fast, twin) << "subnormal case " << i;
+        (fast ? blocked : open) += 1;
+        (fast ? subnormal_blocked : subnormal_open) += 1;
+    }
+    EXPECT_GT(subnormal_blocked, 2000);
+    EXPECT_GT(subnormal_open, 2000);
     EXPECT_GT(blocked, 20000); // both answers are common (31,087 and 168,913 blocked and open)
     EXPECT_GT(open, 20000);
 }

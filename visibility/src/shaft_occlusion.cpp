@@ -7,6 +7,10 @@
 #include <cmath>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace dsoc::visibility {
 
 namespace {
@@ -30,7 +34,7 @@ bool segment_hits_box(glm::vec3 from, glm::vec3 inv, const Aabb& box) {
 
 } // namespace
 
-bool shaft_blocked_by_box(const Aabb& region, const Aabb& box, const Aabb& solid) {
+bool shaft_blocked_by_box_scalar(const Aabb& region, const Aabb& box, const Aabb& solid) {
     if (region.is_empty() || box.is_empty() || solid.is_empty()) {
         return false;
     }
@@ -90,6 +94,71 @@ bool shaft_blocked_by_box(const Aabb& region, const Aabb& box, const Aabb& solid
         }
     }
     return true;
+}
+
+bool shaft_blocked_by_box(const Aabb& region, const Aabb& box, const Aabb& solid) {
+#if defined(__SSE2__)
+    if (region.is_empty() || box.is_empty() || solid.is_empty()) {
+        return false;
+    }
+    // shaft_blocked_by_box_scalar()'s floats, its four pairs of sides of an axis in the
+    // four lanes (lane s: the region's side s & 1, the box's side s & 2). IEEE division,
+    // products and differences are the scalar ones, and each min and max below is
+    // written to pick as the scalar std::min or std::max does, NaN included; the checks
+    // are the same conjunction, in another order.
+    constexpr float kMinOverlap = 1.0e-6f; // segment_through_box()'s
+    const glm::vec3 lo = solid.min + glm::vec3(kBoxShrink);
+    const glm::vec3 hi = solid.max - glm::vec3(kBoxShrink);
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 one = _mm_set1_ps(1.0f);
+    const __m128 min_overlap = _mm_set1_ps(kMinOverlap);
+    float largest_entry[3];
+    float least_exit[3];
+    for (int axis = 0; axis < 3; ++axis) {
+        const __m128 from =
+            _mm_setr_ps(region.min[axis], region.max[axis], region.min[axis], region.max[axis]);
+        const __m128 to = _mm_setr_ps(box.min[axis], box.min[axis], box.max[axis], box.max[axis]);
+        const __m128 slab_lo = _mm_set1_ps(lo[axis]);
+        const __m128 slab_hi = _mm_set1_ps(hi[axis]);
+        const __m128 d = _mm_sub_ps(to, from);
+        const __m128 flat = _mm_cmpeq_ps(d, zero);
+        // A flat pair's segments run outside the slab unless they start inside it.
+        const __m128 inside = _mm_and_ps(_mm_cmpgt_ps(from, slab_lo), _mm_cmplt_ps(from, slab_hi));
+        if (_mm_movemask_ps(_mm_andnot_ps(inside, flat)) != 0) {
+            return false;
+        }
+        const __m128 inv = _mm_div_ps(one, d); // not read in flat lanes
+        const __m128 ta = _mm_mul_ps(_mm_sub_ps(slab_lo, from), inv);
+        const __m128 tb = _mm_mul_ps(_mm_sub_ps(slab_hi, from), inv);
+        const __m128 near = _mm_min_ps(tb, ta);      // ta > tb ? tb : ta
+        const __m128 far = _mm_max_ps(ta, tb);       // ta > tb ? ta : tb
+        const __m128 entry = _mm_max_ps(near, zero); // std::max(0.0f, near)
+        const __m128 exit = _mm_min_ps(far, one);    // std::min(1.0f, far)
+        const __m128 shut = _mm_cmple_ps(_mm_sub_ps(exit, entry), min_overlap);
+        if (_mm_movemask_ps(_mm_andnot_ps(flat, shut)) != 0) {
+            return false;
+        }
+        // Flat lanes leave the axis's interval as it is: entry 0, exit 1.
+        __m128 e = _mm_andnot_ps(flat, entry);
+        __m128 x = _mm_or_ps(_mm_and_ps(flat, one), _mm_andnot_ps(flat, exit));
+        e = _mm_max_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(1, 0, 3, 2)));
+        e = _mm_max_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(2, 3, 0, 1)));
+        x = _mm_min_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(1, 0, 3, 2)));
+        x = _mm_min_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(2, 3, 0, 1)));
+        largest_entry[axis] = _mm_cvtss_f32(e);
+        least_exit[axis] = _mm_cvtss_f32(x);
+    }
+    for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+            if (a != b && least_exit[a] - largest_entry[b] <= kMinOverlap) {
+                return false;
+            }
+        }
+    }
+    return true;
+#else
+    return shaft_blocked_by_box_scalar(region, box, solid);
+#endif
 }
 
 bool shaft_blocked_by(const Aabb& region, const Aabb& box, std::span<const Plane> planes) {

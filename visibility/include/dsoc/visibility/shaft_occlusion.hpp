@@ -32,10 +32,16 @@ namespace dsoc::visibility {
 
 /// The same for an axis-aligned solid box, in float: every segment passes through the
 /// interior of `solid` shrunk by kBoxShrink on every side (the shrink absorbs float
-/// rounding, so `true` also holds for the exact box). About 5x cheaper than the planes.
+/// rounding, so `true` also holds for the exact box). Far cheaper than the planes.
 /// `solid` must be thicker than 2 kBoxShrink on every axis (OccluderWorld::solid_box()
 /// gives no other): a thinner one, shrunk, would turn inside out and block more than it.
+/// With SSE2, four pairs of sides at a time; the answers are shaft_blocked_by_box_scalar()'s.
 [[nodiscard]] bool shaft_blocked_by_box(const Aabb& region, const Aabb& box, const Aabb& solid);
+
+/// shaft_blocked_by_box() one pair of sides at a time in scalar floats: the path
+/// without SSE2, and the twin the vector path is tested and timed against.
+[[nodiscard]] bool shaft_blocked_by_box_scalar(const Aabb& region, const Aabb& box,
+                                               const Aabb& solid);
 
 /// A segment a-b as the box tests read it: its start, b - a, and 1 / (b - a) per axis
 /// (infinite where b - a is 0, and then unused), worked out once for the many boxes one
