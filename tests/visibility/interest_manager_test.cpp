@@ -764,6 +764,35 @@ TEST(InterestManagerEffort, WithoutAPreparedStageTheCheapestEffortIsTheFullOne) 
     EXPECT_EQ(over.stats(100)->cheapest_updates, 10u);
 }
 
+TEST(InterestManagerClusters, BoxesSetAndEntitiesAddedAfterBeginUpdateAreTestedOnTheirOwn) {
+    // Without TBVs the members of a hidden cluster take its answer in a pass of their
+    // own. Entities that are not members as begin_update() made them are tested on their
+    // own: one added since in a slot that was free then, one added in a new slot, and a
+    // member whose box was set since (its cluster's box no longer holds it).
+    int builds = 0;
+    auto m = checked_wall_manager(builds);
+    add_walkers(*m);
+    m->update(1);
+    ASSERT_TRUE(m->remove_entity(5)); // a walker at x = 1,500: its slot is free at tick 2
+    m->begin_update(2);
+    ASSERT_TRUE(m->add_entity(40, EntityDesc{kHalf, {}}, box_at({-250, 0, 0})));  // that slot
+    ASSERT_TRUE(m->add_entity(41, EntityDesc{kHalf, {}}, box_at({-250, 90, 0}))); // a new one
+    ASSERT_TRUE(m->set_entity_box(8, box_at({-200, 120, 0}))); // x = 1,500 at begin_update()
+    m->update_client(0);
+    const std::vector<EntityId> ids = replicated_ids(*m, 100);
+    const auto sent_now = [&](EntityId id) { return std::count(ids.begin(), ids.end(), id) == 1; };
+    EXPECT_TRUE(sent_now(40));
+    EXPECT_TRUE(sent_now(41));
+    EXPECT_TRUE(sent_now(8));
+    // Something is culled: the walkers still behind the wall, hidden with their clusters.
+    for (const EntityId id : {2, 4, 7, 11}) { // x = 1,500, 400, 400 and 1,500
+        EXPECT_FALSE(sent_now(id)) << id;
+    }
+    EXPECT_GT(m->stats(100)->cluster_hits, 0u);
+    const auto problems = m->validate_state();
+    EXPECT_TRUE(problems.empty()) << problems.front();
+}
+
 /// The client (100) looks from x = -500 with no lookahead: a box is visible exactly when
 /// it reaches the viewer's side of the wall (min.x < 8).
 bool visible_from_the_left(const Aabb& box) {

@@ -62,6 +62,7 @@ bool InterestManager::add_entity(EntityId id, const EntityDesc& desc, const Aabb
         entities_.emplace_back();
         views_.emplace_back();
         view_alive_.emplace_back(0);
+        view_fresh_.emplace_back(0);
         view_team_.emplace_back(kNoTeam);
         counts.emplace_back(0);
         for (auto& c : clients_) {
@@ -84,8 +85,9 @@ bool InterestManager::add_entity(EntityId id, const EntityDesc& desc, const Aabb
     e.desc = desc;
     e.box = box;
     e.box_at_last_update = box;
-    views_[slot] = {box, id, e.prepared_is_current()};
+    views_[slot] = {box, id};
     view_alive_[slot] = 1;
+    view_fresh_[slot] = e.prepared_is_current() ? 1 : 0;
     view_team_[slot] = kNoTeam;
     counts[slot].store(0);
     entity_slot_[id] = slot;
@@ -109,6 +111,7 @@ bool InterestManager::remove_entity(EntityId id) {
     }
     entities_[slot].alive = false;
     view_alive_[slot] = 0;
+    view_fresh_[slot] = 0;
     entity_slot_.erase(it);
     free_entity_slots_.push_back(slot);
     return true;
@@ -122,7 +125,7 @@ bool InterestManager::set_entity_box(EntityId id, const Aabb& box, glm::vec3 vel
     EntitySlot& e = entities_[it->second];
     e.box = box;
     views_[it->second].box = box;
-    views_[it->second].prepared_current = e.prepared_is_current();
+    view_fresh_[it->second] = e.prepared_is_current() ? 1 : 0;
     e.down_velocity = std::isfinite(velocity.z) ? std::max(0.0f, -velocity.z) : -1.0f;
     return true;
 }

@@ -18,6 +18,7 @@ using detail::kNoCluster;
 
 void InterestManager::build_clusters() {
     cluster_of_.assign(entities_.size(), kNoCluster);
+    unlisted_slots_.clear();
     for (std::size_t k = 0; k < cluster_count_; ++k) {
         clusters_[k].members.clear();
     }
@@ -30,6 +31,7 @@ void InterestManager::build_clusters() {
     for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
         const EntitySlot& e = entities_[slot];
         if (!e.alive) {
+            unlisted_slots_.push_back(slot);
             continue;
         }
         const glm::vec3 cell = glm::floor(e.box.center() * inv);
@@ -83,13 +85,13 @@ void InterestManager::test_clusters(ClientSlot& c, const RegionVisibility& now,
             continue;
         }
         // Two members due a full test make the test worth it: the count stops there.
-        // (The entity's view, not its slot, for whether its preparation is current: one
-        // small array for every member.)
+        // (view_fresh_, not the slot, for whether its preparation is current: one small
+        // array for every member.)
         int due = 0;
         for (std::size_t m = 0; m < cluster.members.size() && due < 2; ++m) {
             const std::uint32_t slot = cluster.members[m];
             const bool decided = c.states[slot] == PairState::hidden_with_tbv || slot == viewer ||
-                                 !views_[slot].prepared_current;
+                                 view_fresh_[slot] == 0;
             due += decided || takes_quick_test(c, slot) ? 0 : 1;
         }
         if (due < 2) {
@@ -131,9 +133,8 @@ void InterestManager::hide_cluster(ClientSlot& c, std::uint32_t cluster,
     auto& members = c.cluster_members;
     members.clear();
     for (const std::uint32_t slot : clusters_[cluster].members) {
-        const EntityView& e = views_[slot];
         if (view_alive_[slot] != 0 && slot != viewer_slot &&
-            c.states[slot] != PairState::hidden_with_tbv && e.prepared_current) {
+            c.states[slot] != PairState::hidden_with_tbv && view_fresh_[slot] != 0) {
             members.push_back(slot);
         }
     }

@@ -96,13 +96,13 @@ struct InterestManager::EntitySlot {
 /// tick (test_entities(), decide()), packed two to a cache line: the slots themselves
 /// are hundreds of bytes apart, and 500 clients walking them paid a cache miss per
 /// entity. Kept equal to the slot's fields by the registry and begin_update() (the
-/// invariant checker compares them). Whether the slot is alive and its team are columns
-/// of their own beside it (view_alive_, view_team_), which decide() reads sixteen
-/// slots at a time.
+/// invariant checker compares them). Whether the slot is alive, its team and whether
+/// its preparation is current are columns of their own beside it (view_alive_,
+/// view_team_, view_fresh_): decide() reads the first two sixteen slots at a time, and
+/// the pass over a hidden cluster's members the third alone.
 struct InterestManager::EntityView {
-    Aabb box;                      ///< EntitySlot::box
-    EntityId id = 0;               ///< EntitySlot::id
-    bool prepared_current = false; ///< EntitySlot::prepared_is_current()
+    Aabb box;        ///< EntitySlot::box
+    EntityId id = 0; ///< EntitySlot::id
 };
 
 struct InterestManager::TbvGroup {

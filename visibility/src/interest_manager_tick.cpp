@@ -10,6 +10,7 @@
 
 namespace dsoc::visibility {
 
+using detail::kMinClusterMembers;
 using detail::kNoCluster;
 using detail::kNoGroup;
 using detail::kTeleportTolerance;
@@ -74,9 +75,17 @@ void InterestManager::begin_update(std::uint64_t tick) {
         e.tbvs_at_tick_start = tbv_counts_[static_cast<std::size_t>(&e - entities_.data())].load(
             std::memory_order_relaxed);
         prepare_box(e);
-        views_[static_cast<std::size_t>(&e - entities_.data())].prepared_current =
-            e.prepared_is_current();
+        view_fresh_[static_cast<std::size_t>(&e - entities_.data())] =
+            e.prepared_is_current() ? 1 : 0;
         refresh_tbv_candidates(e);
+    }
+    // Whose full test is due, for every client: stepped with the slot (a division per
+    // entity and client costs more than the test of the answer).
+    full_test_due_.resize(entities_.size());
+    const auto interval = static_cast<std::uint32_t>(config_.full_test_interval);
+    for (std::uint32_t slot = 0, phase = full_test_phase(0); slot < entities_.size();
+         ++slot, phase = phase + 1 == interval ? 0 : phase + 1) {
+        full_test_due_[slot] = phase == 0 ? 1 : 0;
     }
     packed_boxes_.clear();
     if (!tbvs_enabled_ && !clusters_enabled_) { // test_entities_in_bulk() may run
@@ -307,7 +316,12 @@ std::uint32_t InterestManager::viewer_slot_of(const ClientSlot& c) const {
 bool InterestManager::takes_quick_test(const ClientSlot& c, std::uint32_t slot) const {
     // Temporal coherence: an entity visible last tick most likely still is; give it
     // the full (slower) test only every full_test_interval ticks, staggered.
-    return c.states[slot] == PairState::visible && full_test_phase(slot) != 0;
+    return c.states[slot] == PairState::visible && !full_test_due(slot);
+}
+
+bool InterestManager::full_test_due(std::uint32_t slot) const {
+    // A slot added since begin_update() is past the column.
+    return slot < full_test_due_.size() ? full_test_due_[slot] != 0 : full_test_phase(slot) == 0;
 }
 
 std::uint32_t InterestManager::full_test_phase(std::uint32_t slot) const {
@@ -338,7 +352,7 @@ void InterestManager::test_entities_in_bulk(ClientSlot& c, const RegionVisibilit
         ++c.stats.box_tests;
         // A box set after begin_update() has no preparation: tested as it is, or
         // visible for the cheapest effort (never guessed).
-        const bool hidden = view.prepared_current
+        const bool hidden = view_fresh_[slot] != 0
                                 ? c.bulk_hidden[slot] != 0
                                 : !cheapest && now.test_box(view.box) == Visibility::occluded;
         state = hidden ? PairState::hidden_expired : PairState::visible;
@@ -353,16 +367,14 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
         test_entities_in_bulk(c, now, viewer, cheapest);
         return;
     }
-    // `phase` is full_test_phase(slot), stepped with the slot (a division per entity
-    // costs more than the bit test that follows).
-    const auto interval = static_cast<std::uint32_t>(config_.full_test_interval);
-    std::uint32_t phase = full_test_phase(0);
+    if (!tbvs_enabled_ && clusters_enabled_) {
+        test_entities_by_cluster(c, now, viewer, cheapest);
+        return;
+    }
     // Members of the clusters begin_update() made: slots below cluster_of_.size().
     const std::size_t clustered = cluster_of_.size();
     const bool lend_hints = config_.blocker_hints && clusters_enabled_;
-    for (std::uint32_t slot = 0; slot < entities_.size();
-         ++slot, phase = phase + 1 == interval ? 0 : phase + 1) {
-        const EntityView& view = views_[slot];
+    for (std::uint32_t slot = 0; slot < entities_.size(); ++slot) {
         PairState& state = c.states[slot];
         if (lend_hints && slot < clustered) {
             // Every member of a cluster proven hidden this tick takes its hint, whatever
@@ -382,9 +394,8 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
         }
         // The preparation (and the cluster's box) is current unless the box was set
         // after begin_update(); a slot added since has neither (nor a cluster entry).
-        const bool fresh = view.prepared_current;
-        const std::uint32_t cluster = fresh ? cluster_of_[slot] : kNoCluster;
-        if (fresh && cluster != kNoCluster && c.cluster_hidden[cluster] != 0) {
+        const std::uint32_t cluster = view_fresh_[slot] != 0 ? cluster_of_[slot] : kNoCluster;
+        if (cluster != kNoCluster && c.cluster_hidden[cluster] != 0) {
             // Hidden with its cluster (whose box holds this one's current box). Without
             // TBVs hide_cluster() would only mark each member as the line below does.
             if (tbvs_enabled_ && c.cluster_hidden[cluster] == 1) {
@@ -396,30 +407,84 @@ void InterestManager::test_entities(ClientSlot& c, const RegionVisibility& now,
             }
             continue;
         }
-        ++c.stats.box_tests;
-        const EntitySlot& e = entities_[slot];
-        if (cheapest) {
-            // A box set after begin_update() has no preparation: visible, never guessed.
-            const bool hidden =
-                fresh && now.test_prepared_coarse(e.prepared) == Visibility::occluded;
-            state = hidden ? PairState::hidden_expired : PairState::visible;
+        test_entity(c, now, slot, cheapest);
+    }
+}
+
+void InterestManager::test_entities_by_cluster(ClientSlot& c, const RegionVisibility& now,
+                                               std::uint32_t viewer, bool cheapest) {
+    // test_entities()'s steps for each slot, in another order: no pair holds a TBV, and
+    // hide() would only mark the pair. The members of every cluster begin_update() made
+    // (each alive slot is in one), then the slots in none.
+    const auto on_its_own = [&](std::uint32_t slot) {
+        if (view_alive_[slot] == 0) {
+            return;
+        }
+        if (slot == viewer) {
+            c.states[slot] = PairState::visible;
+            return;
+        }
+        test_entity(c, now, slot, cheapest);
+    };
+    for (std::uint32_t k = 0; k < cluster_count_; ++k) {
+        const std::vector<std::uint32_t>& members = clusters_[k].members;
+        if (members.size() < kMinClusterMembers || c.cluster_hidden[k] == 0) {
+            for (const std::uint32_t slot : members) {
+                on_its_own(slot);
+            }
             continue;
         }
-        const bool quick = state == PairState::visible && phase != 0; // takes_quick_test()
-        const BoxTest kind = box_test_for(quick, config_.blocker_hints);
-        // Without a prepared stage a preparation is the box alone (prepare()), which
-        // view.box holds: the same answers, and the slot, hundreds of bytes from the
-        // next, is left unread.
-        const bool visible =
-            test_current_box(now, kind, e.prepared, view.box, fresh && prepared_stage_,
-                             c.hints[slot]) == Visibility::visible;
-        if (!tbvs_enabled_) { // hide() would only mark it: no branch on the answer
-            state = visible ? PairState::visible : PairState::hidden_expired;
-        } else if (visible) {
-            state = PairState::visible;
-        } else {
-            hide(c, slot);
+        // Hidden with the cluster, whose box holds each member's box of begin_update():
+        // the members whose box has not been set since. Every member takes the hint
+        // (one set since tries it first in its own test).
+        const std::uint32_t hint = c.cluster_hint[k];
+        const bool lend_hint = config_.blocker_hints;
+        for (const std::uint32_t slot : members) {
+            if (lend_hint) {
+                c.hints[slot] = hint;
+            }
+            if (view_alive_[slot] != 0 && view_fresh_[slot] != 0 && slot != viewer) {
+                c.states[slot] = PairState::hidden_expired;
+            } else {
+                on_its_own(slot);
+            }
         }
+    }
+    for (const std::uint32_t slot : unlisted_slots_) {
+        on_its_own(slot);
+    }
+    for (auto slot = static_cast<std::uint32_t>(cluster_of_.size()); slot < entities_.size();
+         ++slot) {
+        on_its_own(slot);
+    }
+}
+
+void InterestManager::test_entity(ClientSlot& c, const RegionVisibility& now, std::uint32_t slot,
+                                  bool cheapest) {
+    PairState& state = c.states[slot];
+    const bool fresh = view_fresh_[slot] != 0;
+    ++c.stats.box_tests;
+    const EntitySlot& e = entities_[slot];
+    if (cheapest) {
+        // A box set after begin_update() has no preparation: visible, never guessed.
+        const bool hidden = fresh && now.test_prepared_coarse(e.prepared) == Visibility::occluded;
+        state = hidden ? PairState::hidden_expired : PairState::visible;
+        return;
+    }
+    const bool quick = state == PairState::visible && !full_test_due(slot); // takes_quick_test()
+    const BoxTest kind = box_test_for(quick, config_.blocker_hints);
+    // Without a prepared stage a preparation is the box alone (prepare()), which the
+    // packed view holds: the same answers, and the slot, hundreds of bytes from the
+    // next, is left unread.
+    const bool visible =
+        test_current_box(now, kind, e.prepared, views_[slot].box, fresh && prepared_stage_,
+                         c.hints[slot]) == Visibility::visible;
+    if (!tbvs_enabled_) { // hide() would only mark it: no branch on the answer
+        state = visible ? PairState::visible : PairState::hidden_expired;
+    } else if (visible) {
+        state = PairState::visible;
+    } else {
+        hide(c, slot);
     }
 }
 

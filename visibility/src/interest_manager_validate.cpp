@@ -17,7 +17,8 @@ std::vector<std::string> InterestManager::validate_state() const {
                            what);
     };
     const std::size_t n = entities_.size();
-    if (views_.size() != n || view_alive_.size() != n || view_team_.size() != n) {
+    if (views_.size() != n || view_alive_.size() != n || view_team_.size() != n ||
+        view_fresh_.size() != n) {
         problems.push_back("the packed views do not cover every entity slot");
         return problems; // the checks below index them by slot
     }
@@ -34,7 +35,7 @@ std::vector<std::string> InterestManager::validate_state() const {
         const EntityView& v = views_[slot];
         if ((view_alive_[slot] != 0) != e.alive ||
             (e.alive && (v.id != e.id || v.box.min != e.box.min || v.box.max != e.box.max ||
-                         v.prepared_current != e.prepared_is_current()))) {
+                         (view_fresh_[slot] != 0) != e.prepared_is_current()))) {
             problems.push_back("entity slot " + std::to_string(slot) +
                                ": its packed view disagrees with the slot");
         }

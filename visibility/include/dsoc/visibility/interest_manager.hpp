@@ -274,6 +274,15 @@ private:
                                bool cheapest);
     void test_entities(ClientSlot& c, const RegionVisibility& now, std::uint32_t viewer,
                        bool cheapest);
+    /// test_entities() without TBVs, with clusters: cluster by cluster, so that the
+    /// members of a hidden cluster take its answer in a pass of their own and the slot
+    /// pass visits only the others. The same answers: a pair's does not depend on the
+    /// order the pairs are tested in.
+    void test_entities_by_cluster(ClientSlot& c, const RegionVisibility& now, std::uint32_t viewer,
+                                  bool cheapest);
+    /// test_entities()'s own test of one alive entity that is not the viewer, holds no
+    /// hidden TBV and is not hidden with its cluster: its current box, quick or full.
+    void test_entity(ClientSlot& c, const RegionVisibility& now, std::uint32_t slot, bool cheapest);
     /// Step 6: the replication set, its level of detail, enter and leave.
     void decide(ClientSlot& c);
     /// decide()'s kept slots (keeps()) from `slot` on, sixteen at a time while sixteen
@@ -294,6 +303,8 @@ private:
     [[nodiscard]] bool takes_quick_test(const ClientSlot& c, std::uint32_t slot) const;
     /// (tick + slot) mod full_test_interval: the pair's full test is due at 0.
     [[nodiscard]] std::uint32_t full_test_phase(std::uint32_t slot) const;
+    /// full_test_phase(slot) == 0, from the column begin_update() filled.
+    [[nodiscard]] bool full_test_due(std::uint32_t slot) const;
 
     // TBVs.
     [[nodiscard]] int tbv_duration(const EntitySlot& e) const;
@@ -348,6 +359,12 @@ private:
     /// the entity's team (set_entity_team()).
     std::vector<std::uint8_t> view_alive_;
     std::vector<TeamId> view_team_;
+    /// By slot, beside views_: 1 when the entity's preparation (and its cluster's box) is
+    /// current, EntitySlot::prepared_is_current(): its box was not set after begin_update().
+    std::vector<std::uint8_t> view_fresh_;
+    /// By slot, at begin_update(): 1 when the pair's staggered full test is due this tick
+    /// (full_test_phase() is 0), for every client.
+    std::vector<std::uint8_t> full_test_due_;
     /// By entity slot, at begin_update(): the boxes prepared that tick (null when not
     /// alive), for test_entities_in_bulk(); empty when TBVs or clusters are on.
     PackedPreparedBoxes packed_boxes_;
@@ -363,6 +380,9 @@ private:
     std::vector<EntityCluster> clusters_;
     std::size_t cluster_count_ = 0;
     std::vector<std::uint32_t> cluster_of_; ///< by entity slot; kNoCluster when none
+    /// The slots below cluster_of_.size() in no cluster's members: empty at begin_update()
+    /// (an entity added there since is tested on its own).
+    std::vector<std::uint32_t> unlisted_slots_;
     std::unordered_map<std::uint64_t, std::uint32_t> cluster_cells_;
 };
 
