@@ -435,15 +435,15 @@ void InterestManager::test_entities_by_cluster(ClientSlot& c, const RegionVisibi
             continue;
         }
         // Hidden with the cluster, whose box holds each member's box of begin_update():
-        // the members whose box has not been set since. Every member takes the hint
-        // (one set since tries it first in its own test).
+        // the members whose box has not been set since (view_fresh_, 1 only when alive).
+        // Every member takes the hint (one set since tries it first in its own test).
         const std::uint32_t hint = c.cluster_hint[k];
         const bool lend_hint = config_.blocker_hints;
         for (const std::uint32_t slot : members) {
             if (lend_hint) {
                 c.hints[slot] = hint;
             }
-            if (view_alive_[slot] != 0 && view_fresh_[slot] != 0 && slot != viewer) {
+            if (view_fresh_[slot] != 0 && slot != viewer) {
                 c.states[slot] = PairState::hidden_expired;
             } else {
                 on_its_own(slot);

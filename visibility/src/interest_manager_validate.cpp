@@ -34,8 +34,8 @@ std::vector<std::string> InterestManager::validate_state() const {
         const EntitySlot& e = entities_[slot];
         const EntityView& v = views_[slot];
         if ((view_alive_[slot] != 0) != e.alive ||
-            (e.alive && (v.id != e.id || v.box.min != e.box.min || v.box.max != e.box.max ||
-                         (view_fresh_[slot] != 0) != e.prepared_is_current()))) {
+            (view_fresh_[slot] != 0) != (e.alive && e.prepared_is_current()) ||
+            (e.alive && (v.id != e.id || v.box.min != e.box.min || v.box.max != e.box.max))) {
             problems.push_back("entity slot " + std::to_string(slot) +
                                ": its packed view disagrees with the slot");
         }

@@ -359,8 +359,9 @@ private:
     /// the entity's team (set_entity_team()).
     std::vector<std::uint8_t> view_alive_;
     std::vector<TeamId> view_team_;
-    /// By slot, beside views_: 1 when the entity's preparation (and its cluster's box) is
-    /// current, EntitySlot::prepared_is_current(): its box was not set after begin_update().
+    /// By slot, beside views_: 1 when the slot holds an entity whose preparation (and its
+    /// cluster's box) is current, EntitySlot::prepared_is_current(): its box was not set
+    /// after begin_update(). 0 for a free slot.
     std::vector<std::uint8_t> view_fresh_;
     /// By slot, at begin_update(): 1 when the pair's staggered full test is due this tick
     /// (full_test_phase() is 0), for every client.
