@@ -793,6 +793,85 @@ TEST(InterestManagerClusters, BoxesSetAndEntitiesAddedAfterBeginUpdateAreTestedO
     EXPECT_TRUE(problems.empty()) << problems.front();
 }
 
+TEST(InterestManagerClusters, TheClusterPassGivesEntityByEntitySetsUnderRandomChurn) {
+    // The wall culler is exact, so a cluster's box is hidden exactly when every member's
+    // is: a manager with clusters (their pass, cluster by cluster) and one without
+    // (every entity tested on its own, slot by slot) must send the same sets, whatever
+    // is added, removed or moved before and after begin_update().
+    int builds = 0;
+    DSOCConfig with;
+    with.validate_state = true;
+    DSOCConfig without = with;
+    without.entity_cluster_size = 0.0f;
+    const Aabb world{glm::vec3(-4096.0f), glm::vec3(4096.0f)};
+    const auto wall = [&builds] { return std::make_unique<WallVisibility>(&builds); };
+    InterestManager clustered(with, world, wall);
+    InterestManager plain(without, world, wall);
+    std::mt19937 rng(47);
+    std::uniform_real_distribution<float> x(-1200.0f, 2400.0f);
+    std::uniform_real_distribution<float> y(-600.0f, 600.0f);
+    std::vector<EntityId> alive;
+    EntityId next_id = 2;
+    const auto add = [&] {
+        const Aabb box = box_at({x(rng), y(rng), 0});
+        ASSERT_TRUE(clustered.add_entity(next_id, EntityDesc{kHalf, {}}, box));
+        ASSERT_TRUE(plain.add_entity(next_id, EntityDesc{kHalf, {}}, box));
+        alive.push_back(next_id++);
+    };
+    const auto churn = [&](int adds, int removes, int moves) {
+        for (int i = 0; i < removes && !alive.empty(); ++i) {
+            const std::size_t k = rng() % alive.size();
+            ASSERT_TRUE(clustered.remove_entity(alive[k]));
+            ASSERT_TRUE(plain.remove_entity(alive[k]));
+            alive.erase(alive.begin() + static_cast<std::ptrdiff_t>(k));
+        }
+        for (int i = 0; i < adds; ++i) {
+            add();
+        }
+        for (int i = 0; i < moves && !alive.empty(); ++i) {
+            const EntityId id = alive[rng() % alive.size()];
+            const Aabb box = box_at({x(rng), y(rng), 0});
+            ASSERT_TRUE(clustered.set_entity_box(id, box));
+            ASSERT_TRUE(plain.set_entity_box(id, box));
+        }
+    };
+    ClientDesc d;
+    d.viewer = 1;
+    d.lookahead_ticks = 2;
+    for (InterestManager* m : {&clustered, &plain}) {
+        ASSERT_TRUE(m->add_entity(1, EntityDesc{kHalf, {}}, box_at({-500, 0, 0})));
+        ASSERT_TRUE(m->add_client(100, d));
+    }
+    for (int i = 0; i < 120; ++i) {
+        add();
+    }
+    std::size_t hidden_somewhere = 0;
+    for (std::uint64_t tick = 1; tick <= 60; ++tick) {
+        churn(2, 3, 20); // before begin_update(): a slot left free there
+        clustered.begin_update(tick);
+        plain.begin_update(tick);
+        // After: added in the free slots (and, every 5th tick, in new ones), and moved
+        // out of their clusters.
+        churn(tick % 5 == 0 ? 5 : 2, 1, 4);
+        clustered.update_client(0);
+        plain.update_client(0);
+        std::vector<EntityId> a = replicated_ids(clustered, 100);
+        std::vector<EntityId> b = replicated_ids(plain, 100);
+        std::sort(a.begin(), a.end());
+        std::sort(b.begin(), b.end());
+        ASSERT_EQ(a, b) << "tick " << tick;
+        hidden_somewhere += alive.size() + 1 - a.size();
+        for (InterestManager* m : {&clustered, &plain}) {
+            const auto problems = m->validate_state();
+            ASSERT_TRUE(problems.empty()) << problems.front();
+        }
+    }
+    // Something is culled, and the clusters did it.
+    EXPECT_GT(hidden_somewhere, 1000u);
+    EXPECT_GT(clustered.stats(100)->cluster_hits, 100u);
+    EXPECT_EQ(plain.stats(100)->cluster_tests, 0u);
+}
+
 /// The client (100) looks from x = -500 with no lookahead: a box is visible exactly when
 /// it reaches the viewer's side of the wall (min.x < 8).
 bool visible_from_the_left(const Aabb& box) {

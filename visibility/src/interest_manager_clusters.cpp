@@ -119,8 +119,8 @@ void InterestManager::test_clusters(ClientSlot& c, const RegionVisibility& now,
         if (seen == Visibility::occluded) {
             c.cluster_hidden[k] = 1;
             // What hides the cluster's box hides each member's (inside it): the member's
-            // own next test tries it first as well. Lent in test_entities()'s pass over
-            // the slots, in slot order, not here member by member across the pairs.
+            // own next test tries it first as well. Lent in test_entities()'s pass (with
+            // the member's own state), not here across the pairs.
             c.cluster_hint[k] = hint;
             ++c.stats.cluster_hits;
         }

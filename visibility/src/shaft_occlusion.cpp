@@ -127,7 +127,9 @@ bool shaft_blocked_by_box(const Aabb& region, const Aabb& box, const Aabb& solid
         if (_mm_movemask_ps(_mm_andnot_ps(inside, flat)) != 0) {
             return false;
         }
-        const __m128 inv = _mm_div_ps(one, d); // not read in flat lanes
+        // Flat lanes divide by zero (the flag is raised, no trap is enabled here) and
+        // their results are not read.
+        const __m128 inv = _mm_div_ps(one, d);
         const __m128 ta = _mm_mul_ps(_mm_sub_ps(slab_lo, from), inv);
         const __m128 tb = _mm_mul_ps(_mm_sub_ps(slab_hi, from), inv);
         const __m128 near = _mm_min_ps(tb, ta);      // ta > tb ? tb : ta
