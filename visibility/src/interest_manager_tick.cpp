@@ -471,7 +471,7 @@ void InterestManager::test_entity(ClientSlot& c, const RegionVisibility& now, st
         state = hidden ? PairState::hidden_expired : PairState::visible;
         return;
     }
-    const bool quick = state == PairState::visible && !full_test_due(slot); // takes_quick_test()
+    const bool quick = takes_quick_test(c, slot);
     const BoxTest kind = box_test_for(quick, config_.blocker_hints);
     // Without a prepared stage a preparation is the box alone (prepare()), which the
     // packed view holds: the same answers, and the slot, hundreds of bytes from the
