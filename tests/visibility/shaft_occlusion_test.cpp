@@ -309,6 +309,113 @@ TEST(ShaftOcclusion, TheShaftBoxTestAnswersAsItsSixtyFourSegments) {
     EXPECT_GT(open, 20000);
 }
 
+TEST(ShaftOcclusion, TheShaftPlaneTestAnswersAsItsSixtyFourSegments) {
+    // shaft_blocked_by() works each plane's start and rate terms out once and tests two
+    // segments at a time (with SSE2); shaft_blocked_by_scalar() is its twin, one
+    // segment_blocked_by() at a time. Solids of random planes around a centre (tilted,
+    // like a real map's brushes), and axis planes on a coarse lattice, where many
+    // segments run parallel to a plane, in it, or through a corner.
+    std::mt19937 rng(47);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    std::uniform_int_distribution<int> lattice(-12, 12);
+    std::uniform_int_distribution<int> extent(0, 6);
+    const auto lattice_box = [&](float step) {
+        glm::vec3 lo(0.0f);
+        glm::vec3 hi(0.0f);
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = step * static_cast<float>(lattice(rng));
+            hi[a] = lo[a] + step * static_cast<float>(extent(rng));
+        }
+        return Aabb{lo, hi};
+    };
+    const auto tilted_solid = [&](glm::vec3 centre, float radius, int faces) {
+        std::vector<Plane> planes;
+        while (static_cast<int>(planes.size()) < faces) {
+            const glm::vec3 n(unit(rng), unit(rng), unit(rng));
+            if (glm::length(n) < 0.2f) {
+                continue;
+            }
+            Plane p;
+            p.normal = glm::normalize(n);
+            p.distance = glm::dot(p.normal, centre) + radius;
+            planes.push_back(p);
+        }
+        return planes;
+    };
+    int blocked = 0;
+    int open = 0;
+    for (int i = 0; i < 60000; ++i) {
+        std::vector<Plane> planes;
+        Aabb region;
+        Aabb box;
+        if (i % 2 == 0) {
+            // A tilted solid between two boxes on either side of it, often hiding one
+            // from the other; 4 to 40 faces (over 32 take the scalar path).
+            const glm::vec3 centre(unit(rng) * 50.0f, unit(rng) * 50.0f, unit(rng) * 50.0f);
+            const int faces = i % 100 == 0 ? 40 : 4 + static_cast<int>(rng() % 14);
+            planes = tilted_solid(centre, 60.0f + 60.0f * unit(rng), faces);
+            const glm::vec3 axis =
+                glm::normalize(glm::vec3(unit(rng), unit(rng), 0.3f * unit(rng)));
+            const auto near = [&](float along) {
+                const glm::vec3 c =
+                    centre + axis * along + glm::vec3(unit(rng), unit(rng), unit(rng)) * 40.0f;
+                const glm::vec3 half(8.0f + 30.0f * std::abs(unit(rng)),
+                                     8.0f + 30.0f * std::abs(unit(rng)),
+                                     8.0f + 30.0f * std::abs(unit(rng)));
+                return Aabb{c - half, c + half};
+            };
+            region = near(-200.0f - 100.0f * std::abs(unit(rng)));
+            box = near(200.0f + 100.0f * std::abs(unit(rng)));
+        } else {
+            // Axis planes on a lattice: flat rates, starts of exactly zero.
+            const float step = i % 4 == 1 ? 16.0f : 1.0f / 64.0f;
+            Aabb solid = lattice_box(step);
+            solid.max += glm::vec3(step * 4.0f);
+            planes = ConvexPolyhedron::from_aabb(solid).planes();
+            region = lattice_box(step);
+            box = lattice_box(step);
+        }
+        const bool scalar = shaft_blocked_by_scalar(region, box, planes);
+        ASSERT_EQ(shaft_blocked_by(region, box, planes), scalar) << "case " << i;
+        (scalar ? blocked : open) += 1;
+    }
+    EXPECT_GT(blocked, 8000); // both answers are common
+    EXPECT_GT(open, 8000);
+    // Outside the contract (a world's boxes are finite) the two paths still answer alike,
+    // which needs every lane's min and max to pick as the scalar std::min and std::max
+    // do: infinite, NaN and subnormal sides, and planes with zero and subnormal normals.
+    const float inf = std::numeric_limits<float>::infinity();
+    const float tiny = std::numeric_limits<float>::denorm_min();
+    const std::array<float, 9> odd{0.0f, tiny, -tiny, inf, -inf, std::nanf(""), 5.0f, -5.0f, 40.0f};
+    int odd_blocked = 0;
+    for (int i = 0; i < 200000; ++i) {
+        const auto odd_box = [&] {
+            Aabb b;
+            for (int a = 0; a < 3; ++a) {
+                b.min[a] = odd[rng() % odd.size()];
+                b.max[a] = odd[rng() % odd.size()];
+            }
+            return b;
+        };
+        // A cube's faces and up to three odd planes, in a random order (a NaN time that
+        // the scalar path drops must not stick in a lane, whichever plane comes last).
+        std::vector<Plane> planes = ConvexPolyhedron::from_aabb({{-8, -8, -8}, {8, 8, 8}}).planes();
+        for (int k = static_cast<int>(rng() % 4); k > 0; --k) {
+            Plane p;
+            p.normal = glm::vec3(odd[rng() % odd.size()], odd[rng() % 3], odd[rng() % odd.size()]);
+            p.distance = odd[rng() % odd.size()];
+            planes.push_back(p);
+        }
+        std::shuffle(planes.begin(), planes.end(), rng);
+        const Aabb region = odd_box();
+        const Aabb box = odd_box();
+        const bool scalar = shaft_blocked_by_scalar(region, box, planes);
+        ASSERT_EQ(shaft_blocked_by(region, box, planes), scalar) << "odd case " << i;
+        odd_blocked += scalar ? 1 : 0;
+    }
+    EXPECT_GT(odd_blocked, 100);
+}
+
 TEST(ShaftOcclusion, APaperThinWallIsLeftToThePlanes) {
     // A wall 1/128 unit thick: shrunk by kBoxShrink it would turn inside out, a slab
     // 3/128 wide around it, and "block" segments that run beside it in the open. The
@@ -352,7 +459,8 @@ TEST(ShaftOcclusion, AHintNamesTheBlockerAndIsTriedFirst) {
     EXPECT_EQ(shaft.test(region, hidden, scratch, &hint), Visibility::occluded);
     EXPECT_EQ(hint, 1u);
     // A box the wall does not hide: the hint no longer names an occluder (with portals
-    // on it may hold the portal tests' skip count, see PortalOcclusion tests).
+    // on it may hold the portal tests' skip count, see PortalOcclusion tests; the wall
+    // blocks the centre segment, so without them it names a witness, tested below).
     hint = 1;
     EXPECT_EQ(shaft.test(region, Aabb{{50, 900, -20}, {80, 940, 20}}, scratch, &hint),
               Visibility::visible);
@@ -361,7 +469,146 @@ TEST(ShaftOcclusion, AHintNamesTheBlockerAndIsTriedFirst) {
     const ShaftOcclusion no_portals(world, grid, true, 0);
     EXPECT_EQ(no_portals.test(region, Aabb{{50, 900, -20}, {80, 940, 20}}, scratch, &hint),
               Visibility::visible);
+    EXPECT_NE(hint, 1u);
+    EXPECT_EQ(hint & ~ShaftOcclusion::kWitnessCorners, ShaftOcclusion::kWitnessHint) << hint;
+    // Clear of the wall on both sides: no witness (the next test walks the centre first).
+    hint = 0;
+    EXPECT_EQ(no_portals.test(region, Aabb{{-90, 900, -20}, {-60, 940, 20}}, scratch, &hint),
+              Visibility::visible);
     EXPECT_EQ(hint, 0u);
+}
+
+glm::vec3 corner_of(const Aabb& b, std::uint32_t k) {
+    return {(k & 1) ? b.max.x : b.min.x, (k & 2) ? b.max.y : b.min.y, (k & 4) ? b.max.z : b.min.z};
+}
+
+TEST(ShaftOcclusion, AWitnessSegmentShowsABoxInViewUntilItIsBlocked) {
+    OccluderWorld world;
+    world.add(ConvexPolyhedron::from_aabb({{-8, -500, -500}, {8, 500, 500}})); // wall
+    const OccluderGrid grid(world, 128.0f);
+    const ShaftOcclusion shaft(world, grid, true, 0);
+    ShaftOcclusion::Scratch scratch;
+    ReferenceVisibility ref(world);
+    const Aabb region{{-100, -40, -40}, {-50, 40, 40}};
+    const Aabb beside{{50, 900, -20}, {80, 940, 20}}; // the wall blocks the centre segment
+    std::uint32_t hint = 0;
+    ASSERT_EQ(shaft.test(region, beside, scratch, &hint), Visibility::visible);
+    ASSERT_EQ(hint & ~ShaftOcclusion::kWitnessCorners, ShaftOcclusion::kWitnessHint) << hint;
+    const std::uint32_t found = hint;
+    EXPECT_FALSE(
+        ref.segment_blocked(corner_of(region, (found >> 3) & 7u), corner_of(beside, found & 7u)));
+    // A clear witness answers by itself: one the search never picks (lower corners)
+    // stays as it is, where the full test would have found the search's own again.
+    const std::uint32_t lower = ShaftOcclusion::kWitnessHint | 0u << 3 | 0u;
+    ASSERT_FALSE(ref.segment_blocked(corner_of(region, 0), corner_of(beside, 0)));
+    ASSERT_NE(lower, found);
+    hint = lower;
+    EXPECT_EQ(shaft.test(region, beside, scratch, &hint), Visibility::visible);
+    EXPECT_EQ(hint, lower);
+    // Blocked now (the box moved behind the wall): dropped, and the full test proves
+    // the box hidden and names the wall.
+    const Aabb behind{{50, -20, -20}, {80, 20, 20}};
+    hint = found;
+    EXPECT_EQ(shaft.test(region, behind, scratch, &hint), Visibility::occluded);
+    EXPECT_EQ(hint, 1u);
+    // Blocked but the box still in view (it moved along the wall's end): dropped, and
+    // the full test answers `visible` with a witness of its own.
+    const Aabb along{{50, 820, -20}, {80, 860, 20}};
+    ASSERT_TRUE(ref.segment_blocked(corner_of(region, 0), corner_of(along, 0)));
+    hint = lower;
+    EXPECT_EQ(shaft.test(region, along, scratch, &hint), Visibility::visible);
+    EXPECT_NE(hint, lower);
+    EXPECT_EQ(shaft.test(region, along, scratch), Visibility::visible);
+}
+
+TEST(ShaftOcclusion, SearchesForAWitnessThatKeepFailingAreSpaced) {
+    // A low wall blocks the centre segment and a beam above it blocks the upper corners'
+    // segments; the box is seen through the slot between them (z 2 to 10), so it is
+    // visible with no witness among the corners searched.
+    OccluderWorld world;
+    world.add(ConvexPolyhedron::from_aabb({{-8, -500, -200}, {8, 500, 2}})); // low wall
+    world.add(ConvexPolyhedron::from_aabb({{-8, -500, 10}, {8, 500, 200}})); // beam
+    const OccluderGrid grid(world, 128.0f);
+    const ShaftOcclusion shaft(world, grid, true, 0);
+    ShaftOcclusion::Scratch scratch;
+    const Aabb region{{-100, -40, -40}, {-50, 40, 40}};
+    const Aabb box{{50, -20, -20}, {80, 20, 20}};
+    const auto no_witness = [](std::uint32_t level, std::uint32_t skips) {
+        return ShaftOcclusion::kWitnessHint | ShaftOcclusion::kNoWitness | level << 4 | skips;
+    };
+    // Searched and failed: skip the next one; then search and fail again: skip three,
+    // then seven, then fifteen, and stay there.
+    const std::array<std::uint32_t, 12> expected{
+        no_witness(0, 1), no_witness(0, 0), no_witness(1, 3), no_witness(1, 2),
+        no_witness(1, 1), no_witness(1, 0), no_witness(2, 7), no_witness(2, 6),
+        no_witness(2, 5), no_witness(2, 4), no_witness(2, 3), no_witness(2, 2)};
+    std::uint32_t hint = 0;
+    for (std::size_t t = 0; t < expected.size(); ++t) {
+        ASSERT_EQ(shaft.test(region, box, scratch, &hint), Visibility::visible) << "test " << t;
+        ASSERT_EQ(hint, expected[t]) << "test " << t;
+    }
+    hint = no_witness(3, 0);
+    EXPECT_EQ(shaft.test(region, box, scratch, &hint), Visibility::visible);
+    EXPECT_EQ(hint, no_witness(3, 15));
+    // The record is dropped once the box is hidden (the hint names the blocker) or its
+    // centre segment is clear.
+    hint = no_witness(1, 2);
+    EXPECT_EQ(shaft.test(region, Aabb{{50, -20, 100}, {80, 20, 140}}, scratch, &hint),
+              Visibility::occluded);
+    EXPECT_EQ(hint, 2u); // the beam
+    hint = no_witness(1, 2);
+    EXPECT_EQ(shaft.test(region, Aabb{{-90, 900, -20}, {-60, 940, 20}}, scratch, &hint),
+              Visibility::visible);
+    EXPECT_EQ(hint, 0u);
+}
+
+TEST(ShaftOcclusion, AWitnessNeverShowsWhatTheFullTestHides) {
+    // Pairs moving a few units a step, each carrying its hint from test to test as the
+    // manager does: a kept witness is a clear segment (brute force over every occluder)
+    // and the full test without a hint answers `visible` too, so witnesses cost no
+    // entity a full test would hide. Portal depths 0 and 2.
+    std::mt19937 rng(53);
+    std::uniform_real_distribution<float> step(-6.0f, 6.0f);
+    int kept = 0;
+    int hidden = 0;
+    int tests = 0;
+    for (int w = 0; w < 3; ++w) {
+        const TestWorld tw = w == 0   ? make_walls_world(41u, 60, 3000.0f)
+                             : w == 1 ? make_corridor_world(7, 4, 4)
+                                      : make_city_world(3, 4, 4);
+        const OccluderGrid grid(tw.world);
+        ReferenceVisibility ref(tw.world);
+        for (const int depth : {0, 2}) {
+            const ShaftOcclusion shaft(tw.world, grid, true, depth);
+            ShaftOcclusion::Scratch scratch;
+            testing::for_random_region_box_pairs(tw, rng, 150, [&](Aabb region, Aabb box) {
+                std::uint32_t hint = 0;
+                for (int t = 0; t < 12; ++t) {
+                    const glm::vec3 r(step(rng), step(rng), 0.0f);
+                    const glm::vec3 b(step(rng), step(rng), 0.0f);
+                    region = Aabb{region.min + r, region.max + r};
+                    box = Aabb{box.min + b, box.max + b};
+                    const std::uint32_t before = hint;
+                    const Visibility seen = shaft.test(region, box, scratch, &hint);
+                    ++tests;
+                    hidden += seen == Visibility::occluded ? 1 : 0;
+                    const bool witness =
+                        (before & ~ShaftOcclusion::kWitnessCorners) == ShaftOcclusion::kWitnessHint;
+                    if (!witness || seen != Visibility::visible || hint != before) {
+                        continue;
+                    }
+                    ++kept;
+                    ASSERT_FALSE(ref.segment_blocked(corner_of(region, (hint >> 3) & 7u),
+                                                     corner_of(box, hint & 7u)));
+                    ASSERT_EQ(shaft.test(region, box, scratch), Visibility::visible)
+                        << "world " << w << " depth " << depth;
+                }
+            });
+        }
+    }
+    EXPECT_GT(kept, tests / 50) << kept << " of " << tests;
+    EXPECT_GT(hidden, tests / 10) << hidden << " of " << tests;
+    std::printf("witnesses: %d tests, %d kept, %d hidden\n", tests, kept, hidden);
 }
 
 TEST(ShaftOcclusion, RandomRegionsNeverHideWhatAnEyeSees) {
@@ -382,8 +629,12 @@ TEST(ShaftOcclusion, RandomRegionsNeverHideWhatAnEyeSees) {
         testing::for_random_region_box_pairs(
             tw, rng, 700, [&](const Aabb& region, const Aabb& box) {
                 ++configurations;
-                // A stale or random blocker hint changes the work, never the guarantee.
-                std::uint32_t hint = static_cast<std::uint32_t>(rng() % (tw.world.size() + 1));
+                // A stale or random blocker or witness hint changes the work, never the
+                // guarantee.
+                std::uint32_t hint =
+                    rng() % 4 == 0
+                        ? ShaftOcclusion::kWitnessHint | static_cast<std::uint32_t>(rng() % 64)
+                        : static_cast<std::uint32_t>(rng() % (tw.world.size() + 1));
                 const bool hinted = shaft.test(region, box, scratch, &hint) == Visibility::occluded;
                 if (shaft.test(region, box, scratch) != Visibility::occluded && !hinted) {
                     return;

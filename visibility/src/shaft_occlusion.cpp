@@ -163,14 +163,13 @@ bool shaft_blocked_by_box(const Aabb& region, const Aabb& box, const Aabb& solid
 #endif
 }
 
-bool shaft_blocked_by(const Aabb& region, const Aabb& box, std::span<const Plane> planes) {
-    if (region.is_empty() || box.is_empty() || planes.empty()) {
-        return false;
-    }
-    const auto rc = corners(region);
-    const auto bc = corners(box);
-    // Cheap rejection first: a plane with every region corner and every box corner
-    // strictly outside it cannot be crossed by any segment between them.
+namespace {
+
+/// shaft_blocked_by()'s cheap rejection: a plane with every region corner and every box
+/// corner strictly outside it cannot be crossed by any segment between them.
+bool a_plane_leaves_every_corner_outside(std::span<const Plane> planes,
+                                         const std::array<glm::vec3, 8>& rc,
+                                         const std::array<glm::vec3, 8>& bc) {
     for (const Plane& p : planes) {
         bool all_outside = true;
         for (const auto& c : rc) {
@@ -180,8 +179,22 @@ bool shaft_blocked_by(const Aabb& region, const Aabb& box, std::span<const Plane
             all_outside = all_outside && p.signed_distance(c) >= 0.0f;
         }
         if (all_outside) {
-            return false;
+            return true;
         }
+    }
+    return false;
+}
+
+} // namespace
+
+bool shaft_blocked_by_scalar(const Aabb& region, const Aabb& box, std::span<const Plane> planes) {
+    if (region.is_empty() || box.is_empty() || planes.empty()) {
+        return false;
+    }
+    const auto rc = corners(region);
+    const auto bc = corners(box);
+    if (a_plane_leaves_every_corner_outside(planes, rc, bc)) {
+        return false;
     }
     for (const auto& a : rc) {
         for (const auto& b : bc) {
@@ -191,6 +204,110 @@ bool shaft_blocked_by(const Aabb& region, const Aabb& box, std::span<const Plane
         }
     }
     return true;
+}
+
+bool shaft_blocked_by(const Aabb& region, const Aabb& box, std::span<const Plane> planes) {
+#if defined(__SSE2__)
+    // segment_blocked_by() for the 64 corner segments, two at a time, with its doubles:
+    // - a segment's start term, dot(n, a) - d, depends on its region corner alone, and
+    //   each product n[axis] * (b[axis] - a[axis]) of its rate, dot(n, b - a), on one
+    //   side of the region and one of the box: each is worked out once (the starts per
+    //   region corner, when its segments come up), by the same IEEE operations, and
+    //   each rate is summed in glm::dot()'s order;
+    // - the two lanes are the box's min and max x, for one region corner and one choice
+    //   of the box's y and z sides;
+    // - each min and max picks as the scalar std::min or std::max does, NaN included.
+    // The answer is segment_blocked_by()'s for every segment: a segment's entry time
+    // only rises and its exit time only falls, so neither the plane at which a segment
+    // fails nor the segment that fails first changes it.
+    constexpr std::size_t kMaxPlanes = 32; // more (no brush has them) take the scalar path
+    if (planes.size() > kMaxPlanes) {
+        return shaft_blocked_by_scalar(region, box, planes);
+    }
+    if (region.is_empty() || box.is_empty() || planes.empty()) {
+        return false;
+    }
+    const auto rc = corners(region);
+    const auto bc = corners(box);
+    if (a_plane_leaves_every_corner_outside(planes, rc, bc)) {
+        return false;
+    }
+    // The differences b[axis] - a[axis] per [region side][box side], then per plane the
+    // products with the normal: the two x products side by side, the lanes.
+    double diff[3][2][2];
+    for (int axis = 0; axis < 3; ++axis) {
+        for (int r = 0; r < 2; ++r) {
+            for (int b = 0; b < 2; ++b) {
+                diff[axis][r][b] =
+                    static_cast<double>(b != 0 ? box.max[axis] : box.min[axis]) -
+                    static_cast<double>(r != 0 ? region.max[axis] : region.min[axis]);
+            }
+        }
+    }
+    struct Terms {
+        alignas(16) double rate_x[2][2];
+        double rate_y[2][2];
+        double rate_z[2][2];
+    };
+    std::array<Terms, kMaxPlanes> terms;
+    for (std::size_t k = 0; k < planes.size(); ++k) {
+        const glm::dvec3 n(planes[k].normal);
+        for (int r = 0; r < 2; ++r) {
+            for (int b = 0; b < 2; ++b) {
+                terms[k].rate_x[r][b] = n.x * diff[0][r][b];
+                terms[k].rate_y[r][b] = n.y * diff[1][r][b];
+                terms[k].rate_z[r][b] = n.z * diff[2][r][b];
+            }
+        }
+    }
+    std::array<double, kMaxPlanes> start; // dot(n, a) - d per plane, for one region corner a
+    const __m128d zero = _mm_setzero_pd();
+    const __m128d one = _mm_set1_pd(1.0);
+    const __m128d min_overlap = _mm_set1_pd(1.0e-6); // segment_blocked_by()'s
+    const __m128d sign = _mm_set1_pd(-0.0);
+    const __m128d all = _mm_castsi128_pd(_mm_set1_epi32(-1));
+    for (int i = 0; i < 8; ++i) {
+        const int rx = i & 1;
+        const int ry = (i >> 1) & 1;
+        const int rz = i >> 2;
+        const glm::dvec3 a(rc[static_cast<std::size_t>(i)]);
+        for (std::size_t k = 0; k < planes.size(); ++k) {
+            start[k] =
+                glm::dot(glm::dvec3(planes[k].normal), a) - static_cast<double>(planes[k].distance);
+        }
+        for (int yz = 0; yz < 4; ++yz) {
+            const int by = yz & 1;
+            const int bz = yz >> 1;
+            __m128d enter = zero;
+            __m128d exit = one;
+            for (std::size_t k = 0; k < planes.size(); ++k) {
+                const Terms& t = terms[k];
+                const __m128d rate =
+                    _mm_add_pd(_mm_add_pd(_mm_load_pd(t.rate_x[rx]), _mm_set1_pd(t.rate_y[ry][by])),
+                               _mm_set1_pd(t.rate_z[rz][bz]));
+                const __m128d from = _mm_set1_pd(start[k]);
+                const __m128d flat = _mm_cmpeq_pd(rate, zero);
+                if (_mm_movemask_pd(_mm_and_pd(flat, _mm_cmpge_pd(from, zero))) != 0) {
+                    return false; // parallel and outside or on the plane
+                }
+                // Flat lanes divide by zero (no trap is enabled) and are not read.
+                const __m128d at = _mm_div_pd(_mm_xor_pd(from, sign), rate); // -start / rate
+                const __m128d entering = _mm_cmplt_pd(rate, zero);
+                const __m128d leaving = _mm_andnot_pd(_mm_or_pd(flat, entering), all);
+                const __m128d rise = _mm_and_pd(entering, _mm_cmplt_pd(enter, at));
+                const __m128d fall = _mm_and_pd(leaving, _mm_cmplt_pd(at, exit));
+                enter = _mm_or_pd(_mm_and_pd(rise, at), _mm_andnot_pd(rise, enter));
+                exit = _mm_or_pd(_mm_and_pd(fall, at), _mm_andnot_pd(fall, exit));
+                if (_mm_movemask_pd(_mm_cmple_pd(_mm_sub_pd(exit, enter), min_overlap)) != 0) {
+                    return false;
+                }
+            }
+        }
+    }
+    return true;
+#else
+    return shaft_blocked_by_scalar(region, box, planes);
+#endif
 }
 
 namespace {
@@ -284,10 +401,56 @@ int ShaftOcclusion::hidden_through_portals(const Aabb& region, const Aabb& box, 
     return -1;
 }
 
+bool ShaftOcclusion::segment_clear(glm::vec3 a, glm::vec3 b, Scratch& scratch) const {
+    const SegmentRay ray = SegmentRay::between(a, b);
+    return !grid_->any_along_segment(a, b, scratch.grid, [&](OccluderId id) {
+        if (!segment_hits_box(a, ray.inv, world_->occluder(id).bounds())) {
+            return false;
+        }
+        const Aabb& solid = world_->solid_box(id);
+        return solid.is_empty() ? segment_blocked_by(a, b, world_->solid_planes(id))
+                                : segment_through_box(ray, solid);
+    });
+}
+
+std::uint32_t ShaftOcclusion::find_witness(const Aabb& region, const Aabb& box,
+                                           Scratch& scratch) const {
+    // Two segments beside the centre one, above it: from the region's upper corners to
+    // the box's same corners (entities stand on floors, and what blocks the centre is
+    // mostly an edge below the line of sight). Two corners find nearly every witness
+    // four do, for half the walks.
+    static constexpr std::array<std::uint32_t, 2> kCorners = {6, 7};
+    const auto rc = corners(region);
+    const auto bc = corners(box);
+    for (const std::uint32_t k : kCorners) {
+        if (segment_clear(rc[k], bc[k], scratch)) {
+            return kWitnessHint | k << 3 | k;
+        }
+    }
+    return 0;
+}
+
 Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch& scratch,
                                    std::uint32_t* hint, int depth, bool cheap_done) const {
     if (region.is_empty() || box.is_empty() || region.overlaps(box)) {
         return Visibility::visible;
+    }
+    // Temporal coherence for boxes in view: last time's clear segment, if still clear,
+    // shows this box visible too (the exact answer; the proofs below would all fail).
+    // A record of a failed search (kNoWitness) is kept aside for the end.
+    std::uint32_t no_witness = 0;
+    if (hint != nullptr && !cheap_done &&
+        (*hint & ~(kNoWitness | kWitnessCorners)) == kWitnessHint) {
+        if ((*hint & kNoWitness) != 0) {
+            no_witness = *hint;
+        } else {
+            const auto rc = corners(region);
+            const auto bc = corners(box);
+            if (segment_clear(rc[(*hint >> 3) & 7u], bc[*hint & 7u], scratch)) {
+                return Visibility::visible; // the hint stays
+            }
+        }
+        *hint = 0;
     }
     const auto blocks_shaft = [&](OccluderId id) {
         const Aabb& solid = world_->solid_box(id);
@@ -374,6 +537,7 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     // the first that hides the box (or at kMaxFullTests): the rest of a long segment
     // (across a city, say) is not walked for nothing.
     bool one_hides = false;
+    bool centre_blocked = false;
     grid_->any_along_segment(from, to, scratch.grid, [&](OccluderId id) {
         const Aabb& ob = world_->occluder(id).bounds();
         if (!segment_hits_box(from, centre.inv, ob)) {
@@ -389,6 +553,7 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
                                : segment_through_box(centre, solid))) {
             return false;
         }
+        centre_blocked = true;
         if (!cheap_done && id != tried && blocks_shaft(id)) {
             if (hint != nullptr) {
                 *hint = id + 1;
@@ -449,6 +614,20 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     }
     if (hint != nullptr && skips_left > 1) {
         *hint = kPortalHint | 3u << 29 | (skips_left - 1);
+    } else if (hint != nullptr && centre_blocked && !cheap_done) {
+        // Visible, yet the centre segment is blocked: a clear segment beside it spares
+        // the next test these failed proofs (none is looked for when the centre is
+        // clear: the next test walks it first), unless searches keep failing.
+        const std::uint32_t level = (no_witness >> 4) & 3u;
+        const std::uint32_t skips = no_witness & 15u;
+        if (no_witness != 0 && skips > 0) {
+            *hint = kWitnessHint | kNoWitness | level << 4 | (skips - 1);
+        } else if (const std::uint32_t found = find_witness(region, box, scratch); found != 0) {
+            *hint = found;
+        } else {
+            const std::uint32_t next = no_witness != 0 ? std::min(level + 1, 3u) : 0u;
+            *hint = kWitnessHint | kNoWitness | next << 4 | ((2u << next) - 1);
+        }
     }
     return Visibility::visible;
 }

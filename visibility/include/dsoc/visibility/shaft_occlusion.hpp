@@ -26,9 +26,16 @@
 namespace dsoc::visibility {
 
 /// True when every segment from a point of `region` to a point of `box` passes
-/// through the interior of the convex solid { x : dot(n_i, x) <= d_i }.
+/// through the interior of the convex solid { x : dot(n_i, x) <= d_i }: the 64 corner
+/// segments each pass segment_blocked_by(). With SSE2, two segments at a time; the
+/// answers are shaft_blocked_by_scalar()'s.
 [[nodiscard]] bool shaft_blocked_by(const Aabb& region, const Aabb& box,
                                     std::span<const Plane> planes);
+
+/// shaft_blocked_by() one segment at a time: the path without SSE2, and the twin the
+/// vector path is tested and timed against.
+[[nodiscard]] bool shaft_blocked_by_scalar(const Aabb& region, const Aabb& box,
+                                           std::span<const Plane> planes);
 
 /// The same for an axis-aligned solid box, in float: every segment passes through the
 /// interior of `solid` shrunk by kBoxShrink on every side (the shrink absorbs float
@@ -129,11 +136,14 @@ public:
         int portal_budget = 0; ///< sub-tests left for the current top-level test
     };
 
-    /// `hint` (optional, in/out): what proved the box hidden last time, tried first:
-    /// 0 (nothing), 1 + the id of an occluder, or kPortalHint | axis << 29 | id for the
+    /// `hint` (optional, in/out): what decided the box last time, tried first: 0
+    /// (nothing), 1 + the id of an occluder, or kPortalHint | axis << 29 | id for the
     /// plane through the middle of occluder `id` across `axis`, whose fusion test, then
-    /// portal tests, proved it. Written here when one of those proves the box hidden;
-    /// reset to 0 otherwise.
+    /// portal tests, proved it hidden; or a witness (kWitnessHint), a segment found clear
+    /// when the box was last shown visible. Written here when one of the proofs shows
+    /// the box hidden, or when a visible box's centre segment was blocked and a witness
+    /// is found; reset to 0 otherwise. A hint orders the work and never changes what an
+    /// answer promises: a stale one is tried and dropped.
     [[nodiscard]] Visibility test(const Aabb& region, const Aabb& box, Scratch& scratch,
                                   std::uint32_t* hint = nullptr) const;
 
@@ -146,6 +156,20 @@ public:
     static constexpr std::size_t kMaxCutPlanes = 3;
     static constexpr int kDefaultPortalDepth = 2;
     static constexpr std::uint32_t kPortalHint = 0x80000000u;
+    /// Tag of a witness hint, kWitnessHint | r << 3 | b: the segment from corner r of the
+    /// region to corner b of the box (bit 0 of a corner is max x, bit 1 max y, bit 2 max
+    /// z). While that segment stays clear it shows the box visible (some eye of the
+    /// region sees a point of the box), so a box that stays in view costs one walk a test
+    /// instead of failing the proofs again; the first test that finds it blocked drops it
+    /// and runs the full test. Worlds hold fewer than 2^29 occluders, so no occluder or
+    /// portal hint has these top bits.
+    static constexpr std::uint32_t kWitnessHint = 0x60000000u;
+    static constexpr std::uint32_t kWitnessCorners = 0x3fu; ///< r << 3 | b
+    /// kWitnessHint | kNoWitness | level << 4 | skips: the last search found no witness,
+    /// so the pair's next `skips` searches are skipped; a search that fails after them
+    /// skips 2^(level + 2) - 1 (3, 7, then 15): on closed maps few boxes in view have a
+    /// clear corner segment above the blocked centre, and a failed search costs walks.
+    static constexpr std::uint32_t kNoWitness = 0x40u;
     /// Boxes with a longer side skip the portal tests: TBVs of fast entities and boxes of
     /// entity clusters seldom pass them and cost the most (on a generated city, 200
     /// viewers, 2,000 bots: dsoc 738 -> 308 µs per client-tick, the same sets; oa_dm4
@@ -167,6 +191,13 @@ private:
     /// fusion tests of this pair already failed, only the portal tests are left.
     [[nodiscard]] Visibility test_at(const Aabb& region, const Aabb& box, Scratch& scratch,
                                      std::uint32_t* hint, int depth, bool cheap_done = false) const;
+    /// True when no occluder blocks the segment a-b (the centre segment's test, applied
+    /// to every occluder the grid walk finds along it).
+    [[nodiscard]] bool segment_clear(glm::vec3 a, glm::vec3 b, Scratch& scratch) const;
+    /// The witness hint of the first clear one of a few corner segments from `region`
+    /// to `box`, or 0 when they are all blocked.
+    [[nodiscard]] std::uint32_t find_witness(const Aabb& region, const Aabb& box,
+                                             Scratch& scratch) const;
     /// True when, for one of scratch.planes, the cut occluders cover it (fusion), or
     /// every open part is hidden from `region` or hides `box` (sub-tests at `depth` - 1).
     /// Returns the index in scratch.planes of the plane that proved it, or -1.
