@@ -15,6 +15,11 @@ namespace dsoc::visibility {
 
 namespace {
 
+float max_side(const Aabb& b) {
+    const glm::vec3 extent = b.size();
+    return std::max(extent.x, std::max(extent.y, extent.z));
+}
+
 std::array<glm::vec3, 8> corners(const Aabb& b) {
     std::array<glm::vec3, 8> c;
     for (int i = 0; i < 8; ++i) {
@@ -322,9 +327,8 @@ std::uint32_t portal_plane_hint(int axis, OccluderId id) {
 Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& scratch,
                                 std::uint32_t* hint) const {
     scratch.portal_budget = kPortalBudget;
-    const glm::vec3 extent = box.size();
-    const bool small = std::max(extent.x, std::max(extent.y, extent.z)) <= kMaxPortalBoxSide;
-    return test_at(region, box, scratch, hint, small ? portal_depth_ : 0);
+    return test_at(region, box, scratch, hint,
+                   max_side(box) <= kMaxPortalBoxSide ? portal_depth_ : 0);
 }
 
 int ShaftOcclusion::hidden_through_portals(const Aabb& region, const Aabb& box, Scratch& scratch,
@@ -614,10 +618,12 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     }
     if (hint != nullptr && skips_left > 1) {
         *hint = kPortalHint | 3u << 29 | (skips_left - 1);
-    } else if (hint != nullptr && centre_blocked && !cheap_done) {
+    } else if (hint != nullptr && centre_blocked && !cheap_done &&
+               max_side(box) <= kMaxPortalBoxSide) {
         // Visible, yet the centre segment is blocked: a clear segment beside it spares
         // the next test these failed proofs (none is looked for when the centre is
-        // clear: the next test walks it first), unless searches keep failing.
+        // clear: the next test walks it first), unless searches keep failing. Not for
+        // large boxes (entity clusters, TBVs), whose hints are not kept while visible.
         const std::uint32_t level = (no_witness >> 4) & 3u;
         const std::uint32_t skips = no_witness & 15u;
         if (no_witness != 0 && skips > 0) {

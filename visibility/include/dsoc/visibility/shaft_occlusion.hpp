@@ -170,10 +170,11 @@ public:
     /// skips 2^(level + 2) - 1 (3, 7, then 15): on closed maps few boxes in view have a
     /// clear corner segment above the blocked centre, and a failed search costs walks.
     static constexpr std::uint32_t kNoWitness = 0x40u;
-    /// Boxes with a longer side skip the portal tests: TBVs of fast entities and boxes of
-    /// entity clusters seldom pass them and cost the most (on a generated city, 200
-    /// viewers, 2,000 bots: dsoc 738 -> 308 µs per client-tick, the same sets; oa_dm4
-    /// unchanged). Only the queried box counts, not the portals of the sub-tests.
+    /// Boxes with a longer side skip the portal tests (TBVs of fast entities and boxes
+    /// of entity clusters seldom pass them and cost the most: on a generated city, 200
+    /// viewers, 2,000 bots, dsoc 738 -> 308 µs per client-tick, the same sets; oa_dm4
+    /// unchanged) and the search for a witness (their hints are not kept while they are
+    /// visible). Only the queried box counts, not the portals of the sub-tests.
     /// [Units: world units]
     static constexpr float kMaxPortalBoxSide = 200.0f;
     /// Hinted queries after a failed portal test that skip the portal tests.
