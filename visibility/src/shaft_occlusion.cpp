@@ -15,9 +15,10 @@ namespace dsoc::visibility {
 
 namespace {
 
-float max_side(const Aabb& b) {
+/// Boxes up to kMaxPortalBoxSide: they get portal tests and witness searches.
+bool small_box(const Aabb& b) {
     const glm::vec3 extent = b.size();
-    return std::max(extent.x, std::max(extent.y, extent.z));
+    return std::max(extent.x, std::max(extent.y, extent.z)) <= ShaftOcclusion::kMaxPortalBoxSide;
 }
 
 std::array<glm::vec3, 8> corners(const Aabb& b) {
@@ -327,8 +328,7 @@ std::uint32_t portal_plane_hint(int axis, OccluderId id) {
 Visibility ShaftOcclusion::test(const Aabb& region, const Aabb& box, Scratch& scratch,
                                 std::uint32_t* hint) const {
     scratch.portal_budget = kPortalBudget;
-    return test_at(region, box, scratch, hint,
-                   max_side(box) <= kMaxPortalBoxSide ? portal_depth_ : 0);
+    return test_at(region, box, scratch, hint, small_box(box) ? portal_depth_ : 0);
 }
 
 int ShaftOcclusion::hidden_through_portals(const Aabb& region, const Aabb& box, Scratch& scratch,
@@ -406,14 +406,30 @@ int ShaftOcclusion::hidden_through_portals(const Aabb& region, const Aabb& box, 
 }
 
 bool ShaftOcclusion::segment_clear(glm::vec3 a, glm::vec3 b, Scratch& scratch) const {
+    // Every occluder grown by kWitnessMargin: its bounds and axis box on every side, its
+    // planes moved out (a brush with more planes than the buffer counts as in the way).
+    constexpr float m = kWitnessMargin;
     const SegmentRay ray = SegmentRay::between(a, b);
+    const auto grown = [](const Aabb& box) {
+        return Aabb{box.min - glm::vec3(m), box.max + glm::vec3(m)};
+    };
     return !grid_->any_along_segment(a, b, scratch.grid, [&](OccluderId id) {
-        if (!segment_hits_box(a, ray.inv, world_->occluder(id).bounds())) {
+        if (!segment_hits_box(a, ray.inv, grown(world_->occluder(id).bounds()))) {
             return false;
         }
         const Aabb& solid = world_->solid_box(id);
-        return solid.is_empty() ? segment_blocked_by(a, b, world_->solid_planes(id))
-                                : segment_through_box(ray, solid);
+        if (!solid.is_empty()) {
+            return segment_hits_box(a, ray.inv, grown(solid));
+        }
+        const std::span<const Plane> planes = world_->solid_planes(id);
+        std::array<Plane, 32> moved;
+        if (planes.size() > moved.size()) {
+            return true;
+        }
+        for (std::size_t k = 0; k < planes.size(); ++k) {
+            moved[k] = {planes[k].normal, planes[k].distance + m};
+        }
+        return segment_blocked_by(a, b, std::span<const Plane>(moved.data(), planes.size()));
     });
 }
 
@@ -439,8 +455,9 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     if (region.is_empty() || box.is_empty() || region.overlaps(box)) {
         return Visibility::visible;
     }
-    // Temporal coherence for boxes in view: last time's clear segment, if still clear,
-    // shows this box visible too (the exact answer; the proofs below would all fail).
+    // Temporal coherence for boxes in view: last time's clear segment, if still clear
+    // (of every occluder by kWitnessMargin), shows this box visible too: the exact
+    // answer, since every proof below would fail.
     // A record of a failed search (kNoWitness) is kept aside for the end.
     std::uint32_t no_witness = 0;
     if (hint != nullptr && !cheap_done &&
@@ -618,8 +635,7 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     }
     if (hint != nullptr && skips_left > 1) {
         *hint = kPortalHint | 3u << 29 | (skips_left - 1);
-    } else if (hint != nullptr && centre_blocked && !cheap_done &&
-               max_side(box) <= kMaxPortalBoxSide) {
+    } else if (hint != nullptr && centre_blocked && !cheap_done && small_box(box)) {
         // Visible, yet the centre segment is blocked: a clear segment beside it spares
         // the next test these failed proofs (none is looked for when the centre is
         // clear: the next test walks it first), unless searches keep failing. Not for

@@ -141,9 +141,10 @@ public:
     /// plane through the middle of occluder `id` across `axis`, whose fusion test, then
     /// portal tests, proved it hidden; or a witness (kWitnessHint), a segment found clear
     /// when the box was last shown visible. Written here when one of the proofs shows
-    /// the box hidden, or when a visible box's centre segment was blocked and a witness
-    /// is found; reset to 0 otherwise. A hint orders the work and never changes what an
-    /// answer promises: a stale one is tried and dropped.
+    /// the box hidden; when a visible box's centre segment was blocked, to a witness or
+    /// a record of the search (kNoWitness); after failed portal tests, to their skip
+    /// count (kPortalSkips); to 0 otherwise. A hint orders the work and never changes
+    /// what an answer promises: a stale one is tried and dropped.
     [[nodiscard]] Visibility test(const Aabb& region, const Aabb& box, Scratch& scratch,
                                   std::uint32_t* hint = nullptr) const;
 
@@ -158,17 +159,24 @@ public:
     static constexpr std::uint32_t kPortalHint = 0x80000000u;
     /// Tag of a witness hint, kWitnessHint | r << 3 | b: the segment from corner r of the
     /// region to corner b of the box (bit 0 of a corner is max x, bit 1 max y, bit 2 max
-    /// z). While that segment stays clear it shows the box visible (some eye of the
-    /// region sees a point of the box), so a box that stays in view costs one walk a test
-    /// instead of failing the proofs again; the first test that finds it blocked drops it
-    /// and runs the full test. Worlds hold fewer than 2^29 occluders, so no occluder or
-    /// portal hint has these top bits.
+    /// z). While that segment stays clear of every occluder by kWitnessMargin it shows
+    /// the box visible (some eye of the region sees a point of the box, and no proof,
+    /// with its tolerances, could hide it), so a box that stays in view costs one walk a
+    /// test instead of failing the proofs again; the first test that finds it blocked
+    /// drops it and runs the full test. Worlds hold fewer than 2^29 occluders, so no
+    /// occluder or portal hint has these top bits.
     static constexpr std::uint32_t kWitnessHint = 0x60000000u;
     static constexpr std::uint32_t kWitnessCorners = 0x3fu; ///< r << 3 | b
+    /// How far a witness keeps from every occluder: more than the proofs' own slack
+    /// (kBoxShrink, kPortalPad, CutPlaneFusion::kNoiseWidth), so that none of them can
+    /// call hidden a box a witness shows. [Units: world units]
+    static constexpr float kWitnessMargin = 1.0f / 16.0f;
     /// kWitnessHint | kNoWitness | level << 4 | skips: the last search found no witness,
     /// so the pair's next `skips` searches are skipped; a search that fails after them
-    /// skips 2^(level + 2) - 1 (3, 7, then 15): on closed maps few boxes in view have a
+    /// skips 2^(level + 1) - 1 (3, 7, then 15): on closed maps few boxes in view have a
     /// clear corner segment above the blocked centre, and a failed search costs walks.
+    /// With portal tests, failed ones put their skip count in the hint instead, so there
+    /// a search that keeps failing is tried every other test.
     static constexpr std::uint32_t kNoWitness = 0x40u;
     /// Boxes with a longer side skip the portal tests (TBVs of fast entities and boxes
     /// of entity clusters seldom pass them and cost the most: on a generated city, 200
@@ -192,8 +200,8 @@ private:
     /// fusion tests of this pair already failed, only the portal tests are left.
     [[nodiscard]] Visibility test_at(const Aabb& region, const Aabb& box, Scratch& scratch,
                                      std::uint32_t* hint, int depth, bool cheap_done = false) const;
-    /// True when no occluder blocks the segment a-b (the centre segment's test, applied
-    /// to every occluder the grid walk finds along it).
+    /// True when the segment a-b keeps kWitnessMargin from every occluder the grid walk
+    /// finds along it.
     [[nodiscard]] bool segment_clear(glm::vec3 a, glm::vec3 b, Scratch& scratch) const;
     /// The witness hint of the first clear one of a few corner segments from `region`
     /// to `box`, or 0 when they are all blocked.
