@@ -14,7 +14,9 @@
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
@@ -276,17 +278,53 @@ void BM_BspBuild(benchmark::State& state) {
 }
 BENCHMARK(BM_BspBuild)->Arg(10)->Arg(32)->Unit(benchmark::kMillisecond);
 
-/// One run, one ratio: shaft_blocked_by_box() (four pairs of sides at a time with
-/// SSE2) against shaft_blocked_by_box_scalar() over the same 4,096 triples, timed back
-/// to back: an eye region, a player box 200-2,000 units away along x, and a wall
-/// between them whose extent across the shaft is random (most triples blocked, as the
-/// hint's retry of a hidden pair mostly is; the others stop at the first check that
-/// fails). Counters: ns per call each way, the speed-up, the blocked share.
-void BM_ShaftBlockedByBox(benchmark::State& state) {
-    struct Triple {
-        Aabb region, box, solid;
-    };
-    std::vector<Triple> triples;
+/// Times a vector path `fast` and its scalar twin `twin` (each bool(const Triple&)) over
+/// the same triples back to back, each iteration: counters ns per call each way, the
+/// speed-up and the share of triples blocked. Answers that differ for any triple end
+/// the run with an error.
+template <class Triple, class Fast, class Twin>
+void time_against_twin(benchmark::State& state, const std::vector<Triple>& triples, Fast&& fast,
+                       Twin&& twin) {
+    std::vector<std::uint8_t> fast_answers(triples.size());
+    std::vector<std::uint8_t> twin_answers(triples.size());
+    double fast_ns = 0.0;
+    double twin_ns = 0.0;
+    using clock = std::chrono::steady_clock;
+    for (auto _ : state) {
+        const auto t0 = clock::now();
+        for (std::size_t i = 0; i < triples.size(); ++i) {
+            fast_answers[i] = fast(triples[i]) ? 1 : 0;
+        }
+        const auto t1 = clock::now();
+        for (std::size_t i = 0; i < triples.size(); ++i) {
+            twin_answers[i] = twin(triples[i]) ? 1 : 0;
+        }
+        const auto t2 = clock::now();
+        if (fast_answers != twin_answers) {
+            state.SkipWithError("the two paths disagree");
+            break;
+        }
+        fast_ns += std::chrono::duration<double, std::nano>(t1 - t0).count();
+        twin_ns += std::chrono::duration<double, std::nano>(t2 - t1).count();
+    }
+    const double calls =
+        static_cast<double>(state.iterations()) * static_cast<double>(triples.size());
+    state.counters["ns_per_call"] = fast_ns / calls;
+    state.counters["scalar_ns_per_call"] = twin_ns / calls;
+    state.counters["speedup"] = twin_ns / fast_ns;
+    state.counters["blocked"] =
+        static_cast<double>(std::count(fast_answers.begin(), fast_answers.end(), 1)) /
+        static_cast<double>(triples.size());
+}
+
+/// BM_ShaftBlockedBy*'s 4,096 triples (the same each run): an eye region, a player box
+/// 200-2,000 units away along x, and a wall between them whose extent across the shaft
+/// is random.
+struct ShaftTriple {
+    Aabb region, box, wall;
+};
+std::vector<ShaftTriple> shaft_triples() {
+    std::vector<ShaftTriple> triples;
     std::mt19937 rng(11);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
     for (int i = 0; i < 4096; ++i) {
@@ -302,43 +340,28 @@ void BM_ShaftBlockedByBox(benchmark::State& state) {
              Aabb{glm::vec3(x, y - half, -16.0f),
                   glm::vec3(x + 16.0f, y + half, 80.0f + 200.0f * unit(rng))}});
     }
-    const auto count_blocked = [&](auto&& blocked_by) {
-        int n = 0;
-        for (const Triple& t : triples) {
-            n += blocked_by(t.region, t.box, t.solid) ? 1 : 0;
-        }
-        return n;
-    };
-    double vector_ns = 0.0;
-    double scalar_ns = 0.0;
-    int blocked = 0;
-    using clock = std::chrono::steady_clock;
-    for (auto _ : state) {
-        const auto t0 = clock::now();
-        blocked = count_blocked(shaft_blocked_by_box);
-        const auto t1 = clock::now();
-        const int twin = count_blocked(shaft_blocked_by_box_scalar);
-        const auto t2 = clock::now();
-        if (twin != blocked) {
-            state.SkipWithError("the two paths disagree");
-            break;
-        }
-        vector_ns += std::chrono::duration<double, std::nano>(t1 - t0).count();
-        scalar_ns += std::chrono::duration<double, std::nano>(t2 - t1).count();
-    }
-    const double calls =
-        static_cast<double>(state.iterations()) * static_cast<double>(triples.size());
-    state.counters["ns_per_call"] = vector_ns / calls;
-    state.counters["scalar_ns_per_call"] = scalar_ns / calls;
-    state.counters["speedup"] = scalar_ns / vector_ns;
-    state.counters["blocked"] = static_cast<double>(blocked) / static_cast<double>(triples.size());
+    return triples;
+}
+
+/// One run, one ratio: shaft_blocked_by_box() (four pairs of sides at a time with
+/// SSE2) against shaft_blocked_by_box_scalar() over the same 4,096 triples, timed back
+/// to back: an eye region, a player box 200-2,000 units away along x, and a wall
+/// between them whose extent across the shaft is random (most triples blocked, as the
+/// hint's retry of a hidden pair mostly is; the others stop at the first check that
+/// fails). Counters: ns per call each way, the speed-up, the blocked share.
+void BM_ShaftBlockedByBox(benchmark::State& state) {
+    const std::vector<ShaftTriple> triples = shaft_triples();
+    time_against_twin(
+        state, triples,
+        [](const ShaftTriple& t) { return shaft_blocked_by_box(t.region, t.box, t.wall); },
+        [](const ShaftTriple& t) { return shaft_blocked_by_box_scalar(t.region, t.box, t.wall); });
 }
 BENCHMARK(BM_ShaftBlockedByBox);
 
 /// One run, one ratio: shaft_blocked_by() on a solid given by planes (two corner
 /// segments at a time with SSE2) against shaft_blocked_by_scalar(), over the same
-/// 4,096 triples timed back to back: BM_ShaftBlockedByBox's eye regions and player
-/// boxes, and its walls turned about the vertical by up to 30 degrees with a seventh,
+/// 4,096 triples timed back to back: BM_ShaftBlockedByBox's (shaft_triples()), the walls
+/// turned about the vertical by up to 30 degrees with a seventh,
 /// bevelled face (a real map's brushes that are not axis boxes take this path).
 void BM_ShaftBlockedByPlanes(benchmark::State& state) {
     struct Triple {
@@ -346,17 +369,10 @@ void BM_ShaftBlockedByPlanes(benchmark::State& state) {
         std::vector<Plane> solid;
     };
     std::vector<Triple> triples;
-    std::mt19937 rng(11);
+    std::mt19937 rng(12);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-    for (int i = 0; i < 4096; ++i) {
-        const glm::vec3 eye(0.0f, 300.0f * unit(rng), 40.0f + 20.0f * unit(rng));
-        const glm::vec3 eye_reach(32.0f, 32.0f, 8.0f);
-        const glm::vec3 at(200.0f + 1800.0f * unit(rng), 300.0f * unit(rng), 24.0f);
-        const float x = 0.3f * at.x + 0.4f * at.x * unit(rng);
-        const float half = 20.0f + 200.0f * unit(rng);
-        const float y = 150.0f + 100.0f * (unit(rng) - 0.5f);
-        const Aabb wall{glm::vec3(x, y - half, -16.0f),
-                        glm::vec3(x + 16.0f, y + half, 80.0f + 200.0f * unit(rng))};
+    for (const ShaftTriple& t : shaft_triples()) {
+        const Aabb& wall = t.wall;
         const glm::vec3 c = wall.center();
         const float angle = (unit(rng) - 0.5f) * 1.0472f; // +-30 degrees
         const float cs = std::cos(angle);
@@ -372,41 +388,11 @@ void BM_ShaftBlockedByPlanes(benchmark::State& state) {
                                  sn * p.normal.x + cs * p.normal.y, p.normal.z);
             p.distance = glm::dot(p.normal, c) + offset;
         }
-        triples.push_back(
-            {Aabb{eye - eye_reach, eye + eye_reach},
-             Aabb{at - glm::vec3(15.0f, 15.0f, 24.0f), at + glm::vec3(15.0f, 15.0f, 32.0f)},
-             std::move(planes)});
+        triples.push_back({t.region, t.box, std::move(planes)});
     }
-    const auto count_blocked = [&](auto&& blocked_by) {
-        int n = 0;
-        for (const Triple& t : triples) {
-            n += blocked_by(t.region, t.box, std::span<const Plane>(t.solid)) ? 1 : 0;
-        }
-        return n;
-    };
-    double vector_ns = 0.0;
-    double scalar_ns = 0.0;
-    int blocked = 0;
-    using clock = std::chrono::steady_clock;
-    for (auto _ : state) {
-        const auto t0 = clock::now();
-        blocked = count_blocked(shaft_blocked_by);
-        const auto t1 = clock::now();
-        const int twin = count_blocked(shaft_blocked_by_scalar);
-        const auto t2 = clock::now();
-        if (twin != blocked) {
-            state.SkipWithError("the two paths disagree");
-            break;
-        }
-        vector_ns += std::chrono::duration<double, std::nano>(t1 - t0).count();
-        scalar_ns += std::chrono::duration<double, std::nano>(t2 - t1).count();
-    }
-    const double calls =
-        static_cast<double>(state.iterations()) * static_cast<double>(triples.size());
-    state.counters["ns_per_call"] = vector_ns / calls;
-    state.counters["scalar_ns_per_call"] = scalar_ns / calls;
-    state.counters["speedup"] = scalar_ns / vector_ns;
-    state.counters["blocked"] = static_cast<double>(blocked) / static_cast<double>(triples.size());
+    time_against_twin(
+        state, triples, [](const Triple& t) { return shaft_blocked_by(t.region, t.box, t.solid); },
+        [](const Triple& t) { return shaft_blocked_by_scalar(t.region, t.box, t.solid); });
 }
 BENCHMARK(BM_ShaftBlockedByPlanes);
 

@@ -129,6 +129,17 @@ bool every_corner_segment_through(const Aabb& region, const Aabb& box, const Aab
     return true;
 }
 
+/// A box whose six sides are each drawn from `values` (min and max unordered).
+template <std::size_t N>
+Aabb box_of_values(const std::array<float, N>& values, std::mt19937& rng) {
+    Aabb b;
+    for (int a = 0; a < 3; ++a) {
+        b.min[a] = values[rng() % N];
+        b.max[a] = values[rng() % N];
+    }
+    return b;
+}
+
 TEST(ShaftOcclusion, TheShaftBoxTestAnswersAsItsSixtyFourSegments) {
     // shaft_blocked_by_box() works each axis's values out once per pair of sides (four
     // at a time with SSE2; shaft_blocked_by_box_scalar() one at a time); their slow twin
@@ -290,14 +301,7 @@ TEST(ShaftOcclusion, TheShaftBoxTestAnswersAsItsSixtyFourSegments) {
     const float inf = std::numeric_limits<float>::infinity();
     const std::array<float, 8> odd{0.0f, tiny, -tiny, inf, -inf, std::nanf(""), 5.0f, -5.0f};
     for (int i = 0; i < 100000; ++i) {
-        const auto odd_box = [&] {
-            Aabb b;
-            for (int a = 0; a < 3; ++a) {
-                b.min[a] = odd[rng() % odd.size()];
-                b.max[a] = odd[rng() % odd.size()];
-            }
-            return b;
-        };
+        const auto odd_box = [&] { return box_of_values(odd, rng); };
         const Aabb solid{{-8.0f, -8.0f, -kBoxShrink}, {kBoxShrink, 8.0f, 8.0f}};
         const Aabb region = odd_box();
         const Aabb box = odd_box();
@@ -392,14 +396,7 @@ TEST(ShaftOcclusion, TheShaftPlaneTestAnswersAsItsSixtyFourSegments) {
                                     5.0f, -5.0f, 40.0f, 1.0e17f, -1.0e17f, 1.0f};
     int odd_blocked = 0;
     for (int i = 0; i < 200000; ++i) {
-        const auto odd_box = [&] {
-            Aabb b;
-            for (int a = 0; a < 3; ++a) {
-                b.min[a] = odd[rng() % odd.size()];
-                b.max[a] = odd[rng() % odd.size()];
-            }
-            return b;
-        };
+        const auto odd_box = [&] { return box_of_values(odd, rng); };
         // A cube's faces and up to three odd planes, in a random order (a NaN time that
         // the scalar path drops must not stick in a lane, whichever plane comes last).
         std::vector<Plane> planes = ConvexPolyhedron::from_aabb({{-8, -8, -8}, {8, 8, 8}}).planes();

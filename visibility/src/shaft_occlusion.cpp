@@ -171,11 +171,14 @@ bool shaft_blocked_by_box(const Aabb& region, const Aabb& box, const Aabb& solid
 
 namespace {
 
-/// shaft_blocked_by()'s cheap rejection: a plane with every region corner and every box
-/// corner strictly outside it cannot be crossed by any segment between them.
-bool a_plane_leaves_every_corner_outside(std::span<const Plane> planes,
-                                         const std::array<glm::vec3, 8>& rc,
-                                         const std::array<glm::vec3, 8>& bc) {
+/// shaft_blocked_by()'s answers before any segment: false for an empty box or solid,
+/// and when a plane has every region corner and every box corner strictly outside it
+/// (no segment between them crosses it).
+bool not_blocked_at_once(const Aabb& region, const Aabb& box, std::span<const Plane> planes,
+                         const std::array<glm::vec3, 8>& rc, const std::array<glm::vec3, 8>& bc) {
+    if (region.is_empty() || box.is_empty() || planes.empty()) {
+        return true;
+    }
     for (const Plane& p : planes) {
         bool all_outside = true;
         for (const auto& c : rc) {
@@ -194,12 +197,9 @@ bool a_plane_leaves_every_corner_outside(std::span<const Plane> planes,
 } // namespace
 
 bool shaft_blocked_by_scalar(const Aabb& region, const Aabb& box, std::span<const Plane> planes) {
-    if (region.is_empty() || box.is_empty() || planes.empty()) {
-        return false;
-    }
     const auto rc = corners(region);
     const auto bc = corners(box);
-    if (a_plane_leaves_every_corner_outside(planes, rc, bc)) {
+    if (not_blocked_at_once(region, box, planes, rc, bc)) {
         return false;
     }
     for (const auto& a : rc) {
@@ -230,12 +230,9 @@ bool shaft_blocked_by(const Aabb& region, const Aabb& box, std::span<const Plane
     if (planes.size() > kMaxPlanes) {
         return shaft_blocked_by_scalar(region, box, planes);
     }
-    if (region.is_empty() || box.is_empty() || planes.empty()) {
-        return false;
-    }
     const auto rc = corners(region);
     const auto bc = corners(box);
-    if (a_plane_leaves_every_corner_outside(planes, rc, bc)) {
+    if (not_blocked_at_once(region, box, planes, rc, bc)) {
         return false;
     }
     // The differences b[axis] - a[axis] per [region side][box side], then per plane the
