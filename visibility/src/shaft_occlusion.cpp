@@ -21,14 +21,23 @@ bool small_box(const Aabb& b) {
     return std::max(extent.x, std::max(extent.y, extent.z)) <= ShaftOcclusion::kMaxPortalBoxSide;
 }
 
+/// Corner k of `b`: bit 0 of k picks max x, bit 1 max y, bit 2 max z.
+glm::vec3 corner(const Aabb& b, std::uint32_t k) {
+    return {(k & 1u) ? b.max.x : b.min.x, (k & 2u) ? b.max.y : b.min.y,
+            (k & 4u) ? b.max.z : b.min.z};
+}
+
 std::array<glm::vec3, 8> corners(const Aabb& b) {
     std::array<glm::vec3, 8> c;
-    for (int i = 0; i < 8; ++i) {
-        c[static_cast<std::size_t>(i)] = glm::vec3(
-            (i & 1) ? b.max.x : b.min.x, (i & 2) ? b.max.y : b.min.y, (i & 4) ? b.max.z : b.min.z);
+    for (std::uint32_t k = 0; k < 8; ++k) {
+        c[k] = corner(b, k);
     }
     return c;
 }
+
+/// Planes a solid may have for the buffers below (no brush has more; past it,
+/// shaft_blocked_by() takes the scalar path and a witness counts the solid as in its way).
+constexpr std::size_t kMaxBufferedPlanes = 32;
 
 /// Does the segment from + t * dir, t in [0, 1], touch the closed box? `inv` is 1 / dir
 /// per axis.
@@ -226,7 +235,7 @@ bool shaft_blocked_by(const Aabb& region, const Aabb& box, std::span<const Plane
     // The answer is segment_blocked_by()'s for every segment: a segment's entry time
     // only rises and its exit time only falls, so neither the plane at which a segment
     // fails nor the segment that fails first changes it.
-    constexpr std::size_t kMaxPlanes = 32; // more (no brush has them) take the scalar path
+    constexpr std::size_t kMaxPlanes = kMaxBufferedPlanes;
     if (planes.size() > kMaxPlanes) {
         return shaft_blocked_by_scalar(region, box, planes);
     }
@@ -404,7 +413,7 @@ int ShaftOcclusion::hidden_through_portals(const Aabb& region, const Aabb& box, 
 
 bool ShaftOcclusion::segment_clear(glm::vec3 a, glm::vec3 b, Scratch& scratch) const {
     // Every occluder grown by kWitnessMargin: its bounds and axis box on every side, its
-    // planes moved out (a brush with more planes than the buffer counts as in the way).
+    // planes moved out (by the margin for unit normals, as brushes have).
     constexpr float m = kWitnessMargin;
     const SegmentRay ray = SegmentRay::between(a, b);
     const auto grown = [](const Aabb& box) {
@@ -419,7 +428,7 @@ bool ShaftOcclusion::segment_clear(glm::vec3 a, glm::vec3 b, Scratch& scratch) c
             return segment_hits_box(a, ray.inv, grown(solid));
         }
         const std::span<const Plane> planes = world_->solid_planes(id);
-        std::array<Plane, 32> moved;
+        std::array<Plane, kMaxBufferedPlanes> moved;
         if (planes.size() > moved.size()) {
             return true;
         }
@@ -437,10 +446,8 @@ std::uint32_t ShaftOcclusion::find_witness(const Aabb& region, const Aabb& box,
     // mostly an edge below the line of sight). Two corners find nearly every witness
     // four do, for half the walks.
     static constexpr std::array<std::uint32_t, 2> kCorners = {6, 7};
-    const auto rc = corners(region);
-    const auto bc = corners(box);
     for (const std::uint32_t k : kCorners) {
-        if (segment_clear(rc[k], bc[k], scratch)) {
+        if (segment_clear(corner(region, k), corner(box, k), scratch)) {
             return kWitnessHint | k << 3 | k;
         }
     }
@@ -462,9 +469,8 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
         if ((*hint & kNoWitness) != 0) {
             no_witness = *hint;
         } else {
-            const auto rc = corners(region);
-            const auto bc = corners(box);
-            if (segment_clear(rc[(*hint >> 3) & 7u], bc[*hint & 7u], scratch)) {
+            if (segment_clear(corner(region, (*hint >> 3) & 7u), corner(box, *hint & 7u),
+                              scratch)) {
                 return Visibility::visible; // the hint stays
             }
         }
