@@ -14,6 +14,7 @@ OccluderScene::build(const std::vector<ConvexPolyhedron>& occluders) {
     }
     scene->bsp.build(scene->world);
     scene->grid = std::make_unique<OccluderGrid>(scene->world);
+    scene->bvh = std::make_unique<OccluderBvh>(scene->world);
     return scene;
 }
 

@@ -159,6 +159,9 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     if (region.is_empty() || box.is_empty() || region.overlaps(box)) {
         return Visibility::visible;
     }
+    // 0 when the last test of this pair ended visible with its centre segment clear
+    // (or there was none): then the centre is checked first, below.
+    const bool clear_before = hint != nullptr && *hint == 0;
     // Temporal coherence for boxes in view: last time's clear segment, if still clear
     // (of every occluder by kWitnessMargin), shows this box visible too: the exact
     // answer, since every proof below would fail.
@@ -255,6 +258,26 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
             scratch.plane_sources.push_back(id);
         }
     };
+    // No occluder blocks the centre segment: then none can hide the box alone, and
+    // fusion and portals have no plane to try, so the walk below would answer `visible`
+    // and leave the hint as it is. The tree proves that without walking every grid cell
+    // along the segment (it offers every occluder whose bounds the walk's test finds the
+    // segment touching), for pairs whose last test left the hint 0 (mostly a clear
+    // centre), and for segments longer than kMinTreeCells in tests without a hint (the
+    // portals' sub-tests; short ones there are mostly blocked, and cheap to walk). The
+    // others, mostly blocked again, go to the walk directly. The answers are the walk's.
+    const auto blocks_centre = [&](OccluderId id) {
+        const Aabb& solid = world_->solid_box(id); // non-empty: an axis box (fast path)
+        return solid.is_empty() ? segment_blocked_by(from, to, world_->solid_planes(id))
+                                : segment_through_box(centre, solid);
+    };
+    const glm::vec3 span = glm::abs(to - from);
+    if (bvh_ != nullptr &&
+        (clear_before ||
+         (hint == nullptr && span.x + span.y + span.z > kMinTreeCells * grid_->cell_size())) &&
+        !bvh_->any_touching_segment(from, to, blocks_centre)) {
+        return Visibility::visible;
+    }
     // Only an occluder that blocks the centre-to-centre segment can pass the first
     // check below, and such an occluder lies in a cell that segment crosses. They are
     // taken as the walk along it finds them, nearest cells first, and the walk ends at
@@ -272,9 +295,7 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
         }
         // Necessary condition, one segment: the occluder must block centre to centre
         // (also for fusion: some occluder's interior holds the centre's crossing).
-        const Aabb& solid = world_->solid_box(id); // non-empty: an axis box (fast path)
-        if (!(solid.is_empty() ? segment_blocked_by(from, to, world_->solid_planes(id))
-                               : segment_through_box(centre, solid))) {
+        if (!blocks_centre(id)) {
             return false;
         }
         centre_blocked = true;

@@ -3,6 +3,7 @@
 // over an occluder world, occluders taken near-to-far from its BSP tree.
 
 #include "dsoc/visibility/bsp_tree.hpp"
+#include "dsoc/visibility/occluder_bvh.hpp"
 #include "dsoc/visibility/occluder_world.hpp"
 #include "dsoc/visibility/region_occlusion_buffer.hpp"
 #include "dsoc/visibility/region_visibility.hpp"
@@ -19,6 +20,8 @@ struct OccluderScene {
     BspTree bsp;
     /// Candidate lookup for the shaft stage (built by build()).
     std::unique_ptr<OccluderGrid> grid;
+    /// The shaft stage's check for a clear centre segment (built by build()).
+    std::unique_ptr<OccluderBvh> bvh;
 
     /// Merges axis-aligned boxes that tile larger boxes (merge_box_occluders: the same
     /// solid, fewer seams), adds every non-empty polyhedron and builds the BSP.
@@ -68,7 +71,8 @@ public:
         if (!config_.shaft || scene_->grid == nullptr) {
             return Visibility::visible;
         }
-        return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion, config_.portal_depth)
+        return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion, config_.portal_depth,
+                              scene_->bvh.get())
             .test(region_, box, scratch_);
     }
     /// test_box() trying first the occluder that hid the box last time (ShaftOcclusion).
@@ -79,7 +83,8 @@ public:
         if (!config_.shaft || scene_->grid == nullptr) {
             return Visibility::visible;
         }
-        return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion, config_.portal_depth)
+        return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion, config_.portal_depth,
+                              scene_->bvh.get())
             .test(region_, box, scratch_, &hint);
     }
     /// The z-pyramid alone; without it, no test at all (`visible`, which is always

@@ -14,6 +14,7 @@
 #include "dsoc/visibility/box_visibility.hpp"
 #include "dsoc/visibility/cut_plane_fusion.hpp"
 #include "dsoc/visibility/geometry.hpp"
+#include "dsoc/visibility/occluder_bvh.hpp"
 #include "dsoc/visibility/occluder_grid.hpp"
 #include "dsoc/visibility/occluder_world.hpp"
 
@@ -115,11 +116,14 @@ struct SegmentRay {
 /// closes "a doorway, then a wall behind it", which no single plane shows.
 class ShaftOcclusion {
 public:
-    /// `world` and `grid` (built over `world`) must outlive this.
+    /// `world`, `grid` and `bvh` (built over `world`) must outlive this.
     /// `portal_depth`: levels of portal tests below the top one (0: none; needs fusion).
+    /// `bvh` (optional) proves a centre segment clear without the grid walk when no
+    /// occluder blocks it; the answers and hints are the same with it or without it.
     explicit ShaftOcclusion(const OccluderWorld& world, const OccluderGrid& grid,
-                            bool fusion = true, int portal_depth = kDefaultPortalDepth)
-        : world_(&world), grid_(&grid), fusion_(fusion),
+                            bool fusion = true, int portal_depth = kDefaultPortalDepth,
+                            const OccluderBvh* bvh = nullptr)
+        : world_(&world), grid_(&grid), bvh_(bvh), fusion_(fusion),
           portal_depth_(fusion ? std::min(portal_depth, kMaxPortalDepth) : 0) {}
 
     /// Per-thread memory, reused between tests.
@@ -185,6 +189,10 @@ public:
     /// visible). Only the queried box counts, not the portals of the sub-tests.
     /// [Units: world units]
     static constexpr float kMaxPortalBoxSide = 200.0f;
+    /// A centre segment is checked in the tree (when there is one) before the grid walk
+    /// only when it spans more grid cells than this (its length along the three axes
+    /// over the cell's edge): a short walk costs less than the tree's levels.
+    static constexpr float kMinTreeCells = 8.0f;
     /// Hinted queries after a failed portal test that skip the portal tests.
     static constexpr std::uint32_t kPortalSkips = 1;
     static constexpr int kMaxPortalDepth = 4;
@@ -215,6 +223,7 @@ private:
 
     const OccluderWorld* world_;
     const OccluderGrid* grid_;
+    const OccluderBvh* bvh_;
     bool fusion_;
     int portal_depth_;
 };

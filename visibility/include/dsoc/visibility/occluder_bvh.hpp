@@ -1,0 +1,160 @@
+#pragma once
+// A bounding volume hierarchy over an occluder world's bounds: which occluders a
+// segment may touch, found without walking every grid cell along it.
+
+#include "dsoc/visibility/geometry.hpp"
+#include "dsoc/visibility/occluder_world.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace dsoc::visibility {
+
+/// A tree of boxes over the occluders' bounds, four children to a node (one SSE
+/// register a coordinate), built once: immutable after construction; queries are
+/// const, allocate nothing and are thread-safe.
+///
+/// What a query offers does not depend on the tree's shape: every occluder whose bounds
+/// clip_segment_to_box() finds the segment touching, and no other. A node's box is the
+/// min and max of what it holds, so it holds each exactly, and that test is monotone
+/// in the box (its subtractions and products round monotonically): a segment that
+/// touches an occluder's bounds touches every box above it. Each box is tested as
+/// clip_segment_to_box() does (touches()); occluders are then tested by that function.
+class OccluderBvh {
+public:
+    /// `world` need not outlive this: the tree keeps copies of the bounds.
+    explicit OccluderBvh(const OccluderWorld& world);
+
+    /// Offers `stop` (a callable bool(OccluderId)) each occluder whose bounds the segment
+    /// `from`-`to` touches, each once, in no promised order; true as soon as `stop`
+    /// returns true. A segment with a NaN or infinite end or length offers every
+    /// occluder, so that no caller takes the tree's silence for a clear path.
+    template <class Stop>
+    bool any_touching_segment(glm::vec3 from, glm::vec3 to, Stop&& stop) const {
+        if (nodes_.empty()) {
+            return false;
+        }
+        const glm::vec3 dir = to - from;
+        if (!finite(from) || !finite(dir)) {
+            for (OccluderId id = 0; id < bounds_.size(); ++id) {
+                if (stop(id)) {
+                    return true;
+                }
+            }
+            return false;
+        }
+        const Ray ray = Ray::of(from, dir);
+        std::uint32_t stack[kStackSize];
+        int top = 0;
+        stack[top++] = 0;
+        while (top > 0) {
+            const Node& node = nodes_[stack[--top]];
+            for (unsigned hits = touches(node, ray); hits != 0; hits &= hits - 1) {
+                const std::uint32_t child = node.child[__builtin_ctz(hits)];
+                if ((child & kItem) == 0) {
+                    stack[top++] = child;
+                    continue;
+                }
+                const OccluderId id = child & ~kItem;
+                float t0 = 0.0f;
+                float t1 = 1.0f;
+                if (clip_segment_to_box(from, ray.inv, bounds_[id], t0, t1) && stop(id)) {
+                    return true;
+                }
+            }
+        }
+        return false;
+    }
+
+    /// Nodes in the tree (for tests and sizes).
+    [[nodiscard]] std::size_t node_count() const { return nodes_.size(); }
+
+private:
+    /// A child slot: a node's index, or kItem | an occluder id; kEmpty for none (its
+    /// box is empty, so no segment touches it).
+    static constexpr std::uint32_t kItem = 0x80000000u;
+    static constexpr std::uint32_t kEmpty = 0xffffffffu;
+    /// Levels split by the surface area heuristic (uneven parts); below them, at medians.
+    static constexpr int kSahLevels = 16;
+    /// Node indices a query holds at once at most: three more per level, at most
+    /// kSahLevels + 1 + log2(occluders) / 2 levels (fewer than 2^32 occluders).
+    static constexpr int kStackSize = 3 * (kSahLevels + 18) + 1;
+
+    struct alignas(16) Node {
+        float min[3][4]; ///< per axis, the four children's
+        float max[3][4];
+        std::uint32_t child[4];
+        unsigned used = 0; ///< bit i set when child[i] is not kEmpty
+    };
+    /// The segment as touches() reads it: its start and 1 / length per axis (infinite
+    /// for an axis it does not move along).
+    struct Ray {
+        glm::vec3 from{0.0f};
+        glm::vec3 inv{0.0f};
+        static Ray of(glm::vec3 from, glm::vec3 dir) {
+            return {from, glm::vec3(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z)};
+        }
+    };
+
+    static bool finite(glm::vec3 v) {
+        return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+    }
+    /// Bit i set when child i is used and the segment touches its box, as
+    /// clip_segment_to_box() answers for that box.
+    static unsigned touches(const Node& node, const Ray& ray) {
+#if defined(__SSE2__)
+        // clip_segment_to_box()'s floats, four boxes at a time: the same products, each
+        // axis's entry and exit as its swap leaves them (min and max of two numbers), the
+        // same max and min over the axes. On an axis the segment does not move along,
+        // inv is infinite and a product is infinite, or NaN where the start lies on the
+        // box's side: then the axis lets the segment through, as the function's
+        // comparisons do there (start neither below min nor above max).
+        __m128 enter = _mm_setzero_ps();
+        __m128 exit = _mm_set1_ps(1.0f);
+        const __m128 low = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+        const __m128 high = _mm_set1_ps(std::numeric_limits<float>::infinity());
+        for (int a = 0; a < 3; ++a) {
+            const __m128 from = _mm_set1_ps(ray.from[a]);
+            const __m128 inv = _mm_set1_ps(ray.inv[a]);
+            const __m128 ta = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node.min[a]), from), inv);
+            const __m128 tb = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node.max[a]), from), inv);
+            const __m128 nan = _mm_cmpunord_ps(ta, tb);
+            const __m128 lo =
+                _mm_or_ps(_mm_andnot_ps(nan, _mm_min_ps(ta, tb)), _mm_and_ps(nan, low));
+            const __m128 hi =
+                _mm_or_ps(_mm_andnot_ps(nan, _mm_max_ps(ta, tb)), _mm_and_ps(nan, high));
+            enter = _mm_max_ps(enter, lo);
+            exit = _mm_min_ps(exit, hi);
+        }
+        return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(enter, exit))) & node.used;
+#else
+        unsigned hits = 0;
+        for (int i = 0; i < 4; ++i) {
+            const Aabb box{{node.min[0][i], node.min[1][i], node.min[2][i]},
+                           {node.max[0][i], node.max[1][i], node.max[2][i]}};
+            float t0 = 0.0f;
+            float t1 = 1.0f;
+            if (clip_segment_to_box(ray.from, ray.inv, box, t0, t1)) {
+                hits |= 1u << i;
+            }
+        }
+        return hits & node.used;
+#endif
+    }
+    /// Builds the node at `depth` over ids[begin, end) (more than one); returns its index.
+    std::uint32_t build(std::vector<OccluderId>& ids, std::size_t begin, std::size_t end,
+                        int depth);
+    /// The child slot for ids[begin, end): the occluder itself when it is one, else a node.
+    std::uint32_t slot(std::vector<OccluderId>& ids, std::size_t begin, std::size_t end, int depth);
+
+    std::vector<Node> nodes_;  ///< the root first
+    std::vector<Aabb> bounds_; ///< per occluder id
+};
+
+} // namespace dsoc::visibility
