@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <utility>
 #include <vector>
 
 namespace dsoc::visibility {
@@ -47,46 +48,88 @@ std::vector<OccluderId> offered(const OccluderBvh& bvh, glm::vec3 a, glm::vec3 b
     return ids;
 }
 
+/// A point of occluder `o`'s bounds: on its side across `axis` (min or max by `high`),
+/// at fractions `u`, `v` along the other two axes.
+glm::vec3 on_side(const Aabb& o, int axis, bool high, float u, float v) {
+    glm::vec3 p = o.min;
+    p[(axis + 1) % 3] = o.min[(axis + 1) % 3] + (o.max - o.min)[(axis + 1) % 3] * u;
+    p[(axis + 2) % 3] = o.min[(axis + 2) % 3] + (o.max - o.min)[(axis + 2) % 3] * v;
+    p[axis] = high ? o.max[axis] : o.min[axis];
+    return p;
+}
+
 TEST(OccluderBvh, OffersExactlyTheOccludersWhoseBoundsTheSegmentTouches) {
     // Random segments, and the ones a slab test gets wrong most easily: parallel to an
-    // axis, starting on an occluder's side and running along it (0 times infinity),
-    // of length zero, and crossing the world.
+    // axis; in the plane of an occluder's side (0 times infinity); starting on a side
+    // and leaving it, or ending on one (entry and exit equal); through a corner; with a
+    // direction of -0 or a subnormal on an axis; of length zero. Trees split by the
+    // surface area heuristic and at medians throughout.
     std::mt19937 rng(71);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
     int touched = 0;
     int grazing = 0;
     for (int kind = 0; kind < 3; ++kind) {
         const TestWorld tw = world_of_kind(kind);
-        const OccluderBvh bvh(tw.world);
         const Aabb area = tw.world.bounds();
-        std::uniform_real_distribution<float> u(0.0f, 1.0f);
         const auto point = [&] {
             return area.min + (area.max - area.min) * glm::vec3(u(rng), u(rng), u(rng));
         };
-        for (int i = 0; i < 3000; ++i) {
-            glm::vec3 a = point();
-            glm::vec3 b = point();
-            const int shape = i % 6;
-            if (shape == 1) { // along one axis
-                const int keep = static_cast<int>(rng() % 3);
-                for (int axis = 0; axis < 3; ++axis) {
-                    b[axis] = axis == keep ? b[axis] : a[axis];
-                }
-            } else if (shape == 2 || shape == 3) { // in the plane of an occluder's side
-                const Aabb& o =
-                    tw.world.occluder(static_cast<OccluderId>(rng() % tw.world.size())).bounds();
+        const auto some_occluder = [&]() -> const Aabb& {
+            return tw.world.occluder(static_cast<OccluderId>(rng() % tw.world.size())).bounds();
+        };
+        for (const int sah_levels : {OccluderBvh::kSahLevels, 0}) {
+            const OccluderBvh bvh(tw.world, sah_levels);
+            // Below the surface area heuristic's levels, medians: each level a quarter.
+            const double quarters =
+                std::ceil(std::log2(static_cast<double>(tw.world.size())) / 2.0);
+            EXPECT_LE(bvh.depth(), sah_levels + static_cast<int>(quarters))
+                << "world " << kind << " sah levels " << sah_levels;
+            for (int i = 0; i < 4000; ++i) {
+                glm::vec3 a = point();
+                glm::vec3 b = point();
+                const int shape = i % 10;
                 const int axis = static_cast<int>(rng() % 3);
-                a[axis] = b[axis] = (rng() % 2 != 0) ? o.max[axis] : o.min[axis];
-                ++grazing;
-            } else if (shape == 4) {
-                b = a; // a point
+                if (shape == 1) { // along one axis
+                    for (int k = 0; k < 3; ++k) {
+                        b[k] = k == axis ? b[k] : a[k];
+                    }
+                } else if (shape == 2 || shape == 3) { // in the plane of an occluder's side
+                    const Aabb& o = some_occluder();
+                    a[axis] = b[axis] = (rng() % 2 != 0) ? o.max[axis] : o.min[axis];
+                    ++grazing;
+                } else if (shape == 4) {
+                    b = a;               // a point
+                } else if (shape == 5) { // from a side, away from the occluder
+                    const Aabb& o = some_occluder();
+                    const bool high = rng() % 2 != 0;
+                    a = on_side(o, axis, high, u(rng), u(rng));
+                    b = a;
+                    b[axis] += high ? 50.0f : -50.0f;
+                    b[(axis + 1) % 3] += 40.0f * (u(rng) - 0.5f);
+                    ++grazing;
+                } else if (shape == 6) { // ending on a side
+                    b = on_side(some_occluder(), axis, rng() % 2 != 0, u(rng), u(rng));
+                    ++grazing;
+                } else if (shape == 7) { // through or from a corner
+                    const Aabb& o = some_occluder();
+                    const glm::vec3 c((rng() % 2 != 0) ? o.max.x : o.min.x,
+                                      (rng() % 2 != 0) ? o.max.y : o.min.y,
+                                      (rng() % 2 != 0) ? o.max.z : o.min.z);
+                    a = rng() % 2 != 0 ? c : c + (c - b);
+                    ++grazing;
+                } else if (shape == 8) { // a direction of -0 or a subnormal on one axis
+                    a[axis] = 0.0f;
+                    b[axis] = rng() % 2 != 0 ? -0.0f : 1.0e-40f;
+                }
+                const std::vector<OccluderId> want = touching(tw.world, a, b);
+                touched += want.empty() ? 0 : 1;
+                ASSERT_EQ(offered(bvh, a, b), want)
+                    << "world " << kind << " segment " << i << " sah levels " << sah_levels;
             }
-            const std::vector<OccluderId> want = touching(tw.world, a, b);
-            touched += want.empty() ? 0 : 1;
-            ASSERT_EQ(offered(bvh, a, b), want) << "world " << kind << " segment " << i;
         }
     }
-    EXPECT_GT(touched, 3000); // the segments do reach occluders
-    EXPECT_GT(grazing, 1000);
+    EXPECT_GT(touched, 6000); // the segments do reach occluders
+    EXPECT_GT(grazing, 8000);
 }
 
 TEST(OccluderBvh, StopsAtTheFirstYesAndOffersEverythingForANonFiniteSegment) {
@@ -106,8 +149,28 @@ TEST(OccluderBvh, StopsAtTheFirstYesAndOffersEverythingForANonFiniteSegment) {
         return false;
     }));
     EXPECT_EQ(all.size(), tw.world.size());
+    // Finite ends whose difference overflows, and an infinite end: every occluder too.
+    const float big = std::numeric_limits<float>::max();
+    const float inf = std::numeric_limits<float>::infinity();
+    for (const auto& [from, to] : {std::pair{glm::vec3(-big, a.y, a.z), glm::vec3(big, b.y, b.z)},
+                                   std::pair{a, glm::vec3(b.x, inf, b.z)}}) {
+        std::size_t count = 0;
+        EXPECT_FALSE(bvh.any_touching_segment(from, to, [&](OccluderId) {
+            ++count;
+            return false;
+        }));
+        EXPECT_EQ(count, tw.world.size());
+    }
     const OccluderBvh empty{OccluderWorld{}};
     EXPECT_FALSE(empty.any_touching_segment(a, b, [](OccluderId) { return true; }));
+    // One occluder: a root holding it alone.
+    OccluderWorld one;
+    one.add(ConvexPolyhedron::from_aabb(Aabb{glm::vec3(0.0f), glm::vec3(10.0f)}));
+    const OccluderBvh single(one);
+    EXPECT_EQ(offered(single, glm::vec3(-5.0f, 5.0f, 5.0f), glm::vec3(15.0f, 5.0f, 5.0f)),
+              std::vector<OccluderId>{0});
+    EXPECT_TRUE(
+        offered(single, glm::vec3(-5.0f, 15.0f, 5.0f), glm::vec3(15.0f, 15.0f, 5.0f)).empty());
 }
 
 TEST(OccluderBvh, TheShaftStageAnswersAndHintsAsWithoutTheTree) {

@@ -1,6 +1,7 @@
 #include "dsoc/visibility/occluder_bvh.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <numeric>
 
@@ -35,12 +36,14 @@ std::size_t split_ids(const std::vector<Aabb>& bounds, std::vector<OccluderId>& 
     int best_axis = -1;
     float best_cut = 0.0f;
     for (int axis = 0; axis < 3 && !balanced; ++axis) {
-        if (!(spread[axis] > 0.0f)) {
+        // Centres that coincide on this axis, or lie a subnormal apart (the scale would
+        // overflow, and a bin's index be no number): no split along it.
+        const float scale = static_cast<float>(kBins) / spread[axis];
+        if (!(spread[axis] > 0.0f) || !std::isfinite(scale)) {
             continue;
         }
         Aabb bin_box[kBins];
         std::size_t bin_count[kBins] = {};
-        const float scale = static_cast<float>(kBins) / spread[axis];
         const auto bin_of = [&](OccluderId id) {
             const float c = bounds[id].center()[axis];
             return std::clamp(static_cast<int>((c - centres.min[axis]) * scale), 0, kBins - 1);
@@ -112,7 +115,8 @@ std::size_t split_ids(const std::vector<Aabb>& bounds, std::vector<OccluderId>& 
 
 } // namespace
 
-OccluderBvh::OccluderBvh(const OccluderWorld& world) {
+OccluderBvh::OccluderBvh(const OccluderWorld& world, int sah_levels)
+    : sah_levels_(std::clamp(sah_levels, 0, kSahLevels)) {
     bounds_.reserve(world.size());
     for (OccluderId id = 0; id < world.size(); ++id) {
         bounds_.push_back(world.occluder(id).bounds());
@@ -145,11 +149,12 @@ std::uint32_t OccluderBvh::build(std::vector<OccluderId>& ids, std::size_t begin
                                  int depth) {
     const auto index = static_cast<std::uint32_t>(nodes_.size());
     nodes_.emplace_back();
+    depth_ = std::max(depth_, depth);
     // Four parts: the cheapest split by the surface area heuristic, then each half's own.
     std::size_t cut[5] = {begin, 0, 0, 0, end};
-    // Past kSahLevels the medians, so that no world makes the tree deeper than the
+    // Past sah_levels_ the medians, so that no world makes the tree deeper than the
     // query's stack allows.
-    const bool balanced = depth >= kSahLevels;
+    const bool balanced = depth >= sah_levels_;
     cut[2] = split_ids(bounds_, ids, begin, end, balanced);
     cut[1] = cut[2] - begin >= 2 ? split_ids(bounds_, ids, begin, cut[2], balanced) : cut[2];
     cut[3] = end - cut[2] >= 2 ? split_ids(bounds_, ids, cut[2], end, balanced) : end;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace dsoc::visibility {
@@ -9,6 +11,11 @@ namespace dsoc::visibility {
 OccluderId OccluderWorld::add(ConvexPolyhedron polyhedron) {
     if (polyhedron.is_empty()) {
         return kInvalid;
+    }
+    if (occluders_.size() >= kMaxOccluders) {
+        throw std::length_error("OccluderWorld::add: the world already holds " +
+                                std::to_string(occluders_.size()) +
+                                " occluders, the most its ids can name (kMaxOccluders)");
     }
     const auto id = static_cast<OccluderId>(occluders_.size());
     const auto& faces = polyhedron.faces();

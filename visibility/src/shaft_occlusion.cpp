@@ -4,6 +4,7 @@
 
 #include "dsoc/visibility/shaft_occlusion.hpp"
 
+#include "dsoc/visibility/occluder_bvh.hpp"
 #include "dsoc/visibility/reference_visibility.hpp"
 #include "shaft_detail.hpp"
 
@@ -159,9 +160,10 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     if (region.is_empty() || box.is_empty() || region.overlaps(box)) {
         return Visibility::visible;
     }
-    // 0 when the last test of this pair ended visible with its centre segment clear
-    // (or there was none): then the centre is checked first, below.
-    const bool clear_before = hint != nullptr && *hint == 0;
+    // A hint of 0: the last test of this pair left nothing to try first (it ended
+    // visible with no witness or record kept: a clear centre segment, most often). Then
+    // the tree checks the centre first, below; its answer is exact whatever the state.
+    const bool tree_first = hint != nullptr && *hint == 0;
     // Temporal coherence for boxes in view: last time's clear segment, if still clear
     // (of every occluder by kWitnessMargin), shows this box visible too: the exact
     // answer, since every proof below would fail.
@@ -262,10 +264,10 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     // fusion and portals have no plane to try, so the walk below would answer `visible`
     // and leave the hint as it is. The tree proves that without walking every grid cell
     // along the segment (it offers every occluder whose bounds the walk's test finds the
-    // segment touching), for pairs whose last test left the hint 0 (mostly a clear
-    // centre), and for segments longer than kMinTreeCells in tests without a hint (the
-    // portals' sub-tests; short ones there are mostly blocked, and cheap to walk). The
-    // others, mostly blocked again, go to the walk directly. The answers are the walk's.
+    // segment touching), for pairs whose last test left the hint 0, and for segments
+    // longer than kMinTreeCells in tests without a hint (the portals' sub-tests, whose
+    // short segments are cheap to walk). The others, whose last test found the centre
+    // blocked, go to the walk directly. Whichever is asked, the answers are the walk's.
     const auto blocks_centre = [&](OccluderId id) {
         const Aabb& solid = world_->solid_box(id); // non-empty: an axis box (fast path)
         return solid.is_empty() ? segment_blocked_by(from, to, world_->solid_planes(id))
@@ -273,7 +275,7 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
     };
     const glm::vec3 span = glm::abs(to - from);
     if (bvh_ != nullptr &&
-        (clear_before ||
+        (tree_first ||
          (hint == nullptr && span.x + span.y + span.z > kMinTreeCells * grid_->cell_size())) &&
         !bvh_->any_touching_segment(from, to, blocks_centre)) {
         return Visibility::visible;

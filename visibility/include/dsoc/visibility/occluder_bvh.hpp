@@ -5,6 +5,7 @@
 #include "dsoc/visibility/geometry.hpp"
 #include "dsoc/visibility/occluder_world.hpp"
 
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -21,15 +22,22 @@ namespace dsoc::visibility {
 /// const, allocate nothing and are thread-safe.
 ///
 /// What a query offers does not depend on the tree's shape: every occluder whose bounds
-/// clip_segment_to_box() finds the segment touching, and no other. A node's box is the
+/// clip_segment_to_box() finds the segment touching, and no other (for a segment with a
+/// non-finite end or length: every occluder). A node's box is the
 /// min and max of what it holds, so it holds each exactly, and that test is monotone
 /// in the box (its subtractions and products round monotonically): a segment that
 /// touches an occluder's bounds touches every box above it. Each box is tested as
 /// clip_segment_to_box() does (touches()); occluders are then tested by that function.
 class OccluderBvh {
 public:
-    /// `world` need not outlive this: the tree keeps copies of the bounds.
-    explicit OccluderBvh(const OccluderWorld& world);
+    /// Levels split by the surface area heuristic (uneven parts); below them, at medians.
+    static constexpr int kSahLevels = 16;
+
+    /// `world` need not outlive this: the tree keeps copies of the bounds. `sah_levels`
+    /// (at most kSahLevels; fewer only to test the median splits) as above. Worlds hold
+    /// at most OccluderWorld::kMaxOccluders occluders, so ids and node indices fit
+    /// below kItem.
+    explicit OccluderBvh(const OccluderWorld& world, int sah_levels = kSahLevels);
 
     /// Offers `stop` (a callable bool(OccluderId)) each occluder whose bounds the segment
     /// `from`-`to` touches, each once, in no promised order; true as soon as `stop`
@@ -56,7 +64,7 @@ public:
         while (top > 0) {
             const Node& node = nodes_[stack[--top]];
             for (unsigned hits = touches(node, ray); hits != 0; hits &= hits - 1) {
-                const std::uint32_t child = node.child[__builtin_ctz(hits)];
+                const std::uint32_t child = node.child[std::countr_zero(hits)];
                 if ((child & kItem) == 0) {
                     stack[top++] = child;
                     continue;
@@ -74,14 +82,16 @@ public:
 
     /// Nodes in the tree (for tests and sizes).
     [[nodiscard]] std::size_t node_count() const { return nodes_.size(); }
+    /// Levels of nodes below the root at most (0 for a root alone): at most sah_levels
+    /// plus one level per factor of four the occluders then have to lose, which keeps a
+    /// query's stack within kStackSize.
+    [[nodiscard]] int depth() const { return depth_; }
 
 private:
     /// A child slot: a node's index, or kItem | an occluder id; kEmpty for none (its
     /// box is empty, so no segment touches it).
     static constexpr std::uint32_t kItem = 0x80000000u;
     static constexpr std::uint32_t kEmpty = 0xffffffffu;
-    /// Levels split by the surface area heuristic (uneven parts); below them, at medians.
-    static constexpr int kSahLevels = 16;
     /// Node indices a query holds at once at most: three more per level, at most
     /// kSahLevels + 1 + log2(occluders) / 2 levels (fewer than 2^32 occluders).
     static constexpr int kStackSize = 3 * (kSahLevels + 18) + 1;
@@ -153,6 +163,8 @@ private:
     /// The child slot for ids[begin, end): the occluder itself when it is one, else a node.
     std::uint32_t slot(std::vector<OccluderId>& ids, std::size_t begin, std::size_t end, int depth);
 
+    int sah_levels_;
+    int depth_ = 0;
     std::vector<Node> nodes_;  ///< the root first
     std::vector<Aabb> bounds_; ///< per occluder id
 };

@@ -31,9 +31,13 @@ struct OccluderEdge {
 class OccluderWorld {
 public:
     /// Adds a non-empty polyhedron and returns its id; empty polyhedra are ignored
-    /// and return kInvalid. Call before building a BspTree over the world.
+    /// and return kInvalid. Call before building a BspTree over the world. Throws
+    /// std::length_error past kMaxOccluders (the world is left as it was).
     OccluderId add(ConvexPolyhedron polyhedron);
     static constexpr OccluderId kInvalid = 0xffffffffu;
+    /// Occluders a world holds at most: the shaft stage's hints keep an id in their low
+    /// 29 bits, beside a tag in the top three (ShaftOcclusion::kPortalHint, kWitnessHint).
+    static constexpr std::size_t kMaxOccluders = std::size_t{1} << 29;
 
     [[nodiscard]] std::size_t size() const { return occluders_.size(); }
     [[nodiscard]] const ConvexPolyhedron& occluder(OccluderId id) const { return occluders_[id]; }

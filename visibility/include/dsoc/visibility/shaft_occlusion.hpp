@@ -14,7 +14,6 @@
 #include "dsoc/visibility/box_visibility.hpp"
 #include "dsoc/visibility/cut_plane_fusion.hpp"
 #include "dsoc/visibility/geometry.hpp"
-#include "dsoc/visibility/occluder_bvh.hpp"
 #include "dsoc/visibility/occluder_grid.hpp"
 #include "dsoc/visibility/occluder_world.hpp"
 
@@ -25,6 +24,8 @@
 #include <vector>
 
 namespace dsoc::visibility {
+
+class OccluderBvh;
 
 /// True when every segment from a point of `region` to a point of `box` passes
 /// through the interior of the convex solid { x : dot(n_i, x) <= d_i }: the 64 corner
@@ -167,8 +168,8 @@ public:
     /// the box visible (some eye of the region sees a point of the box, and no proof,
     /// with its tolerances, could hide it), so a box that stays in view costs one walk a
     /// test instead of failing the proofs again; the first test that finds it blocked
-    /// drops it and runs the full test. Worlds hold fewer than 2^29 occluders, so no
-    /// occluder or portal hint has these top bits.
+    /// drops it and runs the full test. Worlds hold at most 2^29 occluders
+    /// (OccluderWorld::kMaxOccluders), so no occluder or portal hint has these top bits.
     static constexpr std::uint32_t kWitnessHint = 0x60000000u;
     static constexpr std::uint32_t kWitnessCorners = 0x3fu; ///< r << 3 | b
     /// How far a witness keeps from every occluder: more than the proofs' own slack
