@@ -180,7 +180,6 @@ TEST(OccluderBvh, TheShaftStageAnswersAndHintsAsWithoutTheTree) {
     // tree takes long segments, ShaftOcclusion::kMinTreeCells), at portal depths 0 and
     // 2 (whose sub-tests have no hint). Small grid cells, so that most segments are long.
     std::mt19937 rng(17);
-    std::uniform_real_distribution<float> step(-8.0f, 8.0f);
     int clear_before = 0;
     int long_unhinted = 0;
     int hidden = 0;
@@ -197,10 +196,7 @@ TEST(OccluderBvh, TheShaftStageAnswersAndHintsAsWithoutTheTree) {
                 std::uint32_t hint_with = 0;
                 std::uint32_t hint_without = 0;
                 for (int t = 0; t < 12; ++t) {
-                    const glm::vec3 r(step(rng), step(rng), 0.0f);
-                    const glm::vec3 b(step(rng), step(rng), 0.0f);
-                    region = Aabb{region.min + r, region.max + r};
-                    box = Aabb{box.min + b, box.max + b};
+                    testing::step_pair(rng, 8.0f, region, box);
                     clear_before += hint_with == 0 ? 1 : 0;
                     const Visibility a = with.test(region, box, scratch, &hint_with);
                     const Visibility c = without.test(region, box, scratch, &hint_without);

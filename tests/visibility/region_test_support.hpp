@@ -88,4 +88,16 @@ void for_random_region_box_pairs(const TestWorld& tw, std::mt19937& rng, int cou
     }
 }
 
+/// Moves `region` and `box` each by a random step of up to `reach` units along x and
+/// y: a pair of the hint tests, moving as a viewer and an entity do between ticks.
+inline void step_pair(std::mt19937& rng, float reach, Aabb& region, Aabb& box) {
+    std::uniform_real_distribution<float> step(-reach, reach);
+    const float rx = step(rng);
+    const float ry = step(rng);
+    const float bx = step(rng);
+    const float by = step(rng);
+    region = Aabb{region.min + glm::vec3(rx, ry, 0.0f), region.max + glm::vec3(rx, ry, 0.0f)};
+    box = Aabb{box.min + glm::vec3(bx, by, 0.0f), box.max + glm::vec3(bx, by, 0.0f)};
+}
+
 } // namespace dsoc::visibility::testing

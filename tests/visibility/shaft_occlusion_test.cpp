@@ -593,7 +593,6 @@ TEST(ShaftOcclusion, AWitnessNeverShowsWhatTheFullTestHides) {
     // and the full test without a hint answers `visible` too, so witnesses cost no
     // entity a full test would hide. Portal depths 0 and 2.
     std::mt19937 rng(53);
-    std::uniform_real_distribution<float> step(-6.0f, 6.0f);
     int kept = 0;
     int hidden = 0;
     int tests = 0;
@@ -609,10 +608,7 @@ TEST(ShaftOcclusion, AWitnessNeverShowsWhatTheFullTestHides) {
             testing::for_random_region_box_pairs(tw, rng, 150, [&](Aabb region, Aabb box) {
                 std::uint32_t hint = 0;
                 for (int t = 0; t < 12; ++t) {
-                    const glm::vec3 r(step(rng), step(rng), 0.0f);
-                    const glm::vec3 b(step(rng), step(rng), 0.0f);
-                    region = Aabb{region.min + r, region.max + r};
-                    box = Aabb{box.min + b, box.max + b};
+                    testing::step_pair(rng, 6.0f, region, box);
                     const std::uint32_t before = hint;
                     const Visibility seen = shaft.test(region, box, scratch, &hint);
                     ++tests;
