@@ -116,37 +116,27 @@ std::size_t split_ids(const std::vector<Aabb>& bounds, std::vector<OccluderId>& 
 } // namespace
 
 OccluderBvh::OccluderBvh(const OccluderWorld& world, int sah_levels)
-    : sah_levels_(std::clamp(sah_levels, 0, kSahLevels)) {
-    bounds_.reserve(world.size());
-    for (OccluderId id = 0; id < world.size(); ++id) {
-        bounds_.push_back(world.occluder(id).bounds());
-    }
-    if (bounds_.empty()) {
+    : sah_levels_(std::clamp(sah_levels, 0, kSahLevels)), occluders_(world.size()) {
+    if (occluders_ == 0) {
         return;
     }
-    std::vector<OccluderId> ids(bounds_.size());
+    std::vector<Aabb> bounds;
+    bounds.reserve(occluders_);
+    for (OccluderId id = 0; id < occluders_; ++id) {
+        bounds.push_back(world.occluder(id).bounds());
+    }
+    std::vector<OccluderId> ids(occluders_);
     std::iota(ids.begin(), ids.end(), OccluderId{0});
-    if (ids.size() == 1) {
-        // A root with the one occluder in its first slot.
-        nodes_.emplace_back();
-        nodes_[0].child[0] = kItem | ids[0];
-        for (int a = 0; a < 3; ++a) {
-            nodes_[0].min[a][0] = bounds_[0].min[a];
-            nodes_[0].max[a][0] = bounds_[0].max[a];
-        }
-        nodes_[0].used = 1;
-        return;
-    }
-    (void)build(ids, 0, ids.size(), 0);
+    (void)build(bounds, ids, 0, ids.size(), 0);
 }
 
-std::uint32_t OccluderBvh::slot(std::vector<OccluderId>& ids, std::size_t begin, std::size_t end,
-                                int depth) {
-    return end - begin == 1 ? kItem | ids[begin] : build(ids, begin, end, depth);
+std::uint32_t OccluderBvh::slot(const std::vector<Aabb>& bounds, std::vector<OccluderId>& ids,
+                                std::size_t begin, std::size_t end, int depth) {
+    return end - begin == 1 ? kItem | ids[begin] : build(bounds, ids, begin, end, depth);
 }
 
-std::uint32_t OccluderBvh::build(std::vector<OccluderId>& ids, std::size_t begin, std::size_t end,
-                                 int depth) {
+std::uint32_t OccluderBvh::build(const std::vector<Aabb>& bounds, std::vector<OccluderId>& ids,
+                                 std::size_t begin, std::size_t end, int depth) {
     const auto index = static_cast<std::uint32_t>(nodes_.size());
     nodes_.emplace_back();
     depth_ = std::max(depth_, depth);
@@ -155,9 +145,10 @@ std::uint32_t OccluderBvh::build(std::vector<OccluderId>& ids, std::size_t begin
     // Past sah_levels_ the medians, so that no world makes the tree deeper than the
     // query's stack allows.
     const bool balanced = depth >= sah_levels_;
-    cut[2] = split_ids(bounds_, ids, begin, end, balanced);
-    cut[1] = cut[2] - begin >= 2 ? split_ids(bounds_, ids, begin, cut[2], balanced) : cut[2];
-    cut[3] = end - cut[2] >= 2 ? split_ids(bounds_, ids, cut[2], end, balanced) : end;
+    // One occluder (a world of one): alone in the first slot.
+    cut[2] = end - begin >= 2 ? split_ids(bounds, ids, begin, end, balanced) : end;
+    cut[1] = cut[2] - begin >= 2 ? split_ids(bounds, ids, begin, cut[2], balanced) : cut[2];
+    cut[3] = end - cut[2] >= 2 ? split_ids(bounds, ids, cut[2], end, balanced) : end;
     for (int i = 0; i < 4; ++i) {
         const std::size_t lo = cut[i];
         const std::size_t hi = cut[i + 1];
@@ -165,9 +156,10 @@ std::uint32_t OccluderBvh::build(std::vector<OccluderId>& ids, std::size_t begin
         Aabb box;
         if (hi > lo) {
             for (std::size_t k = lo; k < hi; ++k) {
-                box.extend(bounds_[ids[k]]);
+                box.extend(bounds[ids[k]]);
             }
-            child = slot(ids, lo, hi, depth + 1); // may grow nodes_: index, not a reference, below
+            child = slot(bounds, ids, lo, hi,
+                         depth + 1); // may grow nodes_: index, not a reference, below
             nodes_[index].used |= 1u << i;
         }
         nodes_[index].child[i] = child;

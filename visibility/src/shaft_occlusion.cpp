@@ -273,10 +273,11 @@ Visibility ShaftOcclusion::test_at(const Aabb& region, const Aabb& box, Scratch&
         return solid.is_empty() ? segment_blocked_by(from, to, world_->solid_planes(id))
                                 : segment_through_box(centre, solid);
     };
-    const glm::vec3 span = glm::abs(to - from);
-    if (bvh_ != nullptr &&
-        (tree_first ||
-         (hint == nullptr && span.x + span.y + span.z > kMinTreeCells * grid_->cell_size())) &&
+    const auto long_segment = [&] {
+        const glm::vec3 span = glm::abs(to - from);
+        return span.x + span.y + span.z > kMinTreeCells * grid_->cell_size();
+    };
+    if (bvh_ != nullptr && (tree_first || (hint == nullptr && long_segment())) &&
         !bvh_->any_touching_segment(from, to, blocks_centre)) {
         return Visibility::visible;
     }

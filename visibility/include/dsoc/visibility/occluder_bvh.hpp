@@ -26,8 +26,8 @@ namespace dsoc::visibility {
 /// non-finite end or length: every occluder). A node's box is the
 /// min and max of what it holds, so it holds each exactly, and that test is monotone
 /// in the box (its subtractions and products round monotonically): a segment that
-/// touches an occluder's bounds touches every box above it. Each box is tested as
-/// clip_segment_to_box() does (touches()); occluders are then tested by that function.
+/// touches an occluder's bounds touches every box above it. Each box, an occluder's
+/// bounds in its slot too, is tested as clip_segment_to_box() does (touches()).
 class OccluderBvh {
 public:
     /// Levels split by the surface area heuristic (uneven parts); below them, at medians.
@@ -50,7 +50,7 @@ public:
         }
         const glm::vec3 dir = to - from;
         if (!finite(from) || !finite(dir)) {
-            for (OccluderId id = 0; id < bounds_.size(); ++id) {
+            for (OccluderId id = 0; id < occluders_; ++id) {
                 if (stop(id)) {
                     return true;
                 }
@@ -69,10 +69,7 @@ public:
                     stack[top++] = child;
                     continue;
                 }
-                const OccluderId id = child & ~kItem;
-                float t0 = 0.0f;
-                float t1 = 1.0f;
-                if (clip_segment_to_box(from, ray.inv, bounds_[id], t0, t1) && stop(id)) {
+                if (stop(child & ~kItem)) { // its slot's box is its bounds, just tested
                     return true;
                 }
             }
@@ -157,16 +154,18 @@ private:
         return hits & node.used;
 #endif
     }
-    /// Builds the node at `depth` over ids[begin, end) (more than one); returns its index.
-    std::uint32_t build(std::vector<OccluderId>& ids, std::size_t begin, std::size_t end,
-                        int depth);
+    /// Builds the node at `depth` over ids[begin, end) (one or more; `bounds` per
+    /// occluder id); returns its index.
+    std::uint32_t build(const std::vector<Aabb>& bounds, std::vector<OccluderId>& ids,
+                        std::size_t begin, std::size_t end, int depth);
     /// The child slot for ids[begin, end): the occluder itself when it is one, else a node.
-    std::uint32_t slot(std::vector<OccluderId>& ids, std::size_t begin, std::size_t end, int depth);
+    std::uint32_t slot(const std::vector<Aabb>& bounds, std::vector<OccluderId>& ids,
+                       std::size_t begin, std::size_t end, int depth);
 
     int sah_levels_;
     int depth_ = 0;
-    std::vector<Node> nodes_;  ///< the root first
-    std::vector<Aabb> bounds_; ///< per occluder id
+    std::vector<Node> nodes_; ///< the root first
+    std::size_t occluders_ = 0;
 };
 
 } // namespace dsoc::visibility
