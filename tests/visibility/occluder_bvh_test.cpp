@@ -22,28 +22,35 @@ TestWorld world_of_kind(int kind) {
                        : make_corridor_world(7, 4, 4);
 }
 
-/// What the tree must offer: every occluder whose bounds clip_segment_to_box() finds
-/// the segment touching, by brute force over the world.
-std::vector<OccluderId> touching(const OccluderWorld& world, glm::vec3 a, glm::vec3 b) {
+/// What the tree must offer: every occluder whose bounds, grown by `margin`,
+/// clip_segment_to_box() finds the segment touching, by brute force over the world.
+std::vector<OccluderId> touching(const OccluderWorld& world, glm::vec3 a, glm::vec3 b,
+                                 float margin = 0.0f) {
     const glm::vec3 d = b - a;
     const glm::vec3 inv(1.0f / d.x, 1.0f / d.y, 1.0f / d.z);
     std::vector<OccluderId> ids;
     for (OccluderId id = 0; id < world.size(); ++id) {
+        const Aabb& o = world.occluder(id).bounds();
+        const Aabb grown{o.min - glm::vec3(margin), o.max + glm::vec3(margin)};
         float t0 = 0.0f;
         float t1 = 1.0f;
-        if (clip_segment_to_box(a, inv, world.occluder(id).bounds(), t0, t1)) {
+        if (clip_segment_to_box(a, inv, grown, t0, t1)) {
             ids.push_back(id);
         }
     }
     return ids;
 }
 
-std::vector<OccluderId> offered(const OccluderBvh& bvh, glm::vec3 a, glm::vec3 b) {
+std::vector<OccluderId> offered(const OccluderBvh& bvh, glm::vec3 a, glm::vec3 b,
+                                float margin = 0.0f) {
     std::vector<OccluderId> ids;
-    EXPECT_FALSE(bvh.any_touching_segment(a, b, [&](OccluderId id) {
-        ids.push_back(id);
-        return false;
-    }));
+    EXPECT_FALSE(bvh.any_touching_segment(
+        a, b,
+        [&](OccluderId id) {
+            ids.push_back(id);
+            return false;
+        },
+        margin));
     std::sort(ids.begin(), ids.end());
     return ids;
 }
@@ -62,12 +69,15 @@ TEST(OccluderBvh, OffersExactlyTheOccludersWhoseBoundsTheSegmentTouches) {
     // Random segments, and the ones a slab test gets wrong most easily: parallel to an
     // axis; in the plane of an occluder's side (0 times infinity); starting on a side
     // and leaving it, or ending on one (entry and exit equal); through a corner; with a
-    // direction of -0 or a subnormal on an axis; of length zero. Trees split by the
-    // surface area heuristic and at medians throughout.
+    // direction of -0 or a subnormal on an axis; of length zero; beside a side, within
+    // the witnesses' margin of it. Trees split by the surface area heuristic and at
+    // medians throughout; each segment asked without a margin and with the witnesses'.
+    constexpr float kMargin = ShaftOcclusion::kWitnessMargin;
     std::mt19937 rng(71);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     int touched = 0;
     int grazing = 0;
+    int within_margin = 0; // segments the margin makes touch an occluder more
     for (int kind = 0; kind < 3; ++kind) {
         const TestWorld tw = world_of_kind(kind);
         const Aabb area = tw.world.bounds();
@@ -120,16 +130,27 @@ TEST(OccluderBvh, OffersExactlyTheOccludersWhoseBoundsTheSegmentTouches) {
                 } else if (shape == 8) { // a direction of -0 or a subnormal on one axis
                     a[axis] = 0.0f;
                     b[axis] = rng() % 2 != 0 ? -0.0f : 1.0e-40f;
+                } else if (shape == 9) { // beside a side, outside it by half the margin
+                    const Aabb& o = some_occluder();
+                    const bool high = rng() % 2 != 0;
+                    a[axis] = b[axis] = high ? o.max[axis] + 0.5f * kMargin
+                                             : o.min[axis] - 0.5f * kMargin;
                 }
                 const std::vector<OccluderId> want = touching(tw.world, a, b);
                 touched += want.empty() ? 0 : 1;
                 ASSERT_EQ(offered(bvh, a, b), want)
                     << "world " << kind << " segment " << i << " sah levels " << sah_levels;
+                const std::vector<OccluderId> want_near = touching(tw.world, a, b, kMargin);
+                within_margin += want_near.size() > want.size() ? 1 : 0;
+                ASSERT_EQ(offered(bvh, a, b, kMargin), want_near)
+                    << "world " << kind << " segment " << i << " sah levels " << sah_levels
+                    << " margin " << kMargin;
             }
         }
     }
     EXPECT_GT(touched, 6000); // the segments do reach occluders
     EXPECT_GT(grazing, 8000);
+    EXPECT_GT(within_margin, 500);
 }
 
 TEST(OccluderBvh, StopsAtTheFirstYesAndOffersEverythingForANonFiniteSegment) {
@@ -220,6 +241,44 @@ TEST(OccluderBvh, TheShaftStageAnswersAndHintsAsWithoutTheTree) {
     EXPECT_GT(clear_before, tests / 20) << clear_before << " of " << tests;
     EXPECT_GT(long_unhinted, tests / 4) << long_unhinted << " of " << tests;
     EXPECT_GT(hidden, tests / 10) << hidden << " of " << tests;
+}
+
+TEST(OccluderBvh, AWitnessKeepsItsMarginWithTheTreeAndWithout) {
+    // A wall between a region and a box: the centre segment is blocked, and the witness
+    // search's segments (the top corners') run level over the wall's top. Half the
+    // margin above it they are no witness; twice the margin above, they are. With the
+    // tree, every witness segment is checked against every occluder's grown bounds.
+    // Without it, the grid walk: the wall's top is the grid's, so the walk does not see
+    // a segment half the margin above it (a witness it should not keep: tightness only,
+    // see ShaftOcclusion::segment_clear()); twice the margin above, it agrees.
+    constexpr float m = ShaftOcclusion::kWitnessMargin;
+    constexpr float top = 100.0f;
+    OccluderWorld world;
+    world.add(ConvexPolyhedron::from_aabb(Aabb{{-8.0f, -200.0f, 0.0f}, {8.0f, 200.0f, top}}));
+    const OccluderGrid grid(world, 32.0f);
+    const OccluderBvh bvh(world);
+    const ShaftOcclusion with(world, grid, true, 0, &bvh);
+    const ShaftOcclusion without(world, grid, true, 0);
+    for (const float above : {0.5f * m, 2.0f * m}) {
+        const Aabb region{{-300.0f, -20.0f, 40.0f}, {-250.0f, 20.0f, top + above}};
+        const Aabb box{{250.0f, -10.0f, 40.0f}, {280.0f, 10.0f, top + above}};
+        for (const ShaftOcclusion* stage : {&with, &without}) {
+            if (stage == &without && above < m) {
+                continue; // the walk's blind spot, above
+            }
+            ShaftOcclusion::Scratch scratch;
+            std::uint32_t hint = 0;
+            EXPECT_EQ(stage->test(region, box, scratch, &hint), Visibility::visible);
+            const std::uint32_t top_corners = 6u << 3 | 6u; // max y and z, the first tried
+            if (above < m) {
+                EXPECT_EQ(hint & ~0x3fu, ShaftOcclusion::kWitnessHint | ShaftOcclusion::kNoWitness)
+                    << "above " << above << (stage == &with ? ", tree" : ", walk");
+            } else {
+                EXPECT_EQ(hint, ShaftOcclusion::kWitnessHint | top_corners)
+                    << "above " << above << (stage == &with ? ", tree" : ", walk");
+            }
+        }
+    }
 }
 
 } // namespace

@@ -120,10 +120,8 @@ bool ShaftOcclusion::segment_clear(glm::vec3 a, glm::vec3 b, Scratch& scratch) c
     const auto grown = [](const Aabb& box) {
         return Aabb{box.min - glm::vec3(m), box.max + glm::vec3(m)};
     };
-    return !grid_->any_along_segment(a, b, scratch.grid, [&](OccluderId id) {
-        if (!segment_hits_box(a, ray.inv, grown(world_->occluder(id).bounds()))) {
-            return false;
-        }
+    // An occluder whose grown bounds the segment touches: is its grown solid in the way?
+    const auto in_the_way = [&](OccluderId id) {
         const Aabb& solid = world_->solid_box(id);
         if (!solid.is_empty()) {
             return segment_hits_box(a, ray.inv, grown(solid));
@@ -137,6 +135,19 @@ bool ShaftOcclusion::segment_clear(glm::vec3 a, glm::vec3 b, Scratch& scratch) c
             moved[k] = {planes[k].normal, planes[k].distance + m};
         }
         return segment_blocked_by(a, b, std::span<const Plane>(moved.data(), planes.size()));
+    };
+    // The tree offers exactly the occluders whose grown bounds the segment touches (the
+    // same floats as grown() and segment_hits_box()). The grid walk offers those in the
+    // cells the segment crosses, and so may miss one that lies within the margin of the
+    // segment in a cell it does not cross (beyond the grid's extent, or across a cell's
+    // side): then a witness may pass closer than the margin to it. That costs only
+    // tightness (a witness answers `visible`), and only without a tree.
+    if (bvh_ != nullptr) {
+        return !bvh_->any_touching_segment(a, b, in_the_way, m);
+    }
+    return !grid_->any_along_segment(a, b, scratch.grid, [&](OccluderId id) {
+        return segment_hits_box(a, ray.inv, grown(world_->occluder(id).bounds())) &&
+               in_the_way(id);
     });
 }
 

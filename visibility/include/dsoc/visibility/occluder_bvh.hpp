@@ -21,13 +21,14 @@ namespace dsoc::visibility {
 /// register a coordinate), built once: immutable after construction; queries are
 /// const, allocate nothing and are thread-safe.
 ///
-/// What a query offers does not depend on the tree's shape: every occluder whose bounds
-/// clip_segment_to_box() finds the segment touching, and no other (for a segment with a
-/// non-finite end or length: every occluder). A node's box is the
-/// min and max of what it holds, so it holds each exactly, and that test is monotone
-/// in the box (its subtractions and products round monotonically): a segment that
-/// touches an occluder's bounds touches every box above it. Each box, an occluder's
-/// bounds in its slot too, is tested as clip_segment_to_box() does (touches()).
+/// What a query offers does not depend on the tree's shape: every occluder whose bounds,
+/// grown by the query's margin, clip_segment_to_box() finds the segment touching, and no
+/// other (for a segment with a non-finite end or length: every occluder). A node's box is
+/// the min and max of what it holds, so it holds each exactly; growing rounds
+/// monotonically, and so does that test in the box (its subtractions and products): a
+/// segment that touches an occluder's grown bounds touches every grown box above it. Each
+/// box, an occluder's bounds in its slot too, is grown and tested as
+/// clip_segment_to_box() does (touches()).
 class OccluderBvh {
 public:
     /// Levels split by the surface area heuristic (uneven parts); below them, at medians.
@@ -39,12 +40,15 @@ public:
     /// below kItem.
     explicit OccluderBvh(const OccluderWorld& world, int sah_levels = kSahLevels);
 
-    /// Offers `stop` (a callable bool(OccluderId)) each occluder whose bounds the segment
+    /// Offers `stop` (a callable bool(OccluderId)) each occluder whose bounds, grown by
+    /// `margin` on every side (min - margin, max + margin in floats), the segment
     /// `from`-`to` touches, each once, in no promised order; true as soon as `stop`
     /// returns true. A segment with a NaN or infinite end or length offers every
     /// occluder, so that no caller takes the tree's silence for a clear path.
+    /// [Units: margin in world units, >= 0]
     template <class Stop>
-    bool any_touching_segment(glm::vec3 from, glm::vec3 to, Stop&& stop) const {
+    bool any_touching_segment(glm::vec3 from, glm::vec3 to, Stop&& stop,
+                              float margin = 0.0f) const {
         if (nodes_.empty()) {
             return false;
         }
@@ -57,7 +61,7 @@ public:
             }
             return false;
         }
-        const Ray ray = Ray::of(from, dir);
+        const Ray ray = Ray::of(from, dir, margin);
         std::uint32_t stack[kStackSize];
         int top = 0;
         stack[top++] = 0;
@@ -100,20 +104,23 @@ private:
         unsigned used = 0; ///< bit i set when child[i] is not kEmpty
     };
     /// The segment as touches() reads it: its start and 1 / length per axis (infinite
-    /// for an axis it does not move along).
+    /// for an axis it does not move along), and how far every box is grown.
     struct Ray {
         glm::vec3 from{0.0f};
         glm::vec3 inv{0.0f};
-        static Ray of(glm::vec3 from, glm::vec3 dir) {
-            return {from, glm::vec3(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z)};
+        float margin = 0.0f;
+        static Ray of(glm::vec3 from, glm::vec3 dir, float margin) {
+            return {from, glm::vec3(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z), margin};
         }
     };
 
     static bool finite(glm::vec3 v) {
         return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
     }
-    /// Bit i set when child i is used and the segment touches its box, as
-    /// clip_segment_to_box() answers for that box.
+    /// Bit i set when child i is used and the segment touches its box grown by
+    /// ray.margin, as clip_segment_to_box() answers for that grown box. (A margin of 0
+    /// tests the box itself: x - 0 and x + 0 are x, or +0 for -0 + 0, which every
+    /// comparison takes for -0.)
     static unsigned touches(const Node& node, const Ray& ray) {
 #if defined(__SSE2__)
         // clip_segment_to_box()'s floats, four boxes at a time: the same products, each
@@ -126,11 +133,14 @@ private:
         __m128 exit = _mm_set1_ps(1.0f);
         const __m128 low = _mm_set1_ps(-std::numeric_limits<float>::infinity());
         const __m128 high = _mm_set1_ps(std::numeric_limits<float>::infinity());
+        const __m128 margin = _mm_set1_ps(ray.margin);
         for (int a = 0; a < 3; ++a) {
             const __m128 from = _mm_set1_ps(ray.from[a]);
             const __m128 inv = _mm_set1_ps(ray.inv[a]);
-            const __m128 ta = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node.min[a]), from), inv);
-            const __m128 tb = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node.max[a]), from), inv);
+            const __m128 min = _mm_sub_ps(_mm_load_ps(node.min[a]), margin);
+            const __m128 max = _mm_add_ps(_mm_load_ps(node.max[a]), margin);
+            const __m128 ta = _mm_mul_ps(_mm_sub_ps(min, from), inv);
+            const __m128 tb = _mm_mul_ps(_mm_sub_ps(max, from), inv);
             const __m128 nan = _mm_cmpunord_ps(ta, tb);
             const __m128 lo =
                 _mm_or_ps(_mm_andnot_ps(nan, _mm_min_ps(ta, tb)), _mm_and_ps(nan, low));
@@ -143,8 +153,9 @@ private:
 #else
         unsigned hits = 0;
         for (int i = 0; i < 4; ++i) {
-            const Aabb box{{node.min[0][i], node.min[1][i], node.min[2][i]},
-                           {node.max[0][i], node.max[1][i], node.max[2][i]}};
+            const glm::vec3 m(ray.margin);
+            const Aabb box{glm::vec3(node.min[0][i], node.min[1][i], node.min[2][i]) - m,
+                           glm::vec3(node.max[0][i], node.max[1][i], node.max[2][i]) + m};
             float t0 = 0.0f;
             float t1 = 1.0f;
             if (clip_segment_to_box(ray.from, ray.inv, box, t0, t1)) {

@@ -209,8 +209,8 @@ private:
     /// fusion tests of this pair already failed, only the portal tests are left.
     [[nodiscard]] Visibility test_at(const Aabb& region, const Aabb& box, Scratch& scratch,
                                      std::uint32_t* hint, int depth, bool cheap_done = false) const;
-    /// True when the segment a-b keeps kWitnessMargin from every occluder the grid walk
-    /// finds along it.
+    /// True when the segment a-b keeps kWitnessMargin from every occluder (with a tree),
+    /// or from every occluder the grid walk finds along it (without one).
     [[nodiscard]] bool segment_clear(glm::vec3 a, glm::vec3 b, Scratch& scratch) const;
     /// The witness hint of the first clear one of a few corner segments from `region`
     /// to `box`, or 0 when they are all blocked.
