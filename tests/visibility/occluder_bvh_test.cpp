@@ -133,8 +133,8 @@ TEST(OccluderBvh, OffersExactlyTheOccludersWhoseBoundsTheSegmentTouches) {
                 } else if (shape == 9) { // beside a side, outside it by half the margin
                     const Aabb& o = some_occluder();
                     const bool high = rng() % 2 != 0;
-                    a[axis] = b[axis] = high ? o.max[axis] + 0.5f * kMargin
-                                             : o.min[axis] - 0.5f * kMargin;
+                    a[axis] = b[axis] =
+                        high ? o.max[axis] + 0.5f * kMargin : o.min[axis] - 0.5f * kMargin;
                 }
                 const std::vector<OccluderId> want = touching(tw.world, a, b);
                 touched += want.empty() ? 0 : 1;

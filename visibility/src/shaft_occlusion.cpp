@@ -146,8 +146,7 @@ bool ShaftOcclusion::segment_clear(glm::vec3 a, glm::vec3 b, Scratch& scratch) c
         return !bvh_->any_touching_segment(a, b, in_the_way, m);
     }
     return !grid_->any_along_segment(a, b, scratch.grid, [&](OccluderId id) {
-        return segment_hits_box(a, ray.inv, grown(world_->occluder(id).bounds())) &&
-               in_the_way(id);
+        return segment_hits_box(a, ray.inv, grown(world_->occluder(id).bounds())) && in_the_way(id);
     });
 }
 
