@@ -62,23 +62,9 @@ public:
             return false;
         }
         const Ray ray = Ray::of(from, dir, margin);
-        std::uint32_t stack[kStackSize];
-        int top = 0;
-        stack[top++] = 0;
-        while (top > 0) {
-            const Node& node = nodes_[stack[--top]];
-            for (unsigned hits = touches(node, ray); hits != 0; hits &= hits - 1) {
-                const std::uint32_t child = node.child[std::countr_zero(hits)];
-                if ((child & kItem) == 0) {
-                    stack[top++] = child;
-                    continue;
-                }
-                if (stop(child & ~kItem)) { // its slot's box is its bounds, just tested
-                    return true;
-                }
-            }
-        }
-        return false;
+        // Without a margin (the centre checks, the most frequent) the boxes as they are,
+        // without the two additions an axis.
+        return margin == 0.0f ? search<false>(ray, stop) : search<true>(ray, stop);
     }
 
     /// Nodes in the tree (for tests and sizes).
@@ -118,9 +104,10 @@ private:
         return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
     }
     /// Bit i set when child i is used and the segment touches its box grown by
-    /// ray.margin, as clip_segment_to_box() answers for that grown box. (A margin of 0
-    /// tests the box itself: x - 0 and x + 0 are x, or +0 for -0 + 0, which every
-    /// comparison takes for -0.)
+    /// ray.margin, as clip_segment_to_box() answers for that grown box; kGrown false
+    /// (ray.margin 0) skips the growing. (Grown by 0, a box answers as itself: x - 0 and
+    /// x + 0 are x, or +0 for -0 + 0, which every comparison takes for -0.)
+    template <bool kGrown>
     static unsigned touches(const Node& node, const Ray& ray) {
 #if defined(__SSE2__)
         // clip_segment_to_box()'s floats, four boxes at a time: the same products, each
@@ -137,8 +124,12 @@ private:
         for (int a = 0; a < 3; ++a) {
             const __m128 from = _mm_set1_ps(ray.from[a]);
             const __m128 inv = _mm_set1_ps(ray.inv[a]);
-            const __m128 min = _mm_sub_ps(_mm_load_ps(node.min[a]), margin);
-            const __m128 max = _mm_add_ps(_mm_load_ps(node.max[a]), margin);
+            __m128 min = _mm_load_ps(node.min[a]);
+            __m128 max = _mm_load_ps(node.max[a]);
+            if constexpr (kGrown) {
+                min = _mm_sub_ps(min, margin);
+                max = _mm_add_ps(max, margin);
+            }
             const __m128 ta = _mm_mul_ps(_mm_sub_ps(min, from), inv);
             const __m128 tb = _mm_mul_ps(_mm_sub_ps(max, from), inv);
             const __m128 nan = _mm_cmpunord_ps(ta, tb);
@@ -164,6 +155,28 @@ private:
         }
         return hits & node.used;
 #endif
+    }
+    /// any_touching_segment() for a finite segment; kGrown: the boxes grown by
+    /// ray.margin (else ray.margin is 0 and not read).
+    template <bool kGrown, class Stop>
+    bool search(const Ray& ray, Stop& stop) const {
+        std::uint32_t stack[kStackSize];
+        int top = 0;
+        stack[top++] = 0;
+        while (top > 0) {
+            const Node& node = nodes_[stack[--top]];
+            for (unsigned hits = touches<kGrown>(node, ray); hits != 0; hits &= hits - 1) {
+                const std::uint32_t child = node.child[std::countr_zero(hits)];
+                if ((child & kItem) == 0) {
+                    stack[top++] = child;
+                    continue;
+                }
+                if (stop(child & ~kItem)) { // its slot's box is its bounds, just tested
+                    return true;
+                }
+            }
+        }
+        return false;
     }
     /// Builds the node at `depth` over ids[begin, end) (one or more; `bounds` per
     /// occluder id); returns its index.

@@ -120,9 +120,10 @@ public:
     /// `world`, `grid` and `bvh` (built over `world`) must outlive this.
     /// `portal_depth`: levels of portal tests below the top one (0: none; needs fusion).
     /// `bvh` (optional) proves a centre segment clear without the grid walk when no
-    /// occluder blocks it, and checks witness segments (segment_clear()); the answers
-    /// and hints are the same with it or without it, but for a witness the grid walk
-    /// keeps closer than kWitnessMargin to an occluder in a cell it does not cross.
+    /// occluder blocks it, and checks witness segments (segment_clear()). The answers
+    /// and hints are the same with it or without it, except that without it a witness
+    /// may pass closer than kWitnessMargin to an occluder in a cell the walk does not
+    /// cross.
     explicit ShaftOcclusion(const OccluderWorld& world, const OccluderGrid& grid,
                             bool fusion = true, int portal_depth = kDefaultPortalDepth,
                             const OccluderBvh* bvh = nullptr)
