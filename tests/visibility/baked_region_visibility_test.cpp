@@ -293,29 +293,54 @@ TEST(BakedRegionVisibility, PreparedWordsAnswerAsCellsAndMergedKeysHideOnlyToget
 
 TEST(BakedRegionVisibility, AWalkingRegionAnswersAsAFreshBuildOfEachRegion) {
     // The union is rebuilt from the slabs the last region left (slabs per x): a region
-    // that wanders by small steps along one axis or several must answer every box
-    // exactly as a culler built for that region alone.
+    // that wanders and changes size by small steps along one axis or several must
+    // answer every box exactly as a culler built for that region alone.
     const Baked& b = corridor_table();
+    const CellGrid& grid = b.table->grid();
     BakedRegionVisibility walking(b.table, nullptr);
     std::mt19937 rng(17);
-    std::uniform_real_distribution<float> step(-40.0f, 40.0f);
+    std::uniform_real_distribution<float> step(-60.0f, 60.0f);
     std::bernoulli_distribution moves(0.45);
+    std::uniform_int_distribution<int> how(0, 2); // both faces, only min, only max
     Aabb region = random_box(rng, b.play_area, 60.0f, 120.0f);
     int hidden = 0;
     int tests = 0;
-    for (int r = 0; r < 400; ++r) {
-        glm::vec3 move{0.0f};
+    int x_alone = 0; // steps whose cells changed in x alone: the slabs kept are reused
+    int y_or_z = 0;  // steps whose cells changed in y or z: every slab is made again
+    glm::ivec3 last_lo{0};
+    glm::ivec3 last_hi{-1};
+    for (int r = 0; r < 800; ++r) {
+        Aabb moved = region;
         for (int axis = 0; axis < 3; ++axis) {
-            move[axis] = moves(rng) ? step(rng) : 0.0f;
+            if (!moves(rng)) {
+                continue;
+            }
+            const float d = step(rng);
+            const int faces = how(rng);
+            moved.min[axis] += faces != 2 ? d : 0.0f;
+            moved.max[axis] += faces != 1 ? d : 0.0f;
         }
-        const Aabb moved{region.min + move, region.max + move};
-        if (b.play_area.contains(moved)) {
+        const glm::vec3 size = moved.size();
+        if (b.play_area.contains(moved) && glm::all(glm::greaterThan(size, glm::vec3(16.0f))) &&
+            glm::all(glm::lessThan(size, glm::vec3(520.0f)))) {
             region = moved;
         }
         walking.build(region);
         BakedRegionVisibility fresh(b.table, nullptr);
         fresh.build(region);
         ASSERT_EQ(walking.active(), fresh.active()) << r;
+        ASSERT_EQ(walking.partial(), fresh.partial()) << r;
+        glm::ivec3 lo;
+        glm::ivec3 hi;
+        if (grid.range_of(region, lo, hi)) {
+            const bool same_yz = lo.y == last_lo.y && hi.y == last_hi.y && lo.z == last_lo.z &&
+                                 hi.z == last_hi.z;
+            const bool same_x = lo.x == last_lo.x && hi.x == last_hi.x;
+            x_alone += same_yz && !same_x ? 1 : 0;
+            y_or_z += !same_yz ? 1 : 0;
+            last_lo = lo;
+            last_hi = hi;
+        }
         for (int k = 0; k < 30; ++k) {
             const Aabb box = random_box(rng, b.play_area, 16.0f, 64.0f);
             const Visibility expected = fresh.test_box(box);
@@ -325,6 +350,8 @@ TEST(BakedRegionVisibility, AWalkingRegionAnswersAsAFreshBuildOfEachRegion) {
         }
     }
     EXPECT_GT(hidden, tests / 10); // something is culled
+    EXPECT_GT(x_alone, 20);
+    EXPECT_GT(y_or_z, 20);
 }
 
 TEST(BakedRegionVisibility, AFactoryWithoutATableIsTheNextStage) {
