@@ -333,8 +333,8 @@ TEST(BakedRegionVisibility, AWalkingRegionAnswersAsAFreshBuildOfEachRegion) {
         glm::ivec3 lo;
         glm::ivec3 hi;
         if (grid.range_of(region, lo, hi)) {
-            const bool same_yz = lo.y == last_lo.y && hi.y == last_hi.y && lo.z == last_lo.z &&
-                                 hi.z == last_hi.z;
+            const bool same_yz =
+                lo.y == last_lo.y && hi.y == last_hi.y && lo.z == last_lo.z && hi.z == last_hi.z;
             const bool same_x = lo.x == last_lo.x && hi.x == last_hi.x;
             x_alone += same_yz && !same_x ? 1 : 0;
             y_or_z += !same_yz ? 1 : 0;
