@@ -158,8 +158,8 @@ std::uint32_t OccluderBvh::build(const std::vector<Aabb>& bounds, std::vector<Oc
             for (std::size_t k = lo; k < hi; ++k) {
                 box.extend(bounds[ids[k]]);
             }
-            child = slot(bounds, ids, lo, hi,
-                         depth + 1); // may grow nodes_: index, not a reference, below
+            // May grow nodes_: an index, not a reference, below.
+            child = slot(bounds, ids, lo, hi, depth + 1);
             nodes_[index].used |= 1u << i;
         }
         nodes_[index].child[i] = child;
