@@ -109,9 +109,9 @@ struct ServerConfig {
     /// (interest::kCullerNames).
     interest::CullerKind culler = interest::PolicySettings{}.culler;
     /// Levels of portal tests in the culler's shaft stage (RegionCullerConfig::
-    /// portal_depth): 2 sends about 15% fewer entities on oa_dm4 for about 4x the
-    /// culling CPU, so the server defaults to 0 (capacity) where the library and the
-    /// evaluation default to 2 (docs/operations.md). [Limit: 0..4]
+    /// portal_depth): deeper sends fewer entities for several times the culling CPU,
+    /// so the server defaults to 0 (capacity) where the library and the evaluation
+    /// default to 2 (docs/operations.md has the figures). [Limit: 0..4]
     int portal_depth = interest::PolicySettings{}.portal_depth;
     /// dsoc and occlusion: reject first what the map's PVS (Quake 3 maps with vis data)
     /// proves hidden from every cluster of the client's eye region.

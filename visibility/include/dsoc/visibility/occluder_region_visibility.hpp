@@ -31,11 +31,12 @@ struct OccluderScene {
 
 /// Which stages a region culler runs; both are conservative.
 struct RegionCullerConfig {
-    /// The extended-projection z-pyramid: a build per region (about 0.3-2 ms), then
-    /// ~0.2 us per box; fuses occluders per texel; loses much to parallax when the
-    /// region is wide compared with the occluders' distance.
+    /// The extended-projection z-pyramid: a build per region (its cost is the build),
+    /// then a few texel reads per box; fuses occluders per texel; loses much to parallax
+    /// when the region is wide compared with the occluders' distance.
     bool pyramid = true;
-    /// The exact single-occluder shaft test: no build, ~2-5 us per box that reaches it.
+    /// The exact single-occluder shaft test: no build, but the dearest per box that
+    /// reaches it (docs/region-visibility.md has the figures).
     bool shaft = true;
     /// Within the shaft stage, occluder fusion across cut planes through the walls
     /// the centre segment crosses (cut_plane_fusion.hpp), for boxes no single

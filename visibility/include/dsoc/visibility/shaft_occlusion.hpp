@@ -187,10 +187,10 @@ public:
     /// a search that keeps failing is tried every other test.
     static constexpr std::uint32_t kNoWitness = 0x40u;
     /// Boxes with a longer side skip the portal tests (TBVs of fast entities and boxes
-    /// of entity clusters seldom pass them and cost the most: on a generated city, 200
-    /// viewers, 2,000 bots, dsoc 738 -> 308 µs per client-tick, the same sets; oa_dm4
-    /// unchanged) and the search for a witness (their hints are not kept while they are
-    /// visible). Only the queried box counts, not the portals of the sub-tests.
+    /// of entity clusters seldom pass them and cost the most; docs/region-visibility.md
+    /// has what the bound saves) and the search for a witness (their hints are not kept
+    /// while they are visible). Only the queried box counts, not the portals of the
+    /// sub-tests.
     /// [Units: world units]
     static constexpr float kMaxPortalBoxSide = 200.0f;
     /// A centre segment is checked in the tree (when there is one) before the grid walk
