@@ -449,6 +449,10 @@ std::optional<SnapshotProblem> carry(const FrameEntity& b, const UpdateEntry* e,
     if (!in_range) {
         return SnapshotProblem{"malformed_update", where() + ": a value leaves the range"};
     }
+    if (pitch_beyond(n.pose.pitch, steps)) {
+        return SnapshotProblem{"malformed_update",
+                               where() + ": " + pitch_beyond_detail(n.pose.pitch, steps)};
+    }
     measure_motion(n, b.pose, t, steps);
     return std::nullopt;
 }

@@ -202,6 +202,12 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
             problems.push_back({"malformed_update", where() + ": a delta leaves the range"});
             continue;
         }
+        if (pitch_beyond(q.pitch, settings_.angle_steps)) {
+            problems.push_back(
+                {"malformed_update",
+                 where() + ": " + pitch_beyond_detail(q.pitch, settings_.angle_steps)});
+            continue;
+        }
         r.quantized = q;
     }
     if (reader.problem()) {

@@ -196,9 +196,21 @@ inline std::optional<SnapshotProblem> read_update_entries(const pb::Snapshot& s,
     return reader.problem();
 }
 
+/// Whether a received pitch (steps) is beyond a quarter turn either way: what no pose
+/// with a pitch within [-90, 90] degrees quantizes to (max_pitch_steps).
+[[nodiscard]] inline bool pitch_beyond(std::int64_t pitch, std::uint32_t steps) {
+    return pitch < -max_pitch_steps(steps) || pitch > max_pitch_steps(steps);
+}
+
+/// "pitch step P beyond +-M (a quarter turn)", for a problem's detail.
+[[nodiscard]] inline std::string pitch_beyond_detail(std::int64_t pitch, std::uint32_t steps) {
+    return "pitch step " + std::to_string(pitch) + " beyond +-" +
+           std::to_string(max_pitch_steps(steps)) + " (a quarter turn)";
+}
+
 /// What is wrong with an entering entity's state, if anything: its tier, angles on the
-/// heard tier, a position beyond +-kMaxQuantizedCoordinate, or a yaw step outside
-/// [0, steps).
+/// heard tier, a position beyond +-kMaxQuantizedCoordinate, a yaw step outside
+/// [0, steps), or a pitch beyond a quarter turn.
 [[nodiscard]] inline std::optional<SnapshotProblem> enter_problem(const pb::EntityState& e,
                                                                   std::uint32_t steps) {
     if (e.tier() >= kTiers) {
@@ -221,12 +233,17 @@ inline std::optional<SnapshotProblem> read_update_entries(const pb::Snapshot& s,
                                                        std::to_string(e.yaw()) +
                                                        " >= " + std::to_string(steps)};
     }
+    if (pitch_beyond(e.pitch(), steps)) {
+        return SnapshotProblem{"malformed_update", entity_name(e.id()) + " enters with " +
+                                                       pitch_beyond_detail(e.pitch(), steps)};
+    }
     return std::nullopt;
 }
 
 /// What is wrong with a rebase entry's values (the new tier, x, y, z, yaw, pitch), if
 /// anything (the tier, angles on the heard tier, the yaw step, a position beyond
-/// +-kMaxQuantizedCoordinate); `where()` names the entry (called only for a problem).
+/// +-kMaxQuantizedCoordinate, a pitch beyond a quarter turn); `where()` names the entry
+/// (called only for a problem).
 template <class Where>
 [[nodiscard]] std::optional<SnapshotProblem> rebase_problem(const std::int32_t* values,
                                                             std::uint32_t steps, Where&& where) {
@@ -247,6 +264,10 @@ template <class Where>
         if (values[k] < -kMaxQuantizedCoordinate || values[k] > kMaxQuantizedCoordinate) {
             return SnapshotProblem{"malformed_update", where() + ": rebase beyond +-2^30 quanta"};
         }
+    }
+    if (pitch_beyond(values[5], steps)) {
+        return SnapshotProblem{"malformed_update",
+                               where() + ": rebase " + pitch_beyond_detail(values[5], steps)};
     }
     return std::nullopt;
 }

@@ -717,5 +717,32 @@ TEST_F(HostileFixture, MalformedEntriesAreRejected) {
     expect_rejected(s, "malformed_update");
 }
 
+TEST_F(HostileFixture, APitchBeyondAQuarterTurnIsRejected) {
+    // Entering, updated or rebased: what no pose within [-90, 90] degrees quantizes to.
+    const std::int32_t quarter = max_pitch_steps(settings.angle_steps);
+    pb::Snapshot s = next();
+    pb::EntityState& up = *s.add_enter();
+    up.set_id(9);
+    up.set_pitch(quarter + 1);
+    expect_rejected(s, "malformed_update");
+    s = next();
+    s.set_update_head(1, s.update_head(1) & ~std::uint64_t{15}); // entity 6's mask apart
+    s.add_update_fields(kFieldY | kFieldPitch);
+    s.add_update_values(-quarter - 1);
+    expect_rejected(s, "malformed_update");
+    s = next();
+    s.set_update_head(0, s.update_head(0) & ~std::uint64_t{15}); // entity 4 rebased
+    s.add_update_fields(kFieldRebase);
+    s.clear_update_values();
+    for (const std::int32_t v : {0, 0, 0, 0, 0, quarter + 1, 1}) { // then entity 6's y
+        s.add_update_values(v);
+    }
+    expect_rejected(s, "malformed_update");
+    // On the bound is a pitch, and the same snapshots apply.
+    s.set_update_values(5, quarter);
+    EXPECT_TRUE(decoder.apply(through_wire(s)).empty());
+    EXPECT_EQ(decoder.find(4)->pose.pitch, quarter);
+}
+
 } // namespace
 } // namespace dsoc::protocol

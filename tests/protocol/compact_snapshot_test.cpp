@@ -33,6 +33,22 @@ TEST(Quantization, RoundTripIsWithinHalfAQuantum) {
     }
 }
 
+TEST(Quantization, APitchWithinAQuarterTurnQuantizesWithinMaxPitchSteps) {
+    // Every step count the settings allow, straight up and down and just inside: never
+    // beyond the bound a decoder holds a pitch to, and mostly on it (the bound is tight).
+    int on_the_bound = 0;
+    for (std::uint32_t steps = 256; steps <= 65536; ++steps) {
+        for (const float pitch : {90.0f, -90.0f, 89.999f}) {
+            const QuantizedPose q = quantize(Pose{0, 0, 0, 0, pitch}, 1.0f, steps);
+            ASSERT_LE(std::abs(q.pitch), max_pitch_steps(steps)) << steps << " " << pitch;
+            on_the_bound += std::abs(q.pitch) == max_pitch_steps(steps) ? 1 : 0;
+        }
+    }
+    EXPECT_GT(on_the_bound, 65281 * 3 / 2);
+    static_assert(max_pitch_steps(4096) == 1024 && max_pitch_steps(258) == 65 &&
+                  max_pitch_steps(257) == 64);
+}
+
 TEST(Quantization, ExtentsRoundUpAndErrorsCompareYawAroundTheCircle) {
     EXPECT_EQ(quantize_extent(15.0f, 0.125f), 120u);
     EXPECT_EQ(quantize_extent(15.01f, 0.5f), 31u); // never smaller than the box
@@ -375,6 +391,23 @@ TEST(CompactSnapshot, HostileSnapshotsAreReportedNotTrusted) {
     columns.add_update_fields(kFieldPitch); // a mask apart no entry takes
     EXPECT_EQ(dec.apply(columns).at(0).kind, "malformed_update");
     EXPECT_EQ(dec.apply(one(4, kFieldX | kFieldPitch, {1, 0})).size(), 0u); // apart: fine
+    // A pitch up to a quarter turn either way, and no further: entering, updated, rebased.
+    const std::int32_t quarter = max_pitch_steps(q.angle_steps);
+    EXPECT_EQ(dec.apply(one(4, kFieldPitch, {quarter})).size(), 0u);
+    EXPECT_EQ(dec.apply(one(4, kFieldPitch, {1})).at(0).kind, "malformed_update");
+    EXPECT_EQ(dec.apply(one(4, kFieldPitch, {-2 * quarter - 1})).at(0).kind, "malformed_update");
+    EXPECT_EQ(dec.pose(4)->pitch_deg, 90.0f); // the rejected entries changed nothing
+    EXPECT_EQ(dec.apply(one(4, kFieldRebase, {0, 0, 0, 0, 0, -quarter - 1})).at(0).kind,
+              "malformed_update");
+    EXPECT_EQ(dec.apply(one(4, kFieldRebase, {0, 0, 0, 0, 0, -quarter})).size(), 0u);
+    pb::Snapshot looking_past_up;
+    auto* past = looking_past_up.add_enter();
+    past->set_id(6);
+    past->set_pitch(quarter + 1);
+    EXPECT_EQ(dec.apply(looking_past_up).at(0).kind, "malformed_update");
+    EXPECT_FALSE(dec.knows(6));
+    past->set_pitch(-quarter);
+    EXPECT_EQ(dec.apply(looking_past_up).size(), 0u);
     pb::Snapshot acked = one(4, kFieldX, {1});
     acked.set_baseline_tick(1); // the other wire's snapshot
     EXPECT_EQ(dec.apply(acked).at(0).kind, "malformed_update");
@@ -391,6 +424,7 @@ TEST(CompactSnapshot, HostileSnapshotsAreReportedNotTrusted) {
     a->set_x(dec.pose(4)->x + 0.2f); // 1.6 quanta of 0.125
     a->set_y(dec.pose(4)->y);
     a->set_z(dec.pose(4)->z);
+    a->set_pitch(dec.pose(4)->pitch_deg);
     double worst = 0.0;
     const auto audited = dec.check_audit(audit, worst);
     ASSERT_EQ(audited.size(), 1u);

@@ -87,6 +87,12 @@ struct QuantizedPose {
 [[nodiscard]] QuantizedPose quantize(const Pose& pose, float quantum, std::uint32_t steps);
 /// The pose a quantized pose stands for; yaw in [-180, 180).
 [[nodiscard]] Pose dequantize(const QuantizedPose& q, float quantum, std::uint32_t steps);
+/// The largest |pitch| in steps of a quantized pose whose pitch is within [-90, 90]
+/// degrees: a quarter of `steps`, rounded half up as quantize() rounds. A received pitch
+/// beyond it is malformed (docs/protocol.md).
+[[nodiscard]] constexpr std::int32_t max_pitch_steps(std::uint32_t steps) {
+    return static_cast<std::int32_t>((steps + 2) / 4);
+}
 /// quantize() on `tier` (< kTiers) of `settings`: the heard tier drops the angles (0).
 [[nodiscard]] QuantizedPose quantize(const Pose& pose, const QuantizationSettings& settings,
                                      std::uint8_t tier);
