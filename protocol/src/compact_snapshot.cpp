@@ -202,7 +202,8 @@ std::vector<SnapshotProblem> SnapshotDecoder::apply(const pb::Snapshot& s) {
             problems.push_back({"malformed_update", where() + ": a delta leaves the range"});
             continue;
         }
-        if (pitch_beyond(q.pitch, settings_.angle_steps)) {
+        // Only a pitch that arrives: the replica's own was checked when it came.
+        if ((fields & kFieldPitch) != 0 && pitch_beyond(q.pitch, settings_.angle_steps)) {
             problems.push_back(
                 {"malformed_update",
                  where() + ": " + pitch_beyond_detail(q.pitch, settings_.angle_steps)});
