@@ -209,8 +209,10 @@ inline std::optional<SnapshotProblem> read_update_entries(const pb::Snapshot& s,
 }
 
 /// What is wrong with an entering entity's state, if anything: its tier, angles on the
-/// heard tier, a position beyond +-kMaxQuantizedCoordinate, a yaw step outside
-/// [0, steps), or a pitch beyond a quarter turn.
+/// heard tier, a position beyond +-kMaxQuantizedCoordinate, a half extent beyond
+/// kMaxQuantizedCoordinate (quantize_extent() sends no larger), a yaw step outside
+/// [0, steps), or a pitch beyond a quarter turn. The kind is the game's own value and
+/// passes as it is.
 [[nodiscard]] inline std::optional<SnapshotProblem> enter_problem(const pb::EntityState& e,
                                                                   std::uint32_t steps) {
     if (e.tier() >= kTiers) {
@@ -227,6 +229,13 @@ inline std::optional<SnapshotProblem> read_update_entries(const pb::Snapshot& s,
     if (outside(e.x()) || outside(e.y()) || outside(e.z())) {
         return SnapshotProblem{"malformed_update",
                                entity_name(e.id()) + " enters beyond +-2^30 quanta"};
+    }
+    for (const std::uint32_t half : {e.half_x(), e.half_y(), e.half_z()}) {
+        if (half > static_cast<std::uint32_t>(kMaxQuantizedCoordinate)) {
+            return SnapshotProblem{"malformed_update",
+                                   entity_name(e.id()) + " enters with half extent " +
+                                       std::to_string(half) + " quanta, beyond 2^30"};
+        }
     }
     if (e.yaw() >= steps) {
         return SnapshotProblem{"malformed_update", entity_name(e.id()) + " enters with yaw step " +

@@ -715,6 +715,13 @@ TEST_F(HostileFixture, MalformedEntriesAreRejected) {
     far.set_id(9);
     far.set_y(-kMaxQuantizedCoordinate - 1);
     expect_rejected(s, "malformed_update");
+    s = next();
+    pb::EntityState& huge = *s.add_enter(); // no encoder sends a half extent past 2^30
+    huge.set_id(9);
+    huge.set_half_z(static_cast<std::uint32_t>(kMaxQuantizedCoordinate) + 1);
+    expect_rejected(s, "malformed_update");
+    huge.set_half_z(static_cast<std::uint32_t>(kMaxQuantizedCoordinate)); // on the bound
+    EXPECT_TRUE(decoder.apply(through_wire(s)).empty());
 }
 
 TEST_F(HostileFixture, APitchBeyondAQuarterTurnIsRejected) {
