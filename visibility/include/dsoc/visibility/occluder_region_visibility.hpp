@@ -66,27 +66,11 @@ public:
         }
     }
     [[nodiscard]] Visibility test_box(const Aabb& box) const override {
-        if (buffer_ && buffer_->test_box(box) == Visibility::occluded) {
-            return Visibility::occluded;
-        }
-        if (!config_.shaft || scene_->grid == nullptr) {
-            return Visibility::visible;
-        }
-        return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion, config_.portal_depth,
-                              scene_->bvh.get())
-            .test(region_, box, scratch_);
+        return test_with_hint(box, nullptr);
     }
     /// test_box() trying first the occluder that hid the box last time (ShaftOcclusion).
     [[nodiscard]] Visibility test_box_hinted(const Aabb& box, std::uint32_t& hint) const override {
-        if (buffer_ && buffer_->test_box(box) == Visibility::occluded) {
-            return Visibility::occluded;
-        }
-        if (!config_.shaft || scene_->grid == nullptr) {
-            return Visibility::visible;
-        }
-        return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion, config_.portal_depth,
-                              scene_->bvh.get())
-            .test(region_, box, scratch_, &hint);
+        return test_with_hint(box, &hint);
     }
     /// The z-pyramid alone; without it, no test at all (`visible`, which is always
     /// allowed): an entity visible last tick stays replicated until its next full test.
@@ -98,6 +82,19 @@ public:
     [[nodiscard]] const RegionOcclusionBuffer* buffer() const { return buffer_.get(); }
 
 private:
+    /// The z-pyramid, then the shaft stage with `hint` (nullptr: none).
+    [[nodiscard]] Visibility test_with_hint(const Aabb& box, std::uint32_t* hint) const {
+        if (buffer_ && buffer_->test_box(box) == Visibility::occluded) {
+            return Visibility::occluded;
+        }
+        if (!config_.shaft || scene_->grid == nullptr) {
+            return Visibility::visible;
+        }
+        return ShaftOcclusion(scene_->world, *scene_->grid, config_.fusion, config_.portal_depth,
+                              scene_->bvh.get())
+            .test(region_, box, scratch_, hint);
+    }
+
     std::shared_ptr<const OccluderScene> scene_;
     RegionCullerConfig config_;
     std::unique_ptr<RegionOcclusionBuffer> buffer_;
