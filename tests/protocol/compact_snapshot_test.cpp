@@ -410,7 +410,8 @@ TEST(CompactSnapshot, HostileSnapshotsAreReportedNotTrusted) {
     pb::Snapshot too_wide;
     too_wide.add_enter()->CopyFrom(*past);
     too_wide.mutable_enter(0)->set_half_x(static_cast<std::uint32_t>(kMaxQuantizedCoordinate) + 1);
-    EXPECT_EQ(dec.apply(too_wide).at(0).kind, "malformed_update"); // past what quantize_extent sends
+    EXPECT_EQ(dec.apply(too_wide).at(0).kind,
+              "malformed_update"); // past what quantize_extent sends
     EXPECT_FALSE(dec.knows(6));
     EXPECT_EQ(dec.apply(looking_past_up).size(), 0u);
     pb::Snapshot acked = one(4, kFieldX, {1});
