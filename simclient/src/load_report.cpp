@@ -70,6 +70,7 @@ LoadReport summarize_sessions(const std::vector<std::shared_ptr<SimClient>>& ses
         r.bytes_down += s.bytes_down;
         r.bytes_up += s.bytes_up;
         r.snapshots += s.snapshots;
+        r.checked_snapshots += s.checks_snapshots ? s.snapshots : 0;
         r.entity_updates += s.entity_updates;
         r.audited_poses += s.audited_poses;
         r.max_audit_error = std::max(r.max_audit_error, s.max_audit_error);

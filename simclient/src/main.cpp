@@ -113,6 +113,12 @@ int main(int argc, char** argv) {
                    "Write one JSON line per second to this file (docs/simclient.md)");
     dsoc::cli::add_setting(app, "--seed", config.seed, "Seed of the wandering inputs");
     dsoc::cli::add_setting(
+        app, "--check-every", config.check_every,
+        "Every N-th client decodes and checks each snapshot; the others acknowledge it "
+        "unread, as a load generator that discards response bodies (spectators always "
+        "decode; 1: all)")
+        ->check(CLI::PositiveNumber);
+    dsoc::cli::add_setting(
         app, "--audit-every", config.audit_every_ticks,
         "Check the decoded replica against the server's exact poses every N ticks "
         "(0: never)");

@@ -59,7 +59,7 @@ std::string format_summary(const LoadReport& r) {
         "  connect time           p50 {:.1f} ms  p99 {:.1f} ms\n"
         "  down per client        {:.1f} KiB/s ({:.0f} B/s), {:.0f} entity updates/s\n"
         "  up per client          {:.2f} KiB/s ({:.0f} B/s)\n"
-        "  snapshots received     {}\n"
+        "  snapshots received     {} ({} decoded and checked)\n"
         "  entities known/client  mean {:.1f}  p95 {:.0f}; by hearing only mean {:.1f}\n"
         "  snapshot interarrival  p50 {:.1f} ms  p95 {:.1f} ms  p99 {:.1f} ms\n",
         r.clients, r.config.host, r.config.port, r.wall_seconds, r.scenario_seconds,
@@ -67,8 +67,8 @@ std::string format_summary(const LoadReport& r) {
         r.cancelled_before_hello, r.connect_ms.p50, r.connect_ms.p99,
         r.bytes_down_per_client_s / 1024.0, r.bytes_down_per_client_s,
         r.entity_updates_per_client_s, r.bytes_up_per_client_s / 1024.0, r.bytes_up_per_client_s,
-        r.snapshots, r.entities_known.mean, r.entities_known.p95, r.entities_heard.mean,
-        r.snapshot_interarrival_ms.p50, r.snapshot_interarrival_ms.p95,
+        r.snapshots, r.checked_snapshots, r.entities_known.mean, r.entities_known.p95,
+        r.entities_heard.mean, r.snapshot_interarrival_ms.p50, r.snapshot_interarrival_ms.p95,
         r.snapshot_interarrival_ms.p99);
     if (r.snapshot_socket_interarrival_ms.count > 0) {
         out += fmt::format(
@@ -161,6 +161,7 @@ std::string format_json(const LoadReport& r) {
     j["bytes_up_per_client_per_s"] = r.bytes_up_per_client_s;
     j["entity_updates_per_client_per_s"] = r.entity_updates_per_client_s;
     j["snapshots_received"] = r.snapshots;
+    j["snapshots_checked"] = r.checked_snapshots;
     j["audited_poses"] = r.audited_poses;
     j["max_audit_error_quanta"] = r.max_audit_error;
     j["entities_known_per_client"] = {{"mean", r.entities_known.mean},

@@ -46,6 +46,10 @@ SimClient::SimClient(asio::io_context& io, const LoadConfig& config, SessionSetu
       input_timer_(io), close_timer_(io), connect_timer_(io), decoder_(config.max_frame_bytes),
       input_model_(setup_.group != nullptr ? setup_.group->behaviour : Behaviour::wanderer,
                    config.seed * 1'000'003ULL + setup_.session) {
+    const bool spectator =
+        setup_.group != nullptr && setup_.group->behaviour == Behaviour::spectator;
+    stats_.checks_snapshots = spectator || config.check_every <= 1 ||
+                              static_cast<std::uint32_t>(setup_.index) % config.check_every == 0;
     if (setup_.group != nullptr && setup_.group->network.any()) {
         const auto& net = setup_.group->network;
         delay_out_.emplace(io, net.latency_ms, net.jitter_ms, config.seed ^ (setup_.session << 1));
@@ -230,7 +234,7 @@ void SimClient::send_udp(const pb::Envelope& message) {
         return;
     }
     if (message.has_client_input()) {
-        udp_->send_input(message.client_input(), acked_replica_.newest_tick().value_or(0));
+        udp_->send_input(message.client_input(), acknowledged_tick());
     } else {
         udp_->send_message(message);
         if (message.has_disconnect()) {
@@ -441,6 +445,10 @@ void SimClient::apply_and_audit(Replica& replica, const pb::Snapshot& s) {
 }
 
 void SimClient::apply_snapshot(const pb::Snapshot& s) {
+    if (!stats_.checks_snapshots) {
+        discard_snapshot(s);
+        return;
+    }
     if (udp_) {
         apply_acked_snapshot(s);
         return;
@@ -470,6 +478,22 @@ void SimClient::apply_acked_snapshot(const pb::Snapshot& s) {
     stats_.known_samples.add(static_cast<double>(known()));
     stats_.heard_samples.add(static_cast<double>(heard));
     send_input_on_snapshot();
+}
+
+void SimClient::discard_snapshot(const pb::Snapshot& s) {
+    count_snapshot(s);
+    if (!stats_.saw_own_entity) {
+        for (const pb::EntityState& e : s.enter()) {
+            stats_.saw_own_entity = stats_.saw_own_entity || e.id() == stats_.entity_id;
+        }
+    }
+    if (udp_) {
+        send_input_on_snapshot();
+    }
+}
+
+std::uint64_t SimClient::acknowledged_tick() const {
+    return stats_.checks_snapshots ? acked_replica_.newest_tick().value_or(0) : last_snapshot_tick_;
 }
 
 void SimClient::send_input_on_snapshot() {

@@ -6,6 +6,8 @@
 
 #include "server_fixture.hpp"
 
+#include "dsoc/simclient/load_run.hpp"
+
 #include "dsoc/protocol/challenge_cookie.hpp"
 #include "dsoc/protocol/codec.hpp"
 #include "dsoc/protocol/connect_token.hpp"
@@ -217,6 +219,47 @@ TEST(UdpTransport, ClientsGetSnapshotsAuditsAndTheirOwnEntity) {
         EXPECT_EQ(server.udp_endpoint()->drops()[r], expected)
             << server::udp_drop_name(static_cast<UdpDrop>(r));
     }
+}
+
+TEST(UdpTransport, ClientsThatDiscardSnapshotsStillAcknowledgeEachSoTheServerCodesDeltas) {
+    testing::RunningServer server(udp_config());
+    simclient::LoadConfig lc = udp_load(server, 6, 3.0);
+    lc.check_every = 3; // clients 0 and 3 decode and check; 1, 2, 4 and 5 discard
+    boost::asio::io_context io;
+    simclient::LoadRun run(io, lc);
+    run.start();
+    io.run();
+    std::this_thread::sleep_for(std::chrono::milliseconds(300)); // the goodbyes, as above
+    server.stop();
+    const simclient::LoadReport report = run.report();
+    EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
+    EXPECT_EQ(report.connected, 6);
+    EXPECT_EQ(report.missing_own_entity, 0); // a discarding client finds it among the enters
+    EXPECT_GT(report.audited_poses, 0u);     // the checking clients' audits
+    std::uint64_t checked = 0;
+    for (const auto& client : run.clients()) {
+        const simclient::ClientStats& s = client->stats();
+        EXPECT_EQ(s.checks_snapshots, client->setup().index % 3 == 0) << client->name();
+        EXPECT_GE(s.snapshots, 70u) << client->name(); // ~2.8 s at 30 Hz
+        EXPECT_TRUE(s.saw_own_entity) << client->name();
+        if (s.checks_snapshots) {
+            checked += s.snapshots;
+            EXPECT_GT(s.known_samples.count(), 0u) << client->name();
+        } else {
+            EXPECT_EQ(s.known_samples.count(), 0u) << client->name(); // never decoded
+            EXPECT_EQ(client->known(), 0u) << client->name();
+        }
+    }
+    EXPECT_EQ(report.checked_snapshots, checked);
+    EXPECT_LT(3 * report.checked_snapshots, 2 * report.snapshots);
+    // The discarding clients acknowledged what they received, as the checking ones: the
+    // server coded their snapshots against frames they acknowledged, not whole (were a
+    // discarding client's acknowledgement missing, two thirds of the snapshots would be).
+    const auto& stats = server.stats();
+    EXPECT_GE(stats.snapshots_sent, report.snapshots);
+    EXPECT_EQ(stats.acked_snapshots_against_baseline + stats.acked_snapshots_whole,
+              stats.snapshots_sent);
+    EXPECT_GT(stats.acked_snapshots_against_baseline, 4 * stats.acked_snapshots_whole);
 }
 
 TEST(UdpTransport, OverAnEmulatedLinkSnapshotsArriveATickApartAndTheDelayIsTheLinks) {

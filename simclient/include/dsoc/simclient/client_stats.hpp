@@ -30,7 +30,10 @@ struct ClientStats {
     std::uint64_t bytes_up = 0;
     std::uint64_t snapshots = 0;
     std::uint64_t entity_updates = 0; ///< enters + updates received
-    std::uint64_t audited_poses = 0;  ///< replica poses checked against the server's
+    /// The session decodes and checks its snapshots (LoadConfig::check_every); a
+    /// discarding one counts and acknowledges them, and samples no replica.
+    bool checks_snapshots = true;
+    std::uint64_t audited_poses = 0; ///< replica poses checked against the server's
     /// Largest audit error: distance of a replica pose from the server's, in quanta
     /// (positions) or angle steps; at most 0.5 when the deltas decode right.
     double max_audit_error = 0.0;

@@ -56,6 +56,9 @@ struct LoadReport {
     std::uint64_t bytes_down = 0;
     std::uint64_t bytes_up = 0;
     std::uint64_t snapshots = 0;
+    /// Of them, the ones decoded and checked (LoadConfig::check_every); the entity
+    /// samples and the audits are of these.
+    std::uint64_t checked_snapshots = 0;
     std::uint64_t entity_updates = 0;
     std::uint64_t audited_poses = 0;      ///< replica poses checked against the server's exact ones
     double max_audit_error = 0.0;         ///< [Units: quanta or angle steps] <= 0.5 when correct

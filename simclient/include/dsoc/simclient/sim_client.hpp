@@ -91,6 +91,12 @@ private:
     void receive_udp(const protocol::pb::Envelope& message);
     void send_udp(const protocol::pb::Envelope& message);
     void apply_acked_snapshot(const protocol::pb::Snapshot& snapshot);
+    /// A discarding session's handling of a snapshot (LoadConfig::check_every): counted,
+    /// its own entity looked for among the enters, acknowledged unread.
+    void discard_snapshot(const protocol::pb::Snapshot& snapshot);
+    /// The tick the next input acknowledges (0: none yet): the newest frame applied, or
+    /// by a discarding session the newest snapshot received.
+    [[nodiscard]] std::uint64_t acknowledged_tick() const;
     /// Applies `snapshot` to `replica` (either decoder), checks its audit, counts it.
     template <typename Replica>
     void apply_and_audit(Replica& replica, const protocol::pb::Snapshot& snapshot);
