@@ -168,7 +168,19 @@ void LoadRun::follow(std::size_t g, int share, Clock::time_point now, double dt_
     }
 }
 
+bool picked_to_check(int index, std::uint32_t check_every) {
+    if (check_every <= 1) {
+        return true;
+    }
+    const auto i = static_cast<std::uint64_t>(index);
+    std::uint64_t z = i / check_every + 0x9e3779b97f4a7c15ULL; // splitmix64 of the run
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return (z ^ (z >> 31)) % check_every == i % check_every;
+}
+
 namespace {
+
 /// Between a session lost with its server and its replacement at the next one.
 constexpr auto kFailoverPause = std::chrono::milliseconds(200);
 } // namespace
@@ -217,6 +229,11 @@ std::shared_ptr<SimClient> LoadRun::start_client(std::size_t g, int index) {
     SessionSetup setup;
     setup.group = &scenario_.groups[g];
     setup.index = index;
+    GroupState& gs = groups_[g];
+    if (gs.first_index < 0) {
+        gs.first_index = index;
+    }
+    setup.checks_snapshots = index == gs.first_index || picked_to_check(index, config_.check_every);
     std::tie(setup.host, setup.port) = server_of(index);
     setup.session = clients_.size() * static_cast<std::size_t>(shard_.count) +
                     static_cast<std::size_t>(shard_.index);

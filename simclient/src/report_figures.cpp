@@ -32,6 +32,16 @@ Figure plain(const char* name, const char* meaning, std::function<double(const L
             }};
 }
 
+/// A figure over the checking clients' replicas (LoadConfig::check_every): absent when no
+/// snapshot was decoded, rather than 0.
+Figure sampled(const char* name, const char* meaning, common::Summary LoadReport::*member,
+               double common::Summary::*field) {
+    return {name, Dimension::plain, meaning, [member, field](const LoadReport& r) {
+                const common::Summary& s = r.*member;
+                return FigureValue{s.*field, s.count > 0};
+            }};
+}
+
 std::vector<Figure> make_figures() {
     std::vector<Figure> f;
     add_summary(f, "interarrival", "the time between a client's snapshots as it handled them",
@@ -59,13 +69,15 @@ std::vector<Figure> make_figures() {
                  }});
     f.push_back(plain("entity_updates_per_client", "enters and updates per client per second",
                       [](const LoadReport& r) { return r.entity_updates_per_client_s; }));
-    f.push_back(plain("entities_known_mean", "entities a client knows, mean over snapshots",
-                      [](const LoadReport& r) { return r.entities_known.mean; }));
-    f.push_back(plain("entities_known_p95", "entities a client knows, p95 over snapshots",
-                      [](const LoadReport& r) { return r.entities_known.p95; }));
-    f.push_back(plain("entities_heard_mean",
-                      "entities a client knows only by hearing, mean over snapshots",
-                      [](const LoadReport& r) { return r.entities_heard.mean; }));
+    f.push_back(sampled("entities_known_mean",
+                        "entities a checking client knows, mean over its snapshots",
+                        &LoadReport::entities_known, &common::Summary::mean));
+    f.push_back(sampled("entities_known_p95",
+                        "entities a checking client knows, p95 over its snapshots",
+                        &LoadReport::entities_known, &common::Summary::p95));
+    f.push_back(sampled("entities_heard_mean",
+                        "entities a checking client knows only by hearing, mean over its snapshots",
+                        &LoadReport::entities_heard, &common::Summary::mean));
     f.push_back(plain("snapshots", "snapshots received by all clients",
                       [](const LoadReport& r) { return static_cast<double>(r.snapshots); }));
     f.push_back(plain("sessions", "sessions started",

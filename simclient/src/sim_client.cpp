@@ -48,8 +48,7 @@ SimClient::SimClient(asio::io_context& io, const LoadConfig& config, SessionSetu
                    config.seed * 1'000'003ULL + setup_.session) {
     const bool spectator =
         setup_.group != nullptr && setup_.group->behaviour == Behaviour::spectator;
-    stats_.checks_snapshots = spectator || config.check_every <= 1 ||
-                              static_cast<std::uint32_t>(setup_.index) % config.check_every == 0;
+    stats_.checks_snapshots = setup_.checks_snapshots || spectator;
     if (setup_.group != nullptr && setup_.group->network.any()) {
         const auto& net = setup_.group->network;
         delay_out_.emplace(io, net.latency_ms, net.jitter_ms, config.seed ^ (setup_.session << 1));
@@ -457,8 +456,10 @@ void SimClient::apply_snapshot(const pb::Snapshot& s) {
     if (replica_.knows(stats_.entity_id)) {
         stats_.saw_own_entity = true;
     }
-    stats_.known_samples.add(static_cast<double>(replica_.size()));
-    stats_.heard_samples.add(static_cast<double>(replica_.heard()));
+    if (setup_.checks_snapshots) {
+        stats_.known_samples.add(static_cast<double>(replica_.size()));
+        stats_.heard_samples.add(static_cast<double>(replica_.heard()));
+    }
 }
 
 void SimClient::apply_acked_snapshot(const pb::Snapshot& s) {
@@ -468,20 +469,21 @@ void SimClient::apply_acked_snapshot(const pb::Snapshot& s) {
     if (acked_replica_.find(stats_.entity_id) != nullptr) {
         stats_.saw_own_entity = true;
     }
-    const protocol::DeltaFrame* frame = acked_replica_.newest();
-    std::size_t heard = 0;
-    if (frame != nullptr) {
+    if (const protocol::DeltaFrame* frame = acked_replica_.newest();
+        frame != nullptr && setup_.checks_snapshots) {
+        std::size_t heard = 0;
         for (const protocol::FrameEntity& e : frame->entities) {
             heard += e.tier == protocol::kHeardTier ? 1 : 0;
         }
+        stats_.known_samples.add(static_cast<double>(frame->entities.size()));
+        stats_.heard_samples.add(static_cast<double>(heard));
     }
-    stats_.known_samples.add(static_cast<double>(known()));
-    stats_.heard_samples.add(static_cast<double>(heard));
     send_input_on_snapshot();
 }
 
 void SimClient::discard_snapshot(const pb::Snapshot& s) {
     count_snapshot(s);
+    acked_unread_tick_ = std::max(acked_unread_tick_, s.server_tick());
     if (!stats_.saw_own_entity) {
         for (const pb::EntityState& e : s.enter()) {
             stats_.saw_own_entity = stats_.saw_own_entity || e.id() == stats_.entity_id;
@@ -493,7 +495,7 @@ void SimClient::discard_snapshot(const pb::Snapshot& s) {
 }
 
 std::uint64_t SimClient::acknowledged_tick() const {
-    return stats_.checks_snapshots ? acked_replica_.newest_tick().value_or(0) : last_snapshot_tick_;
+    return stats_.checks_snapshots ? acked_replica_.newest_tick().value_or(0) : acked_unread_tick_;
 }
 
 void SimClient::send_input_on_snapshot() {

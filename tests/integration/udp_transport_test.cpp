@@ -224,7 +224,7 @@ TEST(UdpTransport, ClientsGetSnapshotsAuditsAndTheirOwnEntity) {
 TEST(UdpTransport, ClientsThatDiscardSnapshotsStillAcknowledgeEachSoTheServerCodesDeltas) {
     testing::RunningServer server(udp_config());
     simclient::LoadConfig lc = udp_load(server, 6, 3.0);
-    lc.check_every = 3; // clients 0 and 3 decode and check; 1, 2, 4 and 5 discard
+    lc.check_every = 3; // 0 (the group's first), 1 and 5 decode and check; 2, 3, 4 discard
     boost::asio::io_context io;
     simclient::LoadRun run(io, lc);
     run.start();
@@ -237,10 +237,14 @@ TEST(UdpTransport, ClientsThatDiscardSnapshotsStillAcknowledgeEachSoTheServerCod
     EXPECT_EQ(report.missing_own_entity, 0); // a discarding client finds it among the enters
     EXPECT_GT(report.audited_poses, 0u);     // the checking clients' audits
     std::uint64_t checked = 0;
+    int checking = 0;
     for (const auto& client : run.clients()) {
         const simclient::ClientStats& s = client->stats();
-        EXPECT_EQ(s.checks_snapshots, client->setup().index % 3 == 0) << client->name();
-        EXPECT_GE(s.snapshots, 70u) << client->name(); // ~2.8 s at 30 Hz
+        const int index = client->setup().index;
+        EXPECT_EQ(s.checks_snapshots, index == 0 || simclient::picked_to_check(index, 3))
+            << client->name();
+        checking += s.checks_snapshots ? 1 : 0;
+        EXPECT_GE(s.snapshots, 50u) << client->name(); // ~2.8 s at 30 Hz
         EXPECT_TRUE(s.saw_own_entity) << client->name();
         if (s.checks_snapshots) {
             checked += s.snapshots;
@@ -251,15 +255,19 @@ TEST(UdpTransport, ClientsThatDiscardSnapshotsStillAcknowledgeEachSoTheServerCod
         }
     }
     EXPECT_EQ(report.checked_snapshots, checked);
-    EXPECT_LT(3 * report.checked_snapshots, 2 * report.snapshots);
+    ASSERT_GE(checking, 1);
+    ASSERT_LE(checking, 4); // so that at least two discard
     // The discarding clients acknowledged what they received, as the checking ones: the
     // server coded their snapshots against frames they acknowledged, not whole (were a
-    // discarding client's acknowledgement missing, two thirds of the snapshots would be).
+    // discarding client's acknowledgement missing, a third or more of the snapshots would
+    // be), a tick or two old on loopback (a stale acknowledgement makes them older).
     const auto& stats = server.stats();
     EXPECT_GE(stats.snapshots_sent, report.snapshots);
     EXPECT_EQ(stats.acked_snapshots_against_baseline + stats.acked_snapshots_whole,
               stats.snapshots_sent);
     EXPECT_GT(stats.acked_snapshots_against_baseline, 4 * stats.acked_snapshots_whole);
+    EXPECT_LT(static_cast<double>(stats.acked_baseline_age_ticks),
+              4.0 * static_cast<double>(stats.acked_snapshots_against_baseline));
 }
 
 TEST(UdpTransport, OverAnEmulatedLinkSnapshotsArriveATickApartAndTheDelayIsTheLinks) {

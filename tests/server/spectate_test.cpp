@@ -131,6 +131,32 @@ TEST(Spectating, SimulatedSpectatorsWatchPlayersAndEverySwitchPassesTheProtocolC
     EXPECT_GT(server.stats().spectating_client_ticks, 100u);
 }
 
+TEST_P(Spectating, SpectatorsDecodeTheirSnapshotsWhenTheOtherClientsAcknowledgeThemUnread) {
+    // One client in 1,000 checks (LoadConfig::check_every): each group's first, and none
+    // else here. A spectator picks whom to watch from the players it knows, so all three
+    // decode anyway; were only the first to, fewer than 100 client-ticks would spectate.
+    server::ServerConfig c;
+    c.bots = 40;
+    c.policy = GetParam();
+    testing::RunningServer server(c);
+    simclient::LoadConfig lc;
+    lc.port = server.port();
+    lc.progress = false;
+    lc.check_every = 1000;
+    simclient::Scenario scenario;
+    scenario.stages = {{0.0, 6}, {3.0, 6}};
+    scenario.groups.resize(2);
+    scenario.groups[0].name = "wanderers";
+    scenario.groups[1].name = "spectators";
+    scenario.groups[1].behaviour = simclient::Behaviour::spectator;
+    lc.scenario = scenario;
+    const simclient::LoadReport report = testing::run_load(lc);
+    server.stop();
+    EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
+    EXPECT_LT(report.checked_snapshots, report.snapshots); // two wanderers discarded theirs
+    EXPECT_GT(server.stats().spectating_client_ticks, 130u);
+}
+
 INSTANTIATE_TEST_SUITE_P(Policies, Spectating,
                          ::testing::Values(interest::PolicyKind::distance,
                                            interest::PolicyKind::occlusion),

@@ -40,14 +40,15 @@ struct LoadConfig {
     /// replica against them (within half a quantum); 0: never. Audits cost bytes
     /// (counted by both sides like any other). [Units: ticks]
     std::uint32_t audit_every_ticks = 30;
-    /// Every this many clients (index 0, k, 2k, ...) decode each snapshot into a replica and
-    /// check it: the protocol's invariants, the audits, heard-only precision. The others
+    /// One client in this many (load_run.hpp's picked_to_check(), and each group's first
+    /// client on each thread) decodes each snapshot into a replica and checks it: the protocol's
+    /// invariants, the audits, heard-only precision, the entity samples. The others
     /// read each snapshot's tick, acknowledge it and discard the rest, as a web load
     /// generator discards response bodies: the server codes and sends the same bytes to
     /// both, and the load generator spends a fraction of the CPU on a discarding client,
     /// so a run of many clients on the server's own machine takes less of its cores.
-    /// Spectators always decode (they pick whom to watch from what they know). 1: every
-    /// client checks. [Limit: >= 1]
+    /// Spectators always decode (they pick whom to watch from what they know), but sample
+    /// only when picked. 1: every client checks. [Limit: >= 1]
     std::uint32_t check_every = 1;
     /// Prefix of the client names ("sim-0", "sim-1", ...).
     std::string name_prefix = "sim-";

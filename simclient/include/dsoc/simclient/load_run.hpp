@@ -79,6 +79,13 @@ struct ShardSecond {
     SampleHistogram interarrival_ms;
 };
 
+/// Whether client `index` (>= 0) is one of the 1 in `check_every` that decode and check
+/// (LoadConfig::check_every; 1: every client): one in each run of `check_every`
+/// consecutive indexes, at a place a hash of the run picks, so that the checking clients
+/// fall on every residue of the index (the server a client starts at, its thread) and
+/// not only on those that share a factor with `check_every`.
+[[nodiscard]] bool picked_to_check(int index, std::uint32_t check_every);
+
 class LoadRun {
 public:
     /// `config.scenario` (or the implicit one of its plain fields) must be valid
@@ -129,6 +136,9 @@ private:
         std::vector<Slot> slots;             ///< oldest first
         std::vector<int> respawning_indexes; ///< closed respawners, to reconnect
         double churn_owed = 0.0;             ///< sessions due to churn
+        /// The group's first client here: it checks its snapshots whatever
+        /// LoadConfig::check_every picks, so that no group goes unchecked.
+        int first_index = -1;
     };
 
     void control();

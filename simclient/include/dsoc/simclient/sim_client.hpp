@@ -38,6 +38,10 @@ struct SessionSetup {
     /// Behaviour and network conditions; nullptr: a wanderer without added latency.
     const ClientGroup* group = nullptr;
     int index = 0; ///< names the client (name_prefix + index) and its token id
+    /// Decode every snapshot into the replica, check it and sample what it holds
+    /// (LoadConfig::check_every); otherwise acknowledge each unread. A spectator decodes
+    /// either way (it picks whom to watch from what it knows), but samples only when set.
+    bool checks_snapshots = true;
     /// The server this session connects to (one of LoadConfig's).
     std::string host = "127.0.0.1";
     std::uint16_t port = 27960;
@@ -72,7 +76,7 @@ public:
         return state_ == State::connecting || state_ == State::awaiting_hello;
     }
     [[nodiscard]] bool finished() const { return state_ == State::closed; }
-    /// Entities in the replica right now.
+    /// Entities in the replica right now (0 for a session that does not decode).
     [[nodiscard]] std::size_t known() const;
     /// The replica over TCP (quantized poses as decoded; empty over UDP).
     [[nodiscard]] const protocol::SnapshotDecoder& replica() const { return replica_; }
@@ -157,6 +161,9 @@ private:
     ClientStats stats_;
     InputModel input_model_;
     std::uint64_t last_snapshot_tick_ = 0;
+    /// What a session that does not decode acknowledges: the newest snapshot tick
+    /// received (never going back, as a decoder's newest frame does not); 0: none.
+    std::uint64_t acked_unread_tick_ = 0;
     std::uint64_t input_seq_ = 0;
     int tick_rate_ = 30;
     std::chrono::steady_clock::time_point started_at_;
