@@ -105,16 +105,11 @@ TEST_P(Spectating, AClientWatchingAPlayerIsSentThatPlayersViewThenItsOwnAgain) {
     std::filesystem::remove(trace_path);
 }
 
-TEST(Spectating, SimulatedSpectatorsWatchPlayersAndEverySwitchPassesTheProtocolChecks) {
-    // dsoc-simclient's spectators (behaviour "spectator") beside wanderers, against the
-    // server's default policy: each watches a player it knows and switches every 5-10 s
-    // or when that player is gone; the client checks every snapshot (enters only of
-    // unknown entities, leaves only of known ones, its own entity always there).
-    server::ServerConfig c;
-    c.bots = 40;
-    testing::RunningServer server(c);
+/// Three wanderers, then three spectators (behaviour "spectator"), against `server` for
+/// about 3 s: each spectator watches a player it knows and switches every 5-10 s or when
+/// that player is gone.
+simclient::LoadConfig wanderers_and_spectators(const testing::RunningServer& server) {
     simclient::LoadConfig lc;
-    lc.transport = simclient::LoadConfig::Transport::tcp;
     lc.port = server.port();
     lc.progress = false;
     simclient::Scenario scenario;
@@ -124,6 +119,17 @@ TEST(Spectating, SimulatedSpectatorsWatchPlayersAndEverySwitchPassesTheProtocolC
     scenario.groups[1].name = "spectators";
     scenario.groups[1].behaviour = simclient::Behaviour::spectator;
     lc.scenario = scenario;
+    return lc;
+}
+
+TEST(Spectating, SimulatedSpectatorsWatchPlayersAndEverySwitchPassesTheProtocolChecks) {
+    // Against the server's default policy; the client checks every snapshot (enters only
+    // of unknown entities, leaves only of known ones, its own entity always there).
+    server::ServerConfig c;
+    c.bots = 40;
+    testing::RunningServer server(c);
+    simclient::LoadConfig lc = wanderers_and_spectators(server);
+    lc.transport = simclient::LoadConfig::Transport::tcp;
     const simclient::LoadReport report = testing::run_load(lc);
     server.stop();
     EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
@@ -131,25 +137,15 @@ TEST(Spectating, SimulatedSpectatorsWatchPlayersAndEverySwitchPassesTheProtocolC
     EXPECT_GT(server.stats().spectating_client_ticks, 100u);
 }
 
-TEST_P(Spectating, SpectatorsDecodeTheirSnapshotsWhenTheOtherClientsAcknowledgeThemUnread) {
+TEST(Spectating, SpectatorsDecodeTheirSnapshotsWhenTheOtherClientsAcknowledgeThemUnread) {
     // One client in 1,000 checks (LoadConfig::check_every): each group's first, and none
     // else here. A spectator picks whom to watch from the players it knows, so all three
     // decode anyway; were only the first to, fewer than 100 client-ticks would spectate.
     server::ServerConfig c;
     c.bots = 40;
-    c.policy = GetParam();
     testing::RunningServer server(c);
-    simclient::LoadConfig lc;
-    lc.port = server.port();
-    lc.progress = false;
+    simclient::LoadConfig lc = wanderers_and_spectators(server);
     lc.check_every = 1000;
-    simclient::Scenario scenario;
-    scenario.stages = {{0.0, 6}, {3.0, 6}};
-    scenario.groups.resize(2);
-    scenario.groups[0].name = "wanderers";
-    scenario.groups[1].name = "spectators";
-    scenario.groups[1].behaviour = simclient::Behaviour::spectator;
-    lc.scenario = scenario;
     const simclient::LoadReport report = testing::run_load(lc);
     server.stop();
     EXPECT_TRUE(report.passed()) << simclient::format_summary(report);
