@@ -114,7 +114,7 @@ int main(int argc, char** argv) {
     dsoc::cli::add_setting(app, "--seed", config.seed, "Seed of the wandering inputs");
     dsoc::cli::add_setting(
         app, "--check-every", config.check_every,
-        "Every N-th client decodes and checks each snapshot; the others acknowledge it "
+        "One client in N decodes and checks each snapshot; the others acknowledge it "
         "unread, as a load generator that discards response bodies (spectators always "
         "decode; 1: all)")
         ->check(CLI::PositiveNumber);
