@@ -8,6 +8,16 @@ namespace {
 
 using Read = std::function<FigureValue(const LoadReport&)>;
 
+/// One statistic of a Summary member (the checking clients' entity samples, a time's
+/// spread): absent when the run took no sample, rather than 0.
+Figure of_summary(std::string name, Dimension dimension, std::string meaning,
+                  common::Summary LoadReport::*member, double common::Summary::*field) {
+    return {std::move(name), dimension, std::move(meaning), [member, field](const LoadReport& r) {
+                const common::Summary& s = r.*member;
+                return FigureValue{s.*field, s.count > 0};
+            }};
+}
+
 /// interarrival_mean .. interarrival_max from one Summary member; absent without samples.
 void add_summary(std::vector<Figure>& out, const std::string& prefix, const std::string& what,
                  common::Summary LoadReport::*member) {
@@ -18,27 +28,14 @@ void add_summary(std::vector<Figure>& out, const std::string& prefix, const std:
         {"p99", &common::Summary::p99},
         {"max", &common::Summary::max}};
     for (const auto& [stat, field] : stats) {
-        out.push_back({prefix + "_" + stat, Dimension::time, std::string(stat) + " of " + what,
-                       [member, field = field](const LoadReport& r) {
-                           const common::Summary& s = r.*member;
-                           return FigureValue{s.*field, s.count > 0};
-                       }});
+        out.push_back(of_summary(prefix + "_" + stat, Dimension::time,
+                                 std::string(stat) + " of " + what, member, field));
     }
 }
 
 Figure plain(const char* name, const char* meaning, std::function<double(const LoadReport&)> f) {
     return {name, Dimension::plain, meaning, [f = std::move(f)](const LoadReport& r) {
                 return FigureValue{f(r), true};
-            }};
-}
-
-/// A figure over the checking clients' replicas (LoadConfig::check_every): absent when no
-/// snapshot was decoded, rather than 0.
-Figure sampled(const char* name, const char* meaning, common::Summary LoadReport::*member,
-               double common::Summary::*field) {
-    return {name, Dimension::plain, meaning, [member, field](const LoadReport& r) {
-                const common::Summary& s = r.*member;
-                return FigureValue{s.*field, s.count > 0};
             }};
 }
 
@@ -69,15 +66,16 @@ std::vector<Figure> make_figures() {
                  }});
     f.push_back(plain("entity_updates_per_client", "enters and updates per client per second",
                       [](const LoadReport& r) { return r.entity_updates_per_client_s; }));
-    f.push_back(sampled("entities_known_mean",
-                        "entities a checking client knows, mean over its snapshots",
-                        &LoadReport::entities_known, &common::Summary::mean));
-    f.push_back(sampled("entities_known_p95",
-                        "entities a checking client knows, p95 over its snapshots",
-                        &LoadReport::entities_known, &common::Summary::p95));
-    f.push_back(sampled("entities_heard_mean",
-                        "entities a checking client knows only by hearing, mean over its snapshots",
-                        &LoadReport::entities_heard, &common::Summary::mean));
+    f.push_back(of_summary("entities_known_mean", Dimension::plain,
+                           "entities a checking client knows, mean over its snapshots",
+                           &LoadReport::entities_known, &common::Summary::mean));
+    f.push_back(of_summary("entities_known_p95", Dimension::plain,
+                           "entities a checking client knows, p95 over its snapshots",
+                           &LoadReport::entities_known, &common::Summary::p95));
+    f.push_back(
+        of_summary("entities_heard_mean", Dimension::plain,
+                   "entities a checking client knows only by hearing, mean over its snapshots",
+                   &LoadReport::entities_heard, &common::Summary::mean));
     f.push_back(plain("snapshots", "snapshots received by all clients",
                       [](const LoadReport& r) { return static_cast<double>(r.snapshots); }));
     f.push_back(plain("sessions", "sessions started",

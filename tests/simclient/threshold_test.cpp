@@ -108,6 +108,23 @@ TEST(Threshold, EvaluatesAgainstTheReportInTheLimitsUnit) {
     EXPECT_FALSE(report.passed());
 }
 
+TEST(Threshold, EntityFiguresAreAbsentWhenNoClientDecodedAndPresentOnceOneDid) {
+    // With LoadConfig::check_every, a run may decode no snapshot at all: its entity
+    // figures are then absent (a threshold on them cannot pass on a 0 it never measured).
+    LoadReport r;
+    for (const char* name : {"entities_known_mean", "entities_known_p95", "entities_heard_mean"}) {
+        const Figure* f = find_figure(name);
+        ASSERT_NE(f, nullptr) << name;
+        EXPECT_FALSE(f->read(r).present) << name;
+    }
+    r.entities_known.count = 3;
+    r.entities_known.mean = 12.5;
+    const FigureValue known = find_figure("entities_known_mean")->read(r);
+    EXPECT_TRUE(known.present);
+    EXPECT_DOUBLE_EQ(known.value, 12.5);
+    EXPECT_FALSE(find_figure("entities_heard_mean")->read(r).present);
+}
+
 TEST(Quantity, DurationsAreSecondsAndMayBeCompound) {
     double s = 0.0;
     std::string error;
