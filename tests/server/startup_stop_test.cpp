@@ -49,6 +49,10 @@ namespace {
 }
 
 TEST(StartupStop, ASignalDuringTheFirstBakeSavesItAndGivesUp) {
+    // The child runs this binary again from the start rather than a fork of this process,
+    // which may hold the threads of earlier tests (ThreadSanitizer refuses to start
+    // threads in a fork of a threaded process, and the bake starts some).
+    GTEST_FLAG_SET(death_test_style, "threadsafe");
     for (const int signal : {SIGINT, SIGTERM}) {
         const auto dir = std::filesystem::temp_directory_path() /
                          ("dsoc-startup-stop-" + std::to_string(signal));
