@@ -484,11 +484,10 @@ void SimClient::apply_acked_snapshot(const pb::Snapshot& s) {
 void SimClient::discard_snapshot(const pb::Snapshot& s) {
     count_snapshot(s);
     acked_unread_tick_ = std::max(acked_unread_tick_, s.server_tick());
-    if (!stats_.saw_own_entity) {
-        for (const pb::EntityState& e : s.enter()) {
-            stats_.saw_own_entity = stats_.saw_own_entity || e.id() == stats_.entity_id;
-        }
-    }
+    stats_.saw_own_entity =
+        stats_.saw_own_entity ||
+        std::any_of(s.enter().begin(), s.enter().end(),
+                    [this](const pb::EntityState& e) { return e.id() == stats_.entity_id; });
     if (udp_) {
         send_input_on_snapshot();
     }
