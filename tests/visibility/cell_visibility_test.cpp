@@ -53,8 +53,10 @@ CellVisibilityTable random_table(std::mt19937& random, glm::ivec3 dims,
 
 TEST(CellVisibilityTable, CompressedRowsGiveTheDenseRowsAnswers) {
     std::mt19937 random(1234);
-    for (const glm::ivec3 dims :
-         {glm::ivec3{13, 9, 6}, glm::ivec3{4, 4, 4}, glm::ivec3{1, 30, 3}, glm::ivec3{21, 17, 5}}) {
+    // The last grid's rows span several class words (32 row words each), with literals
+    // and visible words in more than one of them, as a real map's do.
+    for (const glm::ivec3 dims : {glm::ivec3{13, 9, 6}, glm::ivec3{4, 4, 4}, glm::ivec3{1, 30, 3},
+                                  glm::ivec3{21, 17, 5}, glm::ivec3{40, 30, 6}}) {
         CellVisibilityTable dense = random_table(random, dims);
         CellVisibilityTable packed = dense;
         packed.compress();
@@ -62,16 +64,22 @@ TEST(CellVisibilityTable, CompressedRowsGiveTheDenseRowsAnswers) {
         const auto n = static_cast<OpenCell>(dense.open_count());
         std::uint64_t visible_words = 0;
         std::uint64_t hidden_words = 0;
+        std::uint64_t rows_mixed_in_two_class_words = 0; // literal or visible words in two
         for (OpenCell a = 0; a < n; ++a) {
             std::vector<std::uint64_t> d(dense.words_per_row(), 0);
             std::vector<std::uint64_t> p(dense.words_per_row(), 1); // bit 0: a real cell
             dense.or_row_into(a, d);
             packed.or_row_into(a, p); // ORs into what is there
+            std::set<std::size_t> class_words_with_literals;
             for (std::size_t w = 0; w < d.size(); ++w) {
                 ASSERT_EQ(p[w], d[w] | 1u) << "row " << a << " word " << w;
                 hidden_words += d[w] == 0 ? 1 : 0;
                 visible_words += d[w] == ~std::uint64_t{0} ? 1 : 0;
+                if (d[w] != 0 && d[w] != ~std::uint64_t{0}) {
+                    class_words_with_literals.insert(w / 32);
+                }
             }
+            rows_mixed_in_two_class_words += class_words_with_literals.size() >= 2 ? 1 : 0;
             for (OpenCell b = 0; b < n; ++b) {
                 ASSERT_EQ(packed.may_see(a, b), dense.may_see(a, b)) << a << " " << b;
             }
@@ -82,6 +90,9 @@ TEST(CellVisibilityTable, CompressedRowsGiveTheDenseRowsAnswers) {
             EXPECT_GT(hidden_words, 0u);         // every kind of word was exercised
             EXPECT_GT(visible_words, 0u);
             EXPECT_LT(packed.memory_bytes(), dense.memory_bytes());
+        }
+        if (dense.words_per_row() > 64) {
+            EXPECT_GT(rows_mixed_in_two_class_words, static_cast<std::uint64_t>(n / 4));
         }
     }
 }

@@ -16,6 +16,20 @@ constexpr std::uint64_t kCellsPerBlock = kB * kB * kB;
 
 enum WordClass : std::uint64_t { kHidden = 0, kVisible = 1, kLiteral = 2 };
 
+/// Bits 0, 2, 4, ..., 62 of `x` as bits 0..31: of a class word's 2-bit codes, the words
+/// whose code has its low bit set (`x`) or its high bit (`x >> 1`).
+constexpr std::uint32_t even_bits(std::uint64_t x) {
+    x &= 0x5555555555555555u;
+    x = (x | x >> 1) & 0x3333333333333333u;
+    x = (x | x >> 2) & 0x0f0f0f0f0f0f0f0fu;
+    x = (x | x >> 4) & 0x00ff00ff00ff00ffu;
+    x = (x | x >> 8) & 0x0000ffff0000ffffu;
+    x = (x | x >> 16) & 0x00000000ffffffffu;
+    return static_cast<std::uint32_t>(x);
+}
+static_assert(even_bits(0x5u) == 0x3u && even_bits(0xau) == 0x0u && even_bits(0x9u) == 0x1u &&
+              even_bits(std::uint64_t{1} << 62) == 0x80000000u);
+
 } // namespace
 
 CellVisibilityTable::CellVisibilityTable(const CellGrid& grid, std::vector<std::uint32_t> open,
@@ -101,21 +115,25 @@ void CellVisibilityTable::or_row_into(OpenCell from, std::span<std::uint64_t> ou
         }
         return;
     }
-    // Branch-free over the codes: a visible word ORs all ones (the last word's bits
-    // past the last cell are cleared after), and the literal pointer only moves on a
-    // literal (it may look one word past the row's literals: literals_ ends with a
-    // spare word).
+    // Per class word, the literal words and the visible words as two masks of its 32
+    // words: the literals are ORed in word order (the order they are stored in), each
+    // step independent of the codes; a visible word becomes all ones (the last word's
+    // bits past the last cell are cleared after).
     const std::uint64_t* cls = classes_.data() + row * class_words_per_row_;
     const std::uint64_t* literal = literals_.data() + literal_start_[row];
     for (std::size_t cw = 0; cw < class_words_per_row_; ++cw) {
+        const std::uint64_t codes = cls[cw];
+        if (codes == 0) {
+            continue; // 32 hidden words
+        }
         std::uint64_t* words = out.data() + cw * 32;
-        for (std::uint64_t codes = cls[cw]; codes != 0;) {
-            const int shift = std::countr_zero(codes) & ~1;
-            const std::uint64_t code = codes >> shift & 3u;
-            const std::uint64_t all = std::uint64_t{0} - (code & 1u); // visible: all ones
-            words[shift / 2] |= all | (*literal & ~all);
-            literal += code >> 1;
-            codes &= ~(std::uint64_t{3} << shift);
+        static_assert(kVisible == 1 && kLiteral == 2); // the low bit, the high bit
+        for (std::uint32_t literals = even_bits(codes >> 1); literals != 0;
+             literals &= literals - 1) {
+            words[std::countr_zero(literals)] |= *literal++;
+        }
+        for (std::uint32_t visible = even_bits(codes); visible != 0; visible &= visible - 1) {
+            words[std::countr_zero(visible)] = ~std::uint64_t{0};
         }
     }
     if (words_per_row_ > 0) {
@@ -160,7 +178,6 @@ void CellVisibilityTable::compress() {
         }
         literal_start_.push_back(literals_.size());
     }
-    literals_.push_back(0); // the spare word or_row_into() may look at
     literals_.shrink_to_fit();
     bits_.clear();
     bits_.shrink_to_fit();
@@ -204,7 +221,6 @@ CellVisibilityTable::adopt_compressed(std::vector<std::uint64_t> classes,
     if (literal != literals.size()) {
         return std::to_string(literals.size() - literal) + " literal words no code refers to";
     }
-    literals.push_back(0); // the spare word or_row_into() may look at
     // Swap the rows in, check the diagonal, swap them back out on failure.
     class_words_per_row_ = per_row;
     classes_.swap(classes);

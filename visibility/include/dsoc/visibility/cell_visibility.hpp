@@ -86,11 +86,7 @@ public:
     /// 1: all visible, 2: literal); and the literal words, row by row, in word order.
     [[nodiscard]] std::size_t class_words_per_row() const { return (words_per_row_ + 31) / 32; }
     [[nodiscard]] std::span<const std::uint64_t> classes() const { return classes_; }
-    [[nodiscard]] std::span<const std::uint64_t> literals() const {
-        return literals_.empty()
-                   ? std::span<const std::uint64_t>()
-                   : std::span<const std::uint64_t>(literals_).first(literals_.size() - 1);
-    }
+    [[nodiscard]] std::span<const std::uint64_t> literals() const { return literals_; }
     /// Takes compressed rows read from storage, in place of the dense ones, after
     /// checking every rule compress() follows (codes 0..2 and none past the row's
     /// words; as many literals as literal codes; no literal all hidden, all visible or
@@ -138,7 +134,7 @@ private:
     std::vector<std::uint64_t> bits_;
     /// Compressed rows: per row class_words_per_row_ words of 2-bit codes (0: all
     /// hidden, 1: all visible, 2: literal), and the row's literals from
-    /// literal_start_[row], then one spare word.
+    /// literal_start_[row].
     std::size_t class_words_per_row_ = 0;
     std::vector<std::uint64_t> classes_;
     std::vector<std::uint64_t> literal_start_;
