@@ -5,6 +5,7 @@
 
 #include "dsoc/maps/bake_file.hpp"
 #include "dsoc/maps/bake_partial.hpp"
+#include "dsoc/visibility/cell_visibility.hpp"
 
 #include <algorithm>
 #include <cstddef>
@@ -51,6 +52,29 @@ void fuzz_partial(std::vector<std::byte> bytes) {
     }
 }
 
+/// The rows of an accepted table as the runtime reads them, a whole row at a time
+/// (or_row_into) and a bit at a time (may_see): the two must agree (the first rows only,
+/// to bound the work of a large table).
+void check_rows(const dsoc::visibility::CellVisibilityTable& table) {
+    constexpr std::size_t kMaxRows = 64;
+    const std::size_t cells = table.open_count();
+    std::vector<std::uint64_t> row(table.words_per_row());
+    for (std::size_t a = 0; a < std::min(cells, kMaxRows); ++a) {
+        std::ranges::fill(row, std::uint64_t{0});
+        table.or_row_into(static_cast<dsoc::visibility::OpenCell>(a), row);
+        for (std::size_t b = 0; b < cells; ++b) {
+            const bool bit = (row[b / 64] >> (b % 64) & 1u) != 0;
+            if (bit != table.may_see(static_cast<dsoc::visibility::OpenCell>(a),
+                                     static_cast<dsoc::visibility::OpenCell>(b))) {
+                std::abort(); // the two readers of a row disagree
+            }
+        }
+        if (cells % 64 != 0 && !row.empty() && (row.back() >> (cells % 64)) != 0) {
+            std::abort(); // a bit past the last open cell
+        }
+    }
+}
+
 } // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -77,5 +101,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (!again.ok() || !(again.value() == table.value())) {
         std::abort(); // encode_bake wrote something decode_bake reads differently
     }
+    check_rows(table.value());
     return 0;
 }
