@@ -53,8 +53,8 @@ CellVisibilityTable random_table(std::mt19937& random, glm::ivec3 dims,
 
 TEST(CellVisibilityTable, CompressedRowsGiveTheDenseRowsAnswers) {
     std::mt19937 random(1234);
-    // The last grid's rows span several class words (32 row words each), with literals
-    // and visible words in more than one of them, as a real map's do.
+    // The last grid's rows span several class words (32 row words each), a quarter of
+    // them with literal words in two or more, as a real map's rows do.
     for (const glm::ivec3 dims : {glm::ivec3{13, 9, 6}, glm::ivec3{4, 4, 4}, glm::ivec3{1, 30, 3},
                                   glm::ivec3{21, 17, 5}, glm::ivec3{40, 30, 6}}) {
         CellVisibilityTable dense = random_table(random, dims);
@@ -64,7 +64,7 @@ TEST(CellVisibilityTable, CompressedRowsGiveTheDenseRowsAnswers) {
         const auto n = static_cast<OpenCell>(dense.open_count());
         std::uint64_t visible_words = 0;
         std::uint64_t hidden_words = 0;
-        std::uint64_t rows_mixed_in_two_class_words = 0; // literal or visible words in two
+        std::uint64_t rows_with_literals_in_two_class_words = 0;
         for (OpenCell a = 0; a < n; ++a) {
             std::vector<std::uint64_t> d(dense.words_per_row(), 0);
             std::vector<std::uint64_t> p(dense.words_per_row(), 1); // bit 0: a real cell
@@ -79,7 +79,7 @@ TEST(CellVisibilityTable, CompressedRowsGiveTheDenseRowsAnswers) {
                     class_words_with_literals.insert(w / 32);
                 }
             }
-            rows_mixed_in_two_class_words += class_words_with_literals.size() >= 2 ? 1 : 0;
+            rows_with_literals_in_two_class_words += class_words_with_literals.size() >= 2 ? 1 : 0;
             for (OpenCell b = 0; b < n; ++b) {
                 ASSERT_EQ(packed.may_see(a, b), dense.may_see(a, b)) << a << " " << b;
             }
@@ -92,7 +92,7 @@ TEST(CellVisibilityTable, CompressedRowsGiveTheDenseRowsAnswers) {
             EXPECT_LT(packed.memory_bytes(), dense.memory_bytes());
         }
         if (dense.words_per_row() > 64) {
-            EXPECT_GT(rows_mixed_in_two_class_words, static_cast<std::uint64_t>(n / 4));
+            EXPECT_GT(rows_with_literals_in_two_class_words, static_cast<std::uint64_t>(n / 4));
         }
     }
 }
