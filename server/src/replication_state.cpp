@@ -187,8 +187,7 @@ void ReplicationState::build_snapshot(const interest::GameWorld& world,
             encoder_.enter(wanted.id, pose_of(*e), {half.x, half.y, half.z},
                            static_cast<std::uint32_t>(e->kind), wanted.tier, snapshot);
         } else {
-            const std::uint64_t interval = protocol::update_interval(wanted.tier);
-            if ((tick + wanted.id) % interval != 0) {
+            if (!protocol::due_at(wanted.id, wanted.tier, tick)) {
                 return; // deferred: this coarse-tier entity is not due this tick
             }
             if (poses != nullptr) {

@@ -51,6 +51,23 @@ TEST(AckedPrediction, RoundsHalvesAwayFromZero) {
     EXPECT_EQ(divide_rounded(0, 7), 0);
 }
 
+TEST(UpdatePacing, AnEntityIsDueOnceInItsTiersIntervalAndAPacedClientAgrees) {
+    for (std::uint8_t tier = 0; tier < kTiers; ++tier) {
+        const std::uint64_t interval = update_interval(tier);
+        for (std::uint32_t id = 0; id < 9; ++id) {
+            std::uint64_t due = 0;
+            for (std::uint64_t tick = 1; tick <= 8 * interval; ++tick) {
+                const bool now = due_at(id, tier, tick);
+                EXPECT_EQ(now, (tick + id) % interval == 0) << "tier " << int{tier} << " id " << id;
+                // A client sent every tick: the paced rule since the tick before says the same.
+                EXPECT_EQ(now, due_since(id, tier, tick - 1, tick)) << "tick " << tick;
+                due += now ? 1 : 0;
+            }
+            EXPECT_EQ(due, 8u) << "tier " << int{tier} << " id " << id;
+        }
+    }
+}
+
 TEST(AckedPrediction, AnEntityMovingSteadilyIsPredictedExactly) {
     constexpr std::uint32_t kSteps = 4096;
     FrameEntity e;

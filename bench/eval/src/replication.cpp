@@ -44,7 +44,7 @@ SnapshotCost ClientReplication::send(const WorldFrame& frame,
             cost.heard_entries += is_heard ? 1 : 0;
             return;
         }
-        if (is_heard && (tick + id) % protocol::update_interval(tier) != 0) {
+        if (!protocol::due_at(id, tier, tick)) {
             return; // deferred, as the server does on a coarse tier
         }
         if (const std::uint32_t fields = encoder_.update(id, wire_pose(e), tier, snapshot);

@@ -31,6 +31,14 @@ inline constexpr std::size_t kTiers = 4;
 [[nodiscard]] constexpr std::uint64_t update_interval(std::uint8_t tier) {
     return std::uint64_t{1} << update_interval_shift(tier);
 }
+/// Whether a known entity `id` on `tier` (< kTiers) is updated in the snapshot of `tick`:
+/// on every tick on tier 0, else on one tick in update_interval(tier), staggered by id so
+/// a tier's entities spread over its interval. The rule of a client sent every tick (the
+/// server's plain replication and the evaluation's byte count); see due_since() for a
+/// client sent more rarely.
+[[nodiscard]] constexpr bool due_at(std::uint32_t id, std::uint8_t tier, std::uint64_t tick) {
+    return ((tick + id) & (update_interval(tier) - 1)) == 0;
+}
 /// Largest |position / quantum| that travels; larger values are clamped (a world
 /// that large is a server bug, the clamp only keeps the arithmetic defined).
 inline constexpr std::int32_t kMaxQuantizedCoordinate = 1 << 30;

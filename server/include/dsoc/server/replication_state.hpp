@@ -65,11 +65,10 @@ public:
     /// Fills `snapshot` (cleared first) for `tick`: entities in `interest` (increasing
     /// ids, each present in `world`) that the client did not know enter with full
     /// state; known ones whose quantized state changed since last sent get an update
-    /// holding the changed fields - except that an entity on tier t > 0 is updated only
-    /// on ticks where (tick + id) is a multiple of protocol::update_interval(t)
-    /// (staggered, so tiers 1 and 2 cost a half and a quarter of the updates; the heard
-    /// tier as the far one); known ones not in `interest` leave. Afterwards the client
-    /// knows exactly `interest`. `audit`: also fill snapshot.audit with the exact pose
+    /// holding the changed fields - except that an entity is updated only on ticks
+    /// protocol::due_at() names for its tier (tiers 1 and 2 cost a half and a quarter of
+    /// the updates; the heard tier as the far one); known ones not in `interest` leave. Afterwards
+    /// the client knows exactly `interest`. `audit`: also fill snapshot.audit with the exact pose
     /// of every entity made current but those on the heard tier. `poses`
     /// (optional): this tick's SharedPoses of `world`, computed with this state's
     /// quantization; the bytes are the same with or without it. `columns` (optional):
