@@ -1,10 +1,12 @@
 // Fuzzes the .dsocbake reader (dsoc/maps/bake_file.hpp) and the partial bake's
 // (dsoc/maps/bake_partial.hpp): the bytes as they are, then with their checksum made
 // right so that mutations reach the checks behind it. What a reader accepts must
-// survive encode -> decode unchanged.
+// survive encode -> decode unchanged, and its rows read whole, bit by bit and united
+// over blocks of cells must agree.
 
 #include "dsoc/maps/bake_file.hpp"
 #include "dsoc/maps/bake_partial.hpp"
+#include "dsoc/visibility/cell_block_unions.hpp"
 #include "dsoc/visibility/cell_visibility.hpp"
 
 #include <algorithm>
@@ -75,6 +77,42 @@ void check_rows(const dsoc::visibility::CellVisibilityTable& table) {
     }
 }
 
+/// The block unions of an accepted table (small grids only, to bound the work) against
+/// the rows they unite, over the ranges of up to 4 cells an axis at the grid's corner.
+void check_block_unions(const dsoc::visibility::CellVisibilityTable& table) {
+    using dsoc::visibility::CellBlockUnions;
+    const dsoc::visibility::CellGrid& grid = table.grid();
+    if (grid.cell_count() > (1u << 16)) {
+        return;
+    }
+    const CellBlockUnions blocks(table);
+    std::vector<std::uint64_t> rows(table.words_per_row());
+    std::vector<std::uint64_t> united(table.words_per_row());
+    for (int n = 2; n <= 4; ++n) {
+        const glm::ivec3 lo{0};
+        const glm::ivec3 hi = glm::min(grid.dims, glm::ivec3(n)) - 1;
+        if (!CellBlockUnions::covers(lo, hi)) {
+            return;
+        }
+        std::ranges::fill(rows, std::uint64_t{0});
+        for (int z = lo.z; z <= hi.z; ++z) {
+            for (int y = lo.y; y <= hi.y; ++y) {
+                for (int x = lo.x; x <= hi.x; ++x) {
+                    const auto c = table.open_index(grid.index({x, y, z}));
+                    if (c >= 0) {
+                        table.or_row_into(c, rows);
+                    }
+                }
+            }
+        }
+        std::ranges::fill(united, std::uint64_t{0});
+        blocks.or_range_into(lo, hi, united);
+        if (united != rows) {
+            std::abort(); // a range's union from blocks is not the union of its rows
+        }
+    }
+}
+
 } // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -102,5 +140,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         std::abort(); // encode_bake wrote something decode_bake reads differently
     }
     check_rows(table.value());
+    check_block_unions(table.value());
     return 0;
 }

@@ -174,7 +174,8 @@ namespace {
 
 TEST(BakeProgram, JsonGivesTheSpecTheCpuAndThePeakMemoryAndACachedSecondRun) {
     // What scripts/bake-all keeps per map: the map as given (to resume by), the bake's
-    // CPU over all cores and the process's peak memory; a second run loads the table.
+    // CPU over all cores and the process's peak memory, and the block unions a culler
+    // holds beside the table; a second run loads the table.
     const std::filesystem::path dir = std::filesystem::temp_directory_path() / "dsoc-bake-json";
     std::filesystem::remove_all(dir);
     const auto bake = [&] {
@@ -189,6 +190,7 @@ TEST(BakeProgram, JsonGivesTheSpecTheCpuAndThePeakMemoryAndACachedSecondRun) {
         EXPECT_EQ(out["spec"], "gen:rooms:1");
         EXPECT_EQ(out["from_cache"], cached);
         EXPECT_GT(out["peak_rss_bytes"].get<double>(), 1e6);
+        EXPECT_GT(out["block_union_bytes"].get<double>(), 0.0); // held beside the table
         if (!cached) {
             EXPECT_GT(out["cpu_seconds"].get<double>(), 0.0);
             EXPECT_GT(out["exact_tests"].get<double>(), 0.0);

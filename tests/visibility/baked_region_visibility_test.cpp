@@ -194,6 +194,13 @@ TEST(BakedRegionVisibility, UncoveredCellsAreNeverAnsweredAndChangeNoOtherAnswer
     BakedRegionVisibility stage(part,
                                 std::make_unique<CountingStage>(Visibility::occluded, &calls));
     BakedRegionVisibility alone(part, nullptr);
+    // The same stage with block unions: the same answers, the same calls.
+    int block_calls = 0;
+    BakedRegionVisibility stage_blocks(
+        part, std::make_unique<CountingStage>(Visibility::occluded, &block_calls),
+        BakedRegionVisibility::NextFor::after_table,
+        std::make_shared<const CellBlockUnions>(*part));
+    int from_blocks = 0;
     std::mt19937 rng(11);
     int hidden_by_table = 0;
     int uncovered_regions = 0;
@@ -202,6 +209,12 @@ TEST(BakedRegionVisibility, UncoveredCellsAreNeverAnsweredAndChangeNoOtherAnswer
         const Aabb region = random_box(rng, w.play_area, 16.0f, 120.0f);
         stage.build(region);
         alone.build(region);
+        stage_blocks.build(region);
+        EXPECT_EQ(stage_blocks.active(), stage.active());
+        EXPECT_EQ(stage_blocks.partial(), stage.partial());
+        glm::ivec3 lo;
+        glm::ivec3 hi;
+        from_blocks += grid.range_of(region, lo, hi) && CellBlockUnions::covers(lo, hi) ? 1 : 0;
         const bool region_out = touches_uncovered(*part, region);
         uncovered_regions += region_out ? 1 : 0;
         if (region_out) {
@@ -213,6 +226,9 @@ TEST(BakedRegionVisibility, UncoveredCellsAreNeverAnsweredAndChangeNoOtherAnswer
             uncovered_boxes += box_out ? 1 : 0;
             calls = 0;
             const Visibility v = stage.test_box(box);
+            block_calls = 0;
+            EXPECT_EQ(stage_blocks.test_box(box), v);
+            EXPECT_EQ(block_calls, calls);
             PreparedBox p;
             alone.prepare(box, p);
             if (region_out || box_out) {
@@ -226,6 +242,7 @@ TEST(BakedRegionVisibility, UncoveredCellsAreNeverAnsweredAndChangeNoOtherAnswer
         }
     }
     EXPECT_GT(uncovered_regions, 5);
+    EXPECT_GT(from_blocks, 10);
     EXPECT_GT(uncovered_boxes, 50);
     EXPECT_GT(hidden_by_table, 20);
 }
@@ -291,13 +308,14 @@ TEST(BakedRegionVisibility, PreparedWordsAnswerAsCellsAndMergedKeysHideOnlyToget
     EXPECT_GT(merged_checks, 100);
 }
 
-TEST(BakedRegionVisibility, AWalkingRegionAnswersAsAFreshBuildOfEachRegion) {
-    // The union is rebuilt from the slabs the last region left (slabs per x): a region
-    // that wanders and changes size by small steps along one axis or several must
-    // answer every box exactly as a culler built for that region alone.
+/// A region that wanders and changes size by small steps along one axis or several,
+/// built into one culler (with `blocks` or without), must answer every box exactly as a
+/// culler built for that region alone from the table's rows.
+void walk_a_region(std::shared_ptr<const CellBlockUnions> blocks) {
     const Baked& b = corridor_table();
     const CellGrid& grid = b.table->grid();
-    BakedRegionVisibility walking(b.table, nullptr);
+    BakedRegionVisibility walking(b.table, nullptr, BakedRegionVisibility::NextFor::after_table,
+                                  blocks);
     std::mt19937 rng(17);
     std::uniform_real_distribution<float> step(-60.0f, 60.0f);
     std::bernoulli_distribution moves(0.45);
@@ -305,8 +323,10 @@ TEST(BakedRegionVisibility, AWalkingRegionAnswersAsAFreshBuildOfEachRegion) {
     Aabb region = random_box(rng, b.play_area, 60.0f, 120.0f);
     int hidden = 0;
     int tests = 0;
-    int x_alone = 0; // steps whose cells changed in x alone: the slabs kept are reused
-    int y_or_z = 0;  // steps whose cells changed in y or z: every slab is made again
+    int x_alone = 0;     // steps whose cells changed in x alone: the slabs kept are reused
+    int y_or_z = 0;      // steps whose cells changed in y or z: every slab is made again
+    int from_blocks = 0; // ranges of two cells or more on every axis: built from blocks
+    int from_rows = 0;   // the others: from the table's rows
     glm::ivec3 last_lo{0};
     glm::ivec3 last_hi{-1};
     for (int r = 0; r < 800; ++r) {
@@ -340,6 +360,7 @@ TEST(BakedRegionVisibility, AWalkingRegionAnswersAsAFreshBuildOfEachRegion) {
             y_or_z += !same_yz ? 1 : 0;
             last_lo = lo;
             last_hi = hi;
+            (CellBlockUnions::covers(lo, hi) ? from_blocks : from_rows) += 1;
         }
         for (int k = 0; k < 30; ++k) {
             const Aabb box = random_box(rng, b.play_area, 16.0f, 64.0f);
@@ -352,6 +373,20 @@ TEST(BakedRegionVisibility, AWalkingRegionAnswersAsAFreshBuildOfEachRegion) {
     EXPECT_GT(hidden, tests / 10); // something is culled
     EXPECT_GT(x_alone, 20);
     EXPECT_GT(y_or_z, 20);
+    EXPECT_GT(from_blocks, 100); // both ways of building were exercised
+    EXPECT_GT(from_rows, 20);
+}
+
+TEST(BakedRegionVisibility, AWalkingRegionAnswersAsAFreshBuildOfEachRegion) {
+    // The union is rebuilt from the slabs the last region left (slabs per x).
+    walk_a_region(nullptr);
+}
+
+TEST(BakedRegionVisibility, AWalkingRegionBuiltFromBlockUnionsAnswersAsTheRows) {
+    // Ranges of two cells or more on every axis from the blocks, the others from the
+    // slabs, one build after the other: a slab kept across block builds must still be
+    // the slab of its x.
+    walk_a_region(std::make_shared<const CellBlockUnions>(*corridor_table().table));
 }
 
 TEST(BakedRegionVisibility, AFactoryWithoutATableIsTheNextStage) {
@@ -576,15 +611,17 @@ std::shared_ptr<const CellVisibilityTable> half_covered_table() {
 }
 
 /// `table` alone, with the exact stages over `scene` where it does not cover, counting
-/// their builds and tests.
+/// their builds and tests; its unions built from block unions where they can be, as
+/// with_baked_stage() makes them.
 std::unique_ptr<BakedRegionVisibility>
 table_alone_counting(std::shared_ptr<const CellVisibilityTable> table,
                      std::shared_ptr<const OccluderScene> scene, int& builds, int& tests) {
+    auto blocks = std::make_shared<const CellBlockUnions>(*table);
     return std::make_unique<BakedRegionVisibility>(
         std::move(table),
         std::make_unique<CountingNext>(occluder_region_visibility(std::move(scene))(), &builds,
                                        &tests),
-        BakedRegionVisibility::NextFor::where_uncovered);
+        BakedRegionVisibility::NextFor::where_uncovered, std::move(blocks));
 }
 
 TEST(BakedRegionVisibility, BehindTheTableAloneTheExactStagesAnswerOnlyWhereItDoesNotCover) {
@@ -673,6 +710,7 @@ TEST(BakedRegionVisibility, APartialRegionKeepsTheTablesVisibleAndAsksTheExactSt
     std::vector<std::int32_t> words;
     std::vector<std::int32_t> runs;
     int partial_regions = 0;
+    int from_blocks = 0; // partial regions whose union was built from block unions
     int seen_by_table = 0;
     int asked = 0;
     int hidden = 0;
@@ -685,6 +723,10 @@ TEST(BakedRegionVisibility, APartialRegionKeepsTheTablesVisibleAndAsksTheExactSt
         }
         ++partial_regions;
         EXPECT_FALSE(stage.active());
+        glm::ivec3 lo;
+        glm::ivec3 hi;
+        ASSERT_TRUE(half->grid().range_of(region, lo, hi));
+        from_blocks += CellBlockUnions::covers(lo, hi) ? 1 : 0;
         exact->build(region);
         for (int k = 0; k < 30; ++k) {
             const Aabb box = random_box(rng, b.play_area, 16.0f, 64.0f);
@@ -712,6 +754,7 @@ TEST(BakedRegionVisibility, APartialRegionKeepsTheTablesVisibleAndAsksTheExactSt
         }
     }
     EXPECT_GE(partial_regions, 20);
+    EXPECT_GE(from_blocks, 10);
     EXPECT_GT(seen_by_table, 50) << "boxes the exact stages were spared";
     EXPECT_GT(asked, 20);
     EXPECT_GT(hidden, 5) << "something is culled";

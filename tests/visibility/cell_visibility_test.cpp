@@ -1,11 +1,14 @@
 // The compressed rows against the dense rows they were made from (the slow, obviously
-// correct twin), and the block-order runs of a box against the cells it touches.
+// correct twin), the block unions against the rows they unite, and the block-order runs
+// of a box against the cells it touches.
 
+#include "dsoc/visibility/cell_block_unions.hpp"
 #include "dsoc/visibility/cell_visibility.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <random>
 #include <set>
 
@@ -93,6 +96,70 @@ TEST(CellVisibilityTable, CompressedRowsGiveTheDenseRowsAnswers) {
         }
         if (dense.words_per_row() > 64) {
             EXPECT_GT(rows_with_literals_in_two_class_words, static_cast<std::uint64_t>(n / 4));
+        }
+    }
+}
+
+TEST(CellBlockUnions, ARangesUnionFromBlocksIsTheUnionOfItsCellsRows) {
+    std::mt19937 random(4321);
+    for (const glm::ivec3 dims : {glm::ivec3{13, 9, 6}, glm::ivec3{2, 2, 2}, glm::ivec3{1, 30, 3},
+                                  glm::ivec3{40, 30, 6}, glm::ivec3{70, 3, 2}}) {
+        CellVisibilityTable table = random_table(random, dims, true);
+        for (const bool compressed : {false, true}) {
+            if (compressed) {
+                table.compress();
+            }
+            const CellBlockUnions blocks(table);
+            const CellGrid& grid = table.grid();
+            std::uniform_int_distribution<int> x(0, dims.x - 1);
+            std::uniform_int_distribution<int> y(0, dims.y - 1);
+            std::uniform_int_distribution<int> z(0, dims.z - 1);
+            std::uniform_int_distribution<int> cells(2, 8);
+            int ranges = 0;
+            int odd = 0;           // ranges with an odd number of cells on an axis
+            int partly_hidden = 0; // unions with a hidden open cell: something is culled
+            for (int k = 0; k < 3000; ++k) {
+                // Ranges of two to eight cells an axis, as eye regions are, some cut
+                // at the grid's edge.
+                const glm::ivec3 lo{x(random), y(random), z(random)};
+                const glm::ivec3 hi = glm::min(
+                    lo + glm::ivec3{cells(random), cells(random), cells(random)} - 1, dims - 1);
+                if (!CellBlockUnions::covers(lo, hi)) {
+                    continue;
+                }
+                ++ranges;
+                const glm::ivec3 n = hi - lo + 1;
+                odd += (n.x % 2) + (n.y % 2) + (n.z % 2) > 0 ? 1 : 0;
+                std::vector<std::uint64_t> rows(table.words_per_row(), 0);
+                for (int cz = lo.z; cz <= hi.z; ++cz) {
+                    for (int cy = lo.y; cy <= hi.y; ++cy) {
+                        for (int cx = lo.x; cx <= hi.x; ++cx) {
+                            const OpenCell c = table.open_index(grid.index({cx, cy, cz}));
+                            if (c >= 0) {
+                                table.or_row_into(c, rows);
+                            }
+                        }
+                    }
+                }
+                std::vector<std::uint64_t> from_blocks(table.words_per_row(), 0);
+                blocks.or_range_into(lo, hi, from_blocks);
+                ASSERT_EQ(from_blocks, rows) << "cells " << lo.x << "," << lo.y << "," << lo.z
+                                             << " to " << hi.x << "," << hi.y << "," << hi.z;
+                std::size_t seen = 0;
+                for (const std::uint64_t w : rows) {
+                    seen += static_cast<std::size_t>(std::popcount(w));
+                }
+                partly_hidden += seen < table.open_count() ? 1 : 0;
+            }
+            if (dims.x * dims.y * dims.z > 500) {
+                EXPECT_GT(ranges, 200) << dims.x;
+                EXPECT_GT(odd, ranges / 2) << dims.x;
+                EXPECT_GT(partly_hidden, ranges / 3) << dims.x;
+            }
+            if (glm::any(glm::lessThan(dims, glm::ivec3(2)))) {
+                EXPECT_EQ(ranges, 0);
+                EXPECT_EQ(blocks.block_count(), 0u);
+            }
         }
     }
 }

@@ -10,6 +10,7 @@
 #include "dsoc/interest/bake_request.hpp"
 #include "dsoc/maps/bake_cache.hpp"
 #include "dsoc/maps/map_source.hpp"
+#include "dsoc/visibility/cell_block_unions.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -163,6 +164,8 @@ int main(int argc, char** argv) {
         const double hidden = n > 0 ? static_cast<double>(t.hidden_pairs()) / (n * n) : 0.0;
         std::error_code ec;
         const auto file_bytes = std::filesystem::file_size(baked->file, ec);
+        // What a culler holds beside the table at run time (made where it is loaded).
+        const std::size_t block_union_bytes = dsoc::visibility::CellBlockUnions(t).memory_bytes();
         if (json) {
             nlohmann::json out;
             out["map"] = map->name;
@@ -176,6 +179,7 @@ int main(int argc, char** argv) {
             out["hidden_pair_fraction"] = hidden;
             out["file_bytes"] = ec ? 0 : file_bytes;
             out["memory_bytes"] = t.memory_bytes();
+            out["block_union_bytes"] = block_union_bytes;
             out["bake_seconds"] = s.seconds;
             out["cpu_seconds"] = cpu_seconds; // every thread's, loading or baking
             out["peak_rss_bytes"] = peak_rss_bytes();
@@ -197,11 +201,13 @@ int main(int argc, char** argv) {
             std::printf("%s: %s %s\n", map->name.c_str(), baked->from_cache ? "loaded" : "baked",
                         baked->file.c_str());
             std::printf("  cells %zu (%.0f-unit), open %zu (and %zu uncovered), hidden pairs "
-                        "%.1f%%, file %.1f MiB, memory %.1f MiB\n",
+                        "%.1f%%, file %.1f MiB, memory %.1f MiB (and %.1f MiB of block unions "
+                        "at run time)\n",
                         t.grid().cell_count(), static_cast<double>(t.grid().cell_size),
                         t.open_count(), t.uncovered_cells().size(), 100.0 * hidden,
                         ec ? 0.0 : static_cast<double>(file_bytes) / (1 << 20),
-                        static_cast<double>(t.memory_bytes()) / (1 << 20));
+                        static_cast<double>(t.memory_bytes()) / (1 << 20),
+                        static_cast<double>(block_union_bytes) / (1 << 20));
             if (baked->resumed_fraction > 0.0) {
                 std::printf("  went on from a partial bake %.1f%% done (the bake's time counts "
                             "every run, the CPU this one)\n",

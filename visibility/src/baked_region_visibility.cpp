@@ -15,8 +15,9 @@ constexpr char kSlabUncovered = 2;
 
 BakedRegionVisibility::BakedRegionVisibility(std::shared_ptr<const CellVisibilityTable> table,
                                              std::unique_ptr<RegionVisibility> next,
-                                             NextFor next_for)
-    : table_(std::move(table)), next_(std::move(next)),
+                                             NextFor next_for,
+                                             std::shared_ptr<const CellBlockUnions> blocks)
+    : table_(std::move(table)), blocks_(std::move(blocks)), next_(std::move(next)),
       next_for_(next_ != nullptr ? next_for : NextFor::after_table) {}
 
 void BakedRegionVisibility::build(const Aabb& region) {
@@ -37,10 +38,41 @@ void BakedRegionVisibility::build(const Aabb& region) {
     if (lo == built_lo_ && hi == built_hi_) {
         return; // the same cells: the same union (and the same active_ and partial_)
     }
+    if (blocks_ != nullptr && CellBlockUnions::covers(lo, hi)) {
+        build_from_blocks(lo, hi);
+    } else {
+        build_from_slabs(lo, hi);
+    }
+    built_lo_ = lo;
+    built_hi_ = hi;
+}
+
+void BakedRegionVisibility::build_from_blocks(glm::ivec3 lo, glm::ivec3 hi) {
+    const CellGrid& grid = table_->grid();
+    active_ = false;
+    partial_ = false;
+    for (int z = lo.z; z <= hi.z; ++z) {
+        for (int y = lo.y; y <= hi.y; ++y) {
+            for (int x = lo.x; x <= hi.x; ++x) {
+                const OpenCell c = table_->open_index(grid.index({x, y, z}));
+                active_ = active_ || c >= 0;
+                // An eye may be where the table says nothing: the union speaks for the
+                // eyes in the covered cells only.
+                partial_ = partial_ || c == kUncoveredCell;
+            }
+        }
+    }
+    visible_.assign(table_->words_per_row(), 0);
+    if (active_) {
+        blocks_->or_range_into(lo, hi, visible_);
+    }
+}
+
+void BakedRegionVisibility::build_from_slabs(glm::ivec3 lo, glm::ivec3 hi) {
     // The union is kept as one slab per x of the range (the rows of that x's cells);
     // when only the x range moved, the slabs of the xs kept are reused.
-    const bool same_yz = lo.y == built_lo_.y && hi.y == built_hi_.y && lo.z == built_lo_.z &&
-                         hi.z == built_hi_.z && built_lo_.x <= built_hi_.x;
+    const bool same_yz = lo.y == slabs_lo_.y && hi.y == slabs_hi_.y && lo.z == slabs_lo_.z &&
+                         hi.z == slabs_hi_.z && slabs_lo_.x <= slabs_hi_.x;
     const CellGrid& grid = table_->grid();
     const std::size_t words = table_->words_per_row();
     const auto slabs = static_cast<std::size_t>(hi.x - lo.x + 1);
@@ -48,14 +80,14 @@ void BakedRegionVisibility::build(const Aabb& region) {
     int keep_lo = 1;
     int keep_hi = 0;
     if (same_yz) {
-        keep_lo = std::max(lo.x, built_lo_.x);
-        keep_hi = std::min(hi.x, built_hi_.x);
+        keep_lo = std::max(lo.x, slabs_lo_.x);
+        keep_hi = std::min(hi.x, slabs_hi_.x);
     }
     const std::size_t old_slabs = slab_open_.size();
     slabs_.resize(std::max(old_slabs, slabs) * words);
     slab_open_.resize(std::max(old_slabs, slabs), 0);
     if (keep_lo <= keep_hi) {
-        const auto from = static_cast<std::size_t>(keep_lo - built_lo_.x);
+        const auto from = static_cast<std::size_t>(keep_lo - slabs_lo_.x);
         const auto to = static_cast<std::size_t>(keep_lo - lo.x);
         const auto count = static_cast<std::size_t>(keep_hi - keep_lo + 1);
         std::memmove(slabs_.data() + to * words, slabs_.data() + from * words,
@@ -84,8 +116,8 @@ void BakedRegionVisibility::build(const Aabb& region) {
             }
         }
     }
-    built_lo_ = lo;
-    built_hi_ = hi;
+    slabs_lo_ = lo;
+    slabs_hi_ = hi;
     visible_.assign(words, 0);
     active_ = false;
     partial_ = false;
@@ -288,9 +320,11 @@ RegionVisibilityFactory with_baked_stage(std::shared_ptr<const CellVisibilityTab
     if (table == nullptr) {
         return make_next;
     }
-    return [table = std::move(table), make_next = std::move(make_next), next_for] {
+    auto blocks = std::make_shared<const CellBlockUnions>(*table);
+    return [table = std::move(table), blocks = std::move(blocks), make_next = std::move(make_next),
+            next_for] {
         return std::make_unique<BakedRegionVisibility>(table, make_next ? make_next() : nullptr,
-                                                       next_for);
+                                                       next_for, blocks);
     };
 }
 

@@ -1,5 +1,7 @@
 #include "dsoc/visibility/cell_visibility.hpp"
 
+#include "row_codes.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <bit>
@@ -14,21 +16,9 @@ namespace {
 constexpr int kB = kTableBlockCells;
 constexpr std::uint64_t kCellsPerBlock = kB * kB * kB;
 
-enum WordClass : std::uint64_t { kHidden = 0, kVisible = 1, kLiteral = 2 };
-
-/// Bits 0, 2, 4, ..., 62 of `x` as bits 0..31: of a class word's 2-bit codes, the words
-/// whose code has its low bit set (`x`) or its high bit (`x >> 1`).
-constexpr std::uint32_t even_bits(std::uint64_t x) {
-    x &= 0x5555555555555555u;
-    x = (x | x >> 1) & 0x3333333333333333u;
-    x = (x | x >> 2) & 0x0f0f0f0f0f0f0f0fu;
-    x = (x | x >> 4) & 0x00ff00ff00ff00ffu;
-    x = (x | x >> 8) & 0x0000ffff0000ffffu;
-    x = (x | x >> 16) & 0x00000000ffffffffu;
-    return static_cast<std::uint32_t>(x);
-}
-static_assert(even_bits(0x5u) == 0x3u && even_bits(0xau) == 0x0u && even_bits(0x9u) == 0x1u &&
-              even_bits(std::uint64_t{1} << 62) == 0x80000000u);
+using row_codes::kHidden;
+using row_codes::kLiteral;
+using row_codes::kVisible;
 
 } // namespace
 
@@ -78,8 +68,7 @@ std::uint64_t CellVisibilityTable::block_rank(std::uint32_t cell) const {
 }
 
 std::uint64_t CellVisibilityTable::full_word(std::size_t w) const {
-    const std::size_t rest = open_.size() - w * 64;
-    return rest >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << rest) - 1;
+    return row_codes::full_word(open_.size(), w);
 }
 
 bool CellVisibilityTable::may_see(OpenCell from, OpenCell to) const {
@@ -115,27 +104,8 @@ void CellVisibilityTable::or_row_into(OpenCell from, std::span<std::uint64_t> ou
         }
         return;
     }
-    // Per class word, the literal words and the visible words as two masks of its 32
-    // words: the literals are ORed in word order (the order they are stored in), each
-    // step independent of the codes; a visible word becomes all ones (the last word's
-    // bits past the last cell are cleared after).
-    const std::uint64_t* cls = classes_.data() + row * class_words_per_row_;
-    const std::uint64_t* literal = literals_.data() + literal_start_[row];
-    for (std::size_t cw = 0; cw < class_words_per_row_; ++cw) {
-        const std::uint64_t codes = cls[cw];
-        if (codes == 0) {
-            continue; // 32 hidden words
-        }
-        std::uint64_t* words = out.data() + cw * 32;
-        static_assert(kVisible == 1 && kLiteral == 2); // the low bit, the high bit
-        for (std::uint32_t literals = even_bits(codes >> 1); literals != 0;
-             literals &= literals - 1) {
-            words[std::countr_zero(literals)] |= *literal++;
-        }
-        for (std::uint32_t visible = even_bits(codes); visible != 0; visible &= visible - 1) {
-            words[std::countr_zero(visible)] = ~std::uint64_t{0};
-        }
-    }
+    row_codes::or_coded_row(classes_.data() + row * class_words_per_row_, class_words_per_row_,
+                            literals_.data() + literal_start_[row], out.data());
     if (words_per_row_ > 0) {
         out[words_per_row_ - 1] &= full_word(words_per_row_ - 1);
     }
@@ -164,18 +134,8 @@ void CellVisibilityTable::compress() {
     literal_start_.assign(1, 0);
     literals_.clear();
     for (std::size_t r = 0; r < open_.size(); ++r) {
-        const std::uint64_t* bits = bits_.data() + r * words_per_row_;
-        std::uint64_t* cls = classes_.data() + r * class_words_per_row_;
-        for (std::size_t w = 0; w < words_per_row_; ++w) {
-            std::uint64_t code = kHidden;
-            if (bits[w] == full_word(w)) {
-                code = kVisible;
-            } else if (bits[w] != 0) {
-                code = kLiteral;
-                literals_.push_back(bits[w]);
-            }
-            cls[w >> 5] |= code << (2 * (w & 31));
-        }
+        row_codes::encode_row(bits_.data() + r * words_per_row_, open_.size(),
+                              classes_.data() + r * class_words_per_row_, literals_);
         literal_start_.push_back(literals_.size());
     }
     literals_.shrink_to_fit();

@@ -17,6 +17,7 @@
 // stage is built only when first needed after build(), so test_*() of one culler must
 // come from one thread at a time (as the InterestManager's per-client pass does).
 
+#include "dsoc/visibility/cell_block_unions.hpp"
 #include "dsoc/visibility/cell_visibility.hpp"
 #include "dsoc/visibility/region_visibility.hpp"
 
@@ -31,10 +32,12 @@ public:
 
     /// `next` (may be null: the table alone, "visible" for what it does not cover)
     /// answers what the table passes or does not cover (`after_table`), or only what
-    /// it does not cover (`where_uncovered`).
+    /// it does not cover (`where_uncovered`). `blocks` (may be null) are `table`'s
+    /// block unions, for building a region's union from fewer rows (the same union).
     BakedRegionVisibility(std::shared_ptr<const CellVisibilityTable> table,
                           std::unique_ptr<RegionVisibility> next,
-                          NextFor next_for = NextFor::after_table);
+                          NextFor next_for = NextFor::after_table,
+                          std::shared_ptr<const CellBlockUnions> blocks = nullptr);
 
     void build(const Aabb& region) override;
     [[nodiscard]] Visibility test_box(const Aabb& box) const override;
@@ -101,7 +104,15 @@ private:
     /// answer where the region is partial, else `occluded`.
     [[nodiscard]] Visibility covered_answer(bool hidden_from_covered, const Aabb& box) const;
 
+    /// Builds visible_ for the cell range [lo, hi] from the table's rows, one slab of
+    /// them per x (the slabs of the xs the last such build had are reused when only the
+    /// x range moved), and sets active_ and partial_.
+    void build_from_slabs(glm::ivec3 lo, glm::ivec3 hi);
+    /// The same from blocks_ (CellBlockUnions::covers() the range).
+    void build_from_blocks(glm::ivec3 lo, glm::ivec3 hi);
+
     std::shared_ptr<const CellVisibilityTable> table_;
+    std::shared_ptr<const CellBlockUnions> blocks_;
     std::unique_ptr<RegionVisibility> next_;
     NextFor next_for_ = NextFor::after_table;
     bool active_ = false;             ///< the region has covered open cells: visible_ is theirs
@@ -111,8 +122,11 @@ private:
     glm::ivec3 built_lo_{1};
     glm::ivec3 built_hi_{0};
     std::vector<std::uint64_t> visible_; ///< union of the region's rows
-    /// Per x of the built range, the union of the rows of that x's cells, and whether
-    /// it has an open cell (bit 0) and an uncovered one (bit 1).
+    /// Per x of the range [slabs_lo_, slabs_hi_] (empty when slabs_lo_.x > slabs_hi_.x),
+    /// the union of the rows of that x's cells, and whether it has an open cell (bit 0)
+    /// and an uncovered one (bit 1).
+    glm::ivec3 slabs_lo_{1};
+    glm::ivec3 slabs_hi_{0};
     std::vector<std::uint64_t> slabs_;
     std::vector<char> slab_open_;
     mutable std::vector<std::int32_t> scratch_;
@@ -121,7 +135,8 @@ private:
 
 /// Puts the table in front of every culler `make_next` makes (`make_next` empty: the
 /// table alone), the next stage answering as `next_for` says; returns `make_next`
-/// itself when `table` is null.
+/// itself when `table` is null. The table's block unions are made here, once, and
+/// shared by every culler.
 [[nodiscard]] RegionVisibilityFactory with_baked_stage(
     std::shared_ptr<const CellVisibilityTable> table, RegionVisibilityFactory make_next,
     BakedRegionVisibility::NextFor next_for = BakedRegionVisibility::NextFor::after_table);
