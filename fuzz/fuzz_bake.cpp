@@ -9,6 +9,9 @@
 #include "dsoc/visibility/cell_block_unions.hpp"
 #include "dsoc/visibility/cell_visibility.hpp"
 
+#include <glm/common.hpp>
+#include <glm/vector_relational.hpp>
+
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -89,20 +92,16 @@ void check_block_unions(const dsoc::visibility::CellVisibilityTable& table) {
     std::vector<std::uint64_t> rows(table.words_per_row());
     std::vector<std::uint64_t> united(table.words_per_row());
     for (int n = 2; n <= 4; ++n) {
-        const glm::ivec3 lo{0};
+        const glm::ivec3 lo{0}; // the grid's corner
         const glm::ivec3 hi = glm::min(grid.dims, glm::ivec3(n)) - 1;
         if (!CellBlockUnions::covers(lo, hi)) {
             return;
         }
         std::ranges::fill(rows, std::uint64_t{0});
-        for (int z = lo.z; z <= hi.z; ++z) {
-            for (int y = lo.y; y <= hi.y; ++y) {
-                for (int x = lo.x; x <= hi.x; ++x) {
-                    const auto c = table.open_index(grid.index({x, y, z}));
-                    if (c >= 0) {
-                        table.or_row_into(c, rows);
-                    }
-                }
+        for (std::uint32_t cell = 0; cell < grid.cell_count(); ++cell) { // every cell in range
+            const auto c = table.open_index(cell);
+            if (c >= 0 && glm::all(glm::lessThanEqual(grid.coords(cell), hi))) {
+                table.or_row_into(c, rows);
             }
         }
         std::ranges::fill(united, std::uint64_t{0});
